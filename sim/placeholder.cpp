@@ -1,0 +1,1 @@
+// sim/ holds the Simbody plant; see simbody_model.h.

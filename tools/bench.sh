@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Runs every benchmark pinned to one core. Usage: tools/bench.sh [filter-regex]
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$here/tools/run.sh" build >/dev/null
+for b in "$here"/build/bench/*_bench; do
+  echo "== $(basename "$b")"
+  taskset -c 1 "$b" --benchmark_filter="${1:-.}" --benchmark_min_time=0.5
+done

@@ -1,0 +1,10 @@
+// Subcommands of the `kuavo` CLI. Each returns the process exit code:
+// 0 success, 1 failure while running, 2 bad usage or bad input.
+#pragma once
+
+namespace kuavo::cli {
+
+int run_model(int argc, char** argv);  // kuavo model [--variant s45|s42] [--mass KG] --json
+int run_demo(int argc, char** argv);   // kuavo demo: the main job
+
+}  // namespace kuavo::cli

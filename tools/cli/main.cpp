@@ -1,0 +1,35 @@
+// kuavo: the project's command-line entry point.
+#include <cstdio>
+#include <cstring>
+
+#include "tools/cli/commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* usage;
+};
+
+constexpr Command kCommands[] = {
+    {"model", kuavo::cli::run_model, "model [--variant s45|s42] [--mass KG] --json   robot model summary"},
+    {"demo", kuavo::cli::run_demo, "demo [--out DIR]                                 the main job"},
+};
+
+int usage() {
+  std::fprintf(stderr, "usage: kuavo <command> [options]\n");
+  for (const Command& c : kCommands) std::fprintf(stderr, "  kuavo %s\n", c.usage);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return usage();
+  for (const Command& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 1, argv + 1);
+  }
+  std::fprintf(stderr, "kuavo: unknown command '%s'\n", argv[1]);
+  return usage();
+}
