@@ -1,1 +1,0 @@
-// sim/ holds the Simbody plant; see simbody_model.h.
