@@ -119,6 +119,26 @@ TEST(RuiwoBus, JointLimitsClampBeforeTheWireAndAreReported) {
   EXPECT_NEAR(wire.torque_Nm, -20.0, 100.0 / 4095);
 }
 
+TEST(RuiwoBus, NonFiniteJointCommandIsNeutralisedAndReported) {
+  Bus bus;
+  std::string msg;
+  ASSERT_EQ(build_bus({motor(3, 14, -1, 0.2)}, bus, msg), DriverError::kOk);
+  hal::JointCommand cmd;
+  cmd.mode = hal::JointMode::kPdTorque;
+  cmd.position_ref_rad = std::numeric_limits<double>::quiet_NaN();
+  cmd.kp_Nm_per_rad = 80;
+  cmd.kd_Nm_s_per_rad = 2;
+  cmd.torque_ff_Nm = std::numeric_limits<double>::infinity();
+  can_frame f;
+  const std::uint8_t flags = encode_command_rt(bus, 0, cmd, f);
+  EXPECT_TRUE(flags & kNonFinite);
+  PtmCommand wire;
+  ASSERT_EQ(decode_ptm_rt(f, wire), DriverError::kOk);
+  EXPECT_EQ(wire.kp_Nm_per_rad, 0.0);
+  EXPECT_NEAR(wire.torque_Nm, 0.0, 100.0 / 4095);
+  EXPECT_NEAR(wire.kd_Nm_s_per_rad, 2.0, 50.0 / 4095);
+}
+
 TEST(RuiwoBus, DampingAndDisabledModesSendNoStiffness) {
   Bus bus;
   std::string msg;
