@@ -5,6 +5,10 @@
 #include "controllers/model/model_tables.h"
 #include "drivers/bus/bus_load.h"
 #include "drivers/bus/bus_plan.h"
+#include "drivers/bus/open_buses.h"
+
+#include <sys/socket.h>
+#include <unistd.h>
 
 namespace kuavo::drivers {
 namespace {
@@ -90,6 +94,19 @@ TEST(BusPlan, InconsistentPlansAreRefused) {
   bad_fd.buses[0].fd = true;
   bad_fd.buses[0].data_bitrate_bps = 0;
   EXPECT_EQ(check_bus_plan(bad_fd, rep, msg), DriverError::kBadConfig);
+}
+
+TEST(OpenBuses, FailsCleanlyWithoutKernelCan) {
+  const int probe = socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (probe >= 0) {
+    close(probe);
+    GTEST_SKIP() << "this kernel has AF_CAN";
+  }
+  std::vector<CanPort> ports;
+  std::string msg;
+  EXPECT_EQ(open_buses(default_bus_plan(), ports, msg), DriverError::kNoCanSupport);
+  EXPECT_TRUE(ports.empty());
+  EXPECT_EQ(msg.rfind("can0: socket(AF_CAN) failed", 0), 0u) << msg;
 }
 
 }  // namespace
