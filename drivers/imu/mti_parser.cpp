@@ -145,6 +145,8 @@ DriverError to_imu_sample(const MtData2& d, hal::TimeNs stamp_ns, hal::ImuSample
   out.valid = false;
   out.stamp_ns = stamp_ns;
   if (!d.has_quaternion || !d.has_rate_of_turn || !d.has_acceleration) return DriverError::kMtiIncomplete;
+  // The estimator assumes a z-up world; NED output would flip gravity.
+  if (d.orientation_frame_bits != kFrameEnu) return DriverError::kBadConfig;
   const auto& q = d.quaternion_wxyz;
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   bool finite = std::isfinite(norm);

@@ -34,6 +34,8 @@ inline constexpr std::uint16_t kXdiRateOfTurn = 0x8020;
 // Precision bits (XDI & 0x3): only float32 and float64 are accepted.
 inline constexpr std::uint16_t kPrecisionFloat32 = 0x0;
 inline constexpr std::uint16_t kPrecisionFloat64 = 0x3;
+// Coordinate bits (XDI & 0xC) of the orientation: the sensor must be set to ENU.
+inline constexpr std::uint8_t kFrameEnu = 0x0;
 
 struct MtData2 {
   std::array<double, 4> quaternion_wxyz{1.0, 0.0, 0.0, 0.0};
@@ -71,7 +73,8 @@ DriverError parse_rt(Parser& p, const std::uint8_t* bytes, std::size_t n, std::s
 DriverError decode_mtdata2_rt(const std::uint8_t* payload, int length, MtData2& out);
 
 // MTData2 -> HAL sample: valid only with all three quantities present and finite;
-// the quaternion is normalised (rejected if its norm is far from 1).
+// the quaternion is normalised (rejected if its norm is far from 1). kBadConfig
+// if the orientation is not in ENU (the MTi's default; set in MT Manager).
 DriverError to_imu_sample(const MtData2& d, hal::TimeNs stamp_ns, hal::ImuSample& out);
 
 }  // namespace kuavo::drivers::mti

@@ -160,6 +160,13 @@ TEST_F(RuiwoLoop, CorruptedRepliesNeverYieldNonFiniteSamples) {
   EXPECT_GT(bus.unknown_replies, 0u);  // flips in byte 0 give IDs not on the bus
 }
 
+TEST_F(RuiwoLoop, CycleWithFrameIoDoesNotAllocate) {
+  cycle();
+  test::AllocTrap trap;
+  for (int k = 0; k < 50; ++k) cycle();
+  EXPECT_EQ(trap.count(), 0u) << "first allocation " << trap.first_size_bytes() << " bytes";
+}
+
 class CanopenLoop : public ::testing::Test {
  protected:
   static constexpr int kDrives = 3;

@@ -185,6 +185,9 @@ TEST(MtiParser, ToImuSampleReordersAndValidates) {
   partial.has_acceleration = false;
   EXPECT_EQ(to_imu_sample(partial, 1, s), DriverError::kMtiIncomplete);
   EXPECT_FALSE(s.valid);
+  MtData2 ned = got[0];
+  ned.orientation_frame_bits = 0x4;
+  EXPECT_EQ(to_imu_sample(ned, 1, s), DriverError::kBadConfig);
   MtData2 bad = got[0];
   bad.quaternion_wxyz = {0.1, 0.0, 0.0, 0.0};
   EXPECT_EQ(to_imu_sample(bad, 1, s), DriverError::kMtiBadItem);
