@@ -15,6 +15,7 @@ struct Command {
 constexpr Command kCommands[] = {
     {"model", kuavo::cli::run_model, "model [--variant s45|s42] [--mass KG] --json   robot model summary"},
     {"demo", kuavo::cli::run_demo, "demo [--out DIR]                                 the main job"},
+    {"retarget", kuavo::cli::run_retarget, "retarget [IN.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|FILE] --report R.json"},
 };
 
 int usage() {

@@ -1,0 +1,56 @@
+// Contact schedule: which feet support the robot at each 100 Hz frame.
+//
+// Automatic detection works per foot on the robot-proportioned targets: a foot touches down
+// when it is low AND slow, and lifts off when it is high OR fast (hysteresis), then phases
+// shorter than a minimum duration are merged into their neighbours. The per-foot booleans
+// become one label per frame. A manual override file can replace labels over time ranges
+// (the paper annotated its schedule by hand; the override keeps that possible).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tools/mocap/human_targets.h"
+
+namespace kuavo::mocap {
+
+// Stable numbers: they are stored in motion files.
+enum class ContactLabel : std::uint8_t { kFlight = 0, kLeftSupport = 1, kRightSupport = 2, kDoubleSupport = 3 };
+
+const char* to_string(ContactLabel c);
+bool parse_contact_label(const std::string& text, ContactLabel& out);
+inline bool left_in_contact(ContactLabel c) { return c == ContactLabel::kLeftSupport || c == ContactLabel::kDoubleSupport; }
+inline bool right_in_contact(ContactLabel c) { return c == ContactLabel::kRightSupport || c == ContactLabel::kDoubleSupport; }
+inline ContactLabel make_label(bool left, bool right) {
+  return left ? (right ? ContactLabel::kDoubleSupport : ContactLabel::kLeftSupport)
+              : (right ? ContactLabel::kRightSupport : ContactLabel::kFlight);
+}
+
+struct ContactThresholds {
+  // Lowest sole point above the ground [m]. A flat foot reads 0; 2.5 cm covers heel/toe
+  // rolls, 5 cm is clearly lifted (a walking swing clears 5–10 cm).
+  double touchdown_height_m = 0.025;
+  double liftoff_height_m = 0.05;
+  // Horizontal ankle speed [m/s]: a planted foot moves < 0.2 m/s in capture noise and
+  // pivots; a swing foot moves > 0.5 m/s.
+  double touchdown_speed_m_s = 0.3;
+  double liftoff_speed_m_s = 0.6;
+  // Phases shorter than this are merged (at 100 Hz, 8 frames = 80 ms, shorter than any
+  // human step's stance or swing).
+  double min_phase_s = 0.08;
+};
+
+// Labels for every target frame.
+std::vector<ContactLabel> detect_contacts(const HumanTargets& targets, const model::Model& robot,
+                                          const ContactThresholds& thresholds = {});
+
+// Override file: lines "start_s end_s label" (label: flight, left, right, double), '#'
+// comments. Frames with start_s <= t < end_s get the label. Errors name the line.
+bool apply_contact_overrides(const std::string& text, double rate_hz, std::vector<ContactLabel>& labels,
+                             std::string& error);
+
+// Number of maximal runs of equal labels.
+int count_contact_phases(const std::vector<ContactLabel>& labels);
+
+}  // namespace kuavo::mocap

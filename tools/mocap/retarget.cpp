@@ -1,0 +1,301 @@
+#include "tools/mocap/retarget.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "tools/mocap/box_qp.h"
+
+namespace kuavo::mocap {
+namespace {
+
+using dynamics::FrameJacobian;
+using dynamics::kNv;
+using dynamics::VelocityVector;
+using Hessian = Eigen::Matrix<double, kNv, kNv>;
+
+constexpr int kFootBody[2] = {6, 12};  // leg_l6_link, leg_r6_link
+constexpr int kAnkleKp[2] = {kKpLeftAnkle, kKpRightAnkle};
+constexpr int kToeKp[2] = {kKpLeftToe, kKpRightToe};
+constexpr int kCornersPerFoot = model::kNumContactPoints / 2;
+
+Vec3 rotation_log(const Mat3& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+Mat3 yaw_rotation(double yaw) { return Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix(); }
+
+double heading_of(const Mat3& r) { return std::atan2(r(1, 0), r(0, 0)); }
+
+}  // namespace
+
+struct Retargeter::Workspace {
+  dynamics::Data data;
+  FrameJacobian jacobian;
+  Hessian h;
+  VelocityVector g, lo, hi, dx;
+};
+
+Retargeter::Retargeter(const model::Model& robot, const RetargetOptions& options, double rate_hz)
+    : robot_(robot), options_(options), dt_s_(1.0 / rate_hz), keypoints_(robot_keypoints(robot)),
+      ws_(std::make_unique<Workspace>()) {
+  const RetargetWeights& w = options.weights;
+  position_weight_.fill(0.0);
+  position_weight_[kKpPelvis] = w.pelvis_position;
+  position_weight_[kKpLeftAnkle] = position_weight_[kKpRightAnkle] = w.ankle;
+  position_weight_[kKpLeftToe] = position_weight_[kKpRightToe] = w.toe;
+  position_weight_[kKpLeftKnee] = position_weight_[kKpRightKnee] = w.knee;
+  position_weight_[kKpLeftShoulder] = position_weight_[kKpRightShoulder] = w.shoulder;
+  position_weight_[kKpLeftElbow] = position_weight_[kKpRightElbow] = w.elbow;
+  position_weight_[kKpLeftWrist] = position_weight_[kKpRightWrist] = w.wrist;
+  position_weight_[kKpLeftHand] = position_weight_[kKpRightHand] = w.hand;
+  position_weight_[kKpHead] = w.head;
+  reset();
+}
+
+Retargeter::~Retargeter() = default;
+
+void Retargeter::reset() {
+  q_ = ConfigVector::Zero();
+  q_[6] = 1.0;
+  started_ = false;
+}
+
+FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
+                             const FootPins& pins) {
+  Workspace& ws = *ws_;
+  const model::JointLimits& lim = robot_.limits;
+  int iterations = options_.iterations;
+  bool velocity_bounds = options_.velocity_limits;
+  if (!started_) {
+    // Zero pose, base placed on the target pelvis.
+    const Eigen::Quaterniond quat(target.base_rotation);
+    q_.head<3>() = target.position_m[kKpPelvis] - target.base_rotation * keypoints_[kKpPelvis].point_m;
+    q_[3] = quat.x();
+    q_[4] = quat.y();
+    q_[5] = quat.z();
+    q_[6] = quat.w();
+    q_.tail<model::kNumJoints>().setZero();
+    iterations = options_.first_frame_iterations;
+    velocity_bounds = false;
+    started_ = true;
+  }
+  const ConfigVector q_prev = q_;
+  const RetargetWeights& w = options_.weights;
+  for (int it = 0; it < iterations; ++it) {
+    dynamics::forward_kinematics(robot_, ws.data, q_);
+    ws.h.setIdentity();
+    ws.h *= options_.damping;
+    ws.g.setZero();
+    const auto add_point = [&](int body, const Vec3& point_body, const Vec3& target_m, double weight) {
+      const Vec3 p = ws.data.position_m[body] + ws.data.rotation[body] * point_body;
+      dynamics::point_jacobian(robot_, ws.data, body, p, ws.jacobian);
+      const auto jl = ws.jacobian.topRows<3>();
+      ws.h.noalias() += weight * jl.transpose() * jl;
+      ws.g.noalias() += weight * jl.transpose() * (target_m - p);
+    };
+    const auto add_rotation = [&](int body, const Mat3& target_r, double weight) {
+      // Uses ws.jacobian from the preceding add_point on the same body.
+      const auto ja = ws.jacobian.bottomRows<3>();
+      ws.h.noalias() += weight * ja.transpose() * ja;
+      ws.g.noalias() += weight * ja.transpose() * rotation_log(target_r * ws.data.rotation[body].transpose());
+    };
+    // Keypoints.
+    for (int k = 0; k < kNumKeypoints; ++k) {
+      if (!present[k] || position_weight_[k] <= 0.0) continue;
+      const bool foot_kp = k == kAnkleKp[0] || k == kToeKp[0] || k == kAnkleKp[1] || k == kToeKp[1];
+      if (foot_kp && options_.pin_stance_feet) {
+        const int side = (k == kAnkleKp[0] || k == kToeKp[0]) ? 0 : 1;
+        if (pins.pinned[side]) continue;
+      }
+      add_point(keypoints_[k].body, keypoints_[k].point_m, target.position_m[k], position_weight_[k]);
+      if (k == kKpPelvis) add_rotation(0, target.base_rotation, w.pelvis_rotation);
+    }
+    // Stance feet: full pose pinned (free feet near a stance: blended in and out).
+    for (int side = 0; side < 2 && options_.pin_stance_feet; ++side) {
+      for (const FootPose2d* pose : {&pins.stance[side], &pins.release[side]}) {
+        if (pose->blend <= 0.0 || (pins.pinned[side] && pose == &pins.release[side])) continue;
+        const double b4 = pose->blend * pose->blend * pose->blend * pose->blend;
+        add_point(kFootBody[side], Vec3::Zero(), pose->ankle_position_m, b4 * w.stance_position);
+        add_rotation(kFootBody[side], yaw_rotation(pose->yaw_rad), b4 * w.stance_rotation);
+      }
+    }
+    // Sole corners of free feet stay above the ground (one-sided: only while below).
+    for (int c = 0; c < model::kNumContactPoints && options_.ground_rows; ++c) {
+      const int side = c / kCornersPerFoot;
+      if (options_.pin_stance_feet && pins.pinned[side]) continue;
+      const Vec3 p = dynamics::frame_position(robot_, ws.data, c);
+      if (p.z() >= 0.0) continue;
+      dynamics::frame_jacobian(robot_, ws.data, c, ws.jacobian);
+      const auto jz = ws.jacobian.row(2);
+      ws.h.noalias() += w.ground * jz.transpose() * jz;
+      ws.g.noalias() += (w.ground * (1e-4 - p.z())) * jz.transpose();
+    }
+    // Bounds.
+    ws.lo.head<6>().setConstant(-INFINITY);
+    ws.hi.head<6>().setConstant(INFINITY);
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const double qj = q_[7 + j];
+      double lo = lim.position_min_rad[j] - qj, hi = lim.position_max_rad[j] - qj;
+      if (velocity_bounds) {
+        const double step = lim.velocity_rad_s[j] * dt_s_;
+        lo = std::max(lo, q_prev[7 + j] - step - qj);
+        hi = std::min(hi, q_prev[7 + j] + step - qj);
+      }
+      if (lo > 0.0) lo = 0.0;  // numerical safety: q is feasible, so 0 must be
+      if (hi < 0.0) hi = 0.0;
+      ws.lo[6 + j] = lo;
+      ws.hi[6 + j] = hi;
+    }
+    solve_box_qp<kNv>(ws.h, ws.g, ws.lo, ws.hi, ws.dx);
+    q_ = dynamics::integrate(q_, ws.dx, 1.0);
+    // The joint part of integrate() is additive: land exactly on a bound that was hit.
+    for (int j = 0; j < model::kNumJoints; ++j)
+      q_[7 + j] = std::clamp(q_[7 + j], lim.position_min_rad[j], lim.position_max_rad[j]);
+    if (ws.dx.norm() < options_.step_tolerance) break;
+  }
+  FrameLimits out;
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    const double qj = q_[7 + j];
+    at_position_bound_[j] = qj <= lim.position_min_rad[j] + 1e-9 || qj >= lim.position_max_rad[j] - 1e-9;
+    at_velocity_bound_[j] =
+        velocity_bounds && std::abs(qj - q_prev[7 + j]) >= lim.velocity_rad_s[j] * dt_s_ * (1.0 - 1e-6);
+    out.position_bounds_active += at_position_bound_[j];
+    out.velocity_bounds_active += at_velocity_bound_[j];
+  }
+  return out;
+}
+
+std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vector<ContactLabel>& labels,
+                                     const model::Model& robot, double rate_hz) {
+  const std::size_t n = targets.frames.size();
+  std::vector<FootPins> pins(n);
+  const double ankle_h = robot_ankle_height_m(robot);
+  for (int side = 0; side < 2; ++side) {
+    const auto in_contact = [&](std::size_t i) {
+      return i < labels.size() && (side == 0 ? left_in_contact(labels[i]) : right_in_contact(labels[i]));
+    };
+    for (std::size_t i = 0; i < n;) {
+      if (!in_contact(i)) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      Vec3 sum = Vec3::Zero();
+      double cx = 0.0, cy = 0.0;
+      while (j < n && in_contact(j)) {
+        const TargetFrame& f = targets.frames[j];
+        sum += f.position_m[kAnkleKp[side]];
+        // Heading of the foot: ankle→toe if the toe is known, else the pelvis heading.
+        double yaw = heading_of(f.base_rotation);
+        if (targets.present[kToeKp[side]]) {
+          const Vec3 d = f.position_m[kToeKp[side]] - f.position_m[kAnkleKp[side]];
+          if (std::hypot(d.x(), d.y()) > 1e-6) yaw = std::atan2(d.y(), d.x());
+        }
+        cx += std::cos(yaw);
+        cy += std::sin(yaw);
+        ++j;
+      }
+      const Vec3 mean = sum / static_cast<double>(j - i);
+      const double yaw = std::atan2(cy, cx);
+      const FootPose2d pose{Vec3(mean.x(), mean.y(), ankle_h), yaw, 1.0};
+      for (std::size_t k = i; k < j; ++k) {
+        pins[k].pinned[side] = true;
+        pins[k].stance[side] = pose;
+      }
+      // Approach before touchdown and release after liftoff.
+      const int window = std::max(1, static_cast<int>(std::lround(kPinBlend_s * rate_hz)));
+      for (int d = 1; d <= window; ++d) {
+        FootPose2d faded = pose;
+        faded.blend = 1.0 - static_cast<double>(d) / (window + 1);
+        const std::ptrdiff_t before = static_cast<std::ptrdiff_t>(i) - d, after = static_cast<std::ptrdiff_t>(j) - 1 + d;
+        if (before >= 0 && !pins[before].pinned[side]) pins[before].stance[side] = faded;
+        if (after < static_cast<std::ptrdiff_t>(n) && !pins[after].pinned[side]) pins[after].release[side] = faded;
+      }
+      i = j;
+    }
+  }
+  return pins;
+}
+
+void retarget_motion(const model::Model& robot, const HumanTargets& targets, const std::vector<ContactLabel>& labels,
+                     const RetargetOptions& options, RetargetResult& out) {
+  out = RetargetResult{};
+  out.contacts = labels;
+  out.contacts.resize(targets.frames.size(), ContactLabel::kFlight);
+  const std::vector<FootPins> pins = options.pin_stance_feet ? plan_foot_pins(targets, out.contacts, robot, targets.rate_hz)
+                                                             : std::vector<FootPins>(targets.frames.size());
+  Retargeter solver(robot, options, targets.rate_hz);
+  out.q.reserve(targets.frames.size());
+  RetargetReport& r = out.report;
+  for (std::size_t i = 0; i < targets.frames.size(); ++i) {
+    const FrameLimits l = solver.step(targets.frames[i], targets.present, pins[i]);
+    out.q.push_back(solver.q());
+    r.position_bound_active_samples += l.position_bounds_active;
+    r.velocity_bound_active_samples += l.velocity_bounds_active;
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      r.position_bound_active_per_joint[j] += solver.at_position_bound()[j];
+      r.velocity_bound_active_per_joint[j] += solver.at_velocity_bound()[j];
+    }
+  }
+  evaluate_motion(robot, targets, out);
+}
+
+void evaluate_motion(const model::Model& robot, const HumanTargets& targets, RetargetResult& result) {
+  RetargetReport& r = result.report;
+  const std::size_t n = result.q.size();
+  r.frames = static_cast<int>(n);
+  r.duration_s = n > 0 ? static_cast<double>(n - 1) / targets.rate_hz : 0.0;
+  r.contact_phases = count_contact_phases(result.contacts);
+  const auto kps = robot_keypoints(robot);
+  auto data = std::make_unique<dynamics::Data>();
+  std::array<Vec3, model::kNumContactPoints> corners{}, prev_corners{};
+  double err_sum = 0.0;
+  long err_count = 0;
+  r.keypoint_error_max_m = r.foot_slide_max_m_s = r.penetration_max_m = r.float_max_m = 0.0;
+  r.joint_limit_violations = r.velocity_limit_violations = 0;
+  const double dt = 1.0 / targets.rate_hz;
+  // Tolerances: 1e-9 rad of round-off on the limits, 1e-6 relative on the velocity.
+  for (std::size_t i = 0; i < n; ++i) {
+    const ConfigVector& q = result.q[i];
+    dynamics::forward_kinematics(robot, *data, q);
+    for (int k = 0; k < kNumKeypoints; ++k) {
+      if (!targets.present[k] || i >= targets.frames.size()) continue;
+      const Vec3 p = data->position_m[kps[k].body] + data->rotation[kps[k].body] * kps[k].point_m;
+      const double e = (p - targets.frames[i].position_m[k]).norm();
+      err_sum += e;
+      ++err_count;
+      r.keypoint_error_max_m = std::max(r.keypoint_error_max_m, e);
+    }
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      corners[c] = dynamics::frame_position(robot, *data, c);
+      r.penetration_max_m = std::max(r.penetration_max_m, -corners[c].z());
+    }
+    for (int side = 0; side < 2; ++side) {
+      const bool now = side == 0 ? left_in_contact(result.contacts[i]) : right_in_contact(result.contacts[i]);
+      if (!now) continue;
+      for (int c = side * kCornersPerFoot; c < (side + 1) * kCornersPerFoot; ++c)
+        r.float_max_m = std::max(r.float_max_m, corners[c].z());
+      const bool before = i > 0 && (side == 0 ? left_in_contact(result.contacts[i - 1])
+                                              : right_in_contact(result.contacts[i - 1]));
+      if (!before) continue;
+      for (int c = side * kCornersPerFoot; c < (side + 1) * kCornersPerFoot; ++c) {
+        const Vec3 d = corners[c] - prev_corners[c];
+        r.foot_slide_max_m_s = std::max(r.foot_slide_max_m_s, std::hypot(d.x(), d.y()) / dt);
+      }
+    }
+    prev_corners = corners;
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const double qj = q[7 + j];
+      if (qj < robot.limits.position_min_rad[j] - 1e-9 || qj > robot.limits.position_max_rad[j] + 1e-9)
+        ++r.joint_limit_violations;
+      if (i > 0 && std::abs(qj - result.q[i - 1][7 + j]) > robot.limits.velocity_rad_s[j] * dt * (1.0 + 1e-6))
+        ++r.velocity_limit_violations;
+    }
+  }
+  r.keypoint_error_mean_m = err_count > 0 ? err_sum / static_cast<double>(err_count) : 0.0;
+  r.penetration_max_m = std::max(0.0, r.penetration_max_m);
+}
+
+}  // namespace kuavo::mocap
