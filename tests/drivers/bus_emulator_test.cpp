@@ -10,6 +10,7 @@
 
 #include "controllers/model/model.h"
 #include "drivers/canopen/cia402_drive.h"
+#include "drivers/emulator/bus_fault.h"
 #include "drivers/emulator/cia402_emulator.h"
 #include "drivers/emulator/ruiwo_emulator.h"
 #include "drivers/ruiwo/ruiwo_bus.h"
@@ -158,6 +159,34 @@ TEST_F(RuiwoLoop, CorruptedRepliesNeverYieldNonFiniteSamples) {
     EXPECT_TRUE(std::isfinite(s.position_rad) && std::isfinite(s.velocity_rad_s) && std::isfinite(s.torque_Nm));
   }
   EXPECT_GT(bus.unknown_replies, 0u);  // flips in byte 0 give IDs not on the bus
+}
+
+TEST_F(RuiwoLoop, BusOffStopsTransmissionUntilCleared) {
+  EXPECT_FALSE(emulator::inject_bus_fault(emu.faults, wire.device, emulator::BusFault::kBusOff));
+  emulator::arm_fault_injection(emu.faults, 5);
+  ASSERT_TRUE(emulator::inject_bus_fault(emu.faults, wire.device, emulator::BusFault::kBusOff));
+  RxFrame rx;
+  EXPECT_EQ(receive_rt(wire.host, rx), DriverError::kErrorFrame);
+  EXPECT_TRUE(wire.host.health.bus_off);
+  can_frame f;
+  ruiwo::encode_command_rt(bus, 0, commands.joints[bus.motors[0].joint], f);
+  EXPECT_EQ(send_rt(wire.host, f), DriverError::kBusOff);
+  // No command reaches the motors, so every motor goes silent on schedule.
+  int silent = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < bus.count; ++i) {
+      ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], f);
+      if (send_rt(wire.host, f) == DriverError::kOk) ADD_FAILURE() << "sent while bus-off";
+      ruiwo::note_sent_rt(bus, i, now);
+    }
+    now += 4'000'000;
+    silent = ruiwo::check_timeouts_rt(bus, now, sensors);
+  }
+  EXPECT_EQ(silent, bus.count);
+  ASSERT_TRUE(emulator::inject_bus_fault(emu.faults, wire.device, emulator::BusFault::kRestarted));
+  EXPECT_EQ(receive_rt(wire.host, rx), DriverError::kErrorFrame);
+  clear_bus_off(wire.host.health);
+  EXPECT_EQ(cycle(), 0);  // replies resume
 }
 
 TEST_F(RuiwoLoop, CycleWithFrameIoDoesNotAllocate) {
