@@ -40,8 +40,13 @@ std::vector<bool> detect_foot(const HumanTargets& t, int ankle, int toe, double 
     if (t.present[toe]) height = std::min(height, t.frames[i].position_m[toe].z() - toe_h);
     const int i0 = std::max(0, i - 1), i1 = std::min(n - 1, i + 1);
     const double dt = (i1 - i0) / t.rate_hz;
-    const Vec3 d = t.frames[i1].position_m[ankle] - t.frames[i0].position_m[ankle];
-    const double speed = dt > 0.0 ? std::hypot(d.x(), d.y()) / dt : 0.0;
+    const auto horizontal_speed = [&](int kp) {
+      const Vec3 d = t.frames[i1].position_m[kp] - t.frames[i0].position_m[kp];
+      return dt > 0.0 ? std::hypot(d.x(), d.y()) / dt : 0.0;
+    };
+    // A foot pivoting on its heel or ball moves the other end: take the faster of the two.
+    double speed = horizontal_speed(ankle);
+    if (t.present[toe]) speed = std::max(speed, horizontal_speed(toe));
     if (!on && height < th.touchdown_height_m && speed < th.touchdown_speed_m_s) on = true;
     else if (on && (height > th.liftoff_height_m || speed > th.liftoff_speed_m_s)) on = false;
     contact[i] = on;

@@ -32,10 +32,11 @@ struct ContactThresholds {
   // rolls, 5 cm is clearly lifted (a walking swing clears 5–10 cm).
   double touchdown_height_m = 0.025;
   double liftoff_height_m = 0.05;
-  // Horizontal ankle speed [m/s]: a planted foot moves < 0.2 m/s in capture noise and
-  // pivots; a swing foot moves > 0.5 m/s.
-  double touchdown_speed_m_s = 0.3;
-  double liftoff_speed_m_s = 0.6;
+  // Horizontal speed of the faster of ankle and toe [m/s]: a planted foot reads < 0.1 m/s
+  // of capture noise; a swing foot, or one pivoting on heel or ball (which a pinned robot
+  // foot cannot do), moves its far end faster than 0.4 m/s.
+  double touchdown_speed_m_s = 0.2;
+  double liftoff_speed_m_s = 0.4;
   // Phases shorter than this are merged (at 100 Hz, 8 frames = 80 ms, shorter than any
   // human step's stance or swing).
   double min_phase_s = 0.08;

@@ -18,6 +18,8 @@ constexpr int kFootBody[2] = {6, 12};  // leg_l6_link, leg_r6_link
 constexpr int kAnkleKp[2] = {kKpLeftAnkle, kKpRightAnkle};
 constexpr int kToeKp[2] = {kKpLeftToe, kKpRightToe};
 constexpr int kCornersPerFoot = model::kNumContactPoints / 2;
+// Levenberg damping of the stance projection: tiny, so the correction is minimum-norm.
+constexpr double kProjectionDamping = 1e-9;
 
 Vec3 rotation_log(const Mat3& r) {
   const Eigen::AngleAxisd aa(r);
@@ -83,10 +85,16 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
   }
   const ConfigVector q_prev = q_;
   const RetargetWeights& w = options_.weights;
-  for (int it = 0; it < iterations; ++it) {
+  // After the weighted solve, a few projection iterations put the stance feet exactly on
+  // their pins (a minimum-norm correction under the same bounds): the weighted terms alone
+  // leave millimetres of compromise whenever a velocity bound is active.
+  const bool any_pinned = options_.pin_stance_feet && (pins.pinned[0] || pins.pinned[1]);
+  const int total = iterations + (any_pinned ? options_.projection_iterations : 0);
+  for (int it = 0; it < total; ++it) {
+    const bool project = it >= iterations;
     dynamics::forward_kinematics(robot_, ws.data, q_);
     ws.h.setIdentity();
-    ws.h *= options_.damping;
+    ws.h *= project ? kProjectionDamping : options_.damping;
     ws.g.setZero();
     const auto add_point = [&](int body, const Vec3& point_body, const Vec3& target_m, double weight) {
       const Vec3 p = ws.data.position_m[body] + ws.data.rotation[body] * point_body;
@@ -101,8 +109,15 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       ws.h.noalias() += weight * ja.transpose() * ja;
       ws.g.noalias() += weight * ja.transpose() * rotation_log(target_r * ws.data.rotation[body].transpose());
     };
+    if (project) {
+      for (int side = 0; side < 2; ++side) {
+        if (!pins.pinned[side]) continue;
+        add_point(kFootBody[side], Vec3::Zero(), pins.stance[side].ankle_position_m, 1.0);
+        add_rotation(kFootBody[side], yaw_rotation(pins.stance[side].yaw_rad), 1.0);
+      }
+    }
     // Keypoints.
-    for (int k = 0; k < kNumKeypoints; ++k) {
+    for (int k = 0; k < kNumKeypoints && !project; ++k) {
       if (!present[k] || position_weight_[k] <= 0.0) continue;
       const bool foot_kp = k == kAnkleKp[0] || k == kToeKp[0] || k == kAnkleKp[1] || k == kToeKp[1];
       if (foot_kp && options_.pin_stance_feet) {
@@ -113,7 +128,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       if (k == kKpPelvis) add_rotation(0, target.base_rotation, w.pelvis_rotation);
     }
     // Stance feet: full pose pinned (free feet near a stance: blended in and out).
-    for (int side = 0; side < 2 && options_.pin_stance_feet; ++side) {
+    for (int side = 0; side < 2 && options_.pin_stance_feet && !project; ++side) {
       for (const FootPose2d* pose : {&pins.stance[side], &pins.release[side]}) {
         if (pose->blend <= 0.0 || (pins.pinned[side] && pose == &pins.release[side])) continue;
         const double b4 = pose->blend * pose->blend * pose->blend * pose->blend;
@@ -122,7 +137,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       }
     }
     // Sole corners of free feet stay above the ground (one-sided: only while below).
-    for (int c = 0; c < model::kNumContactPoints && options_.ground_rows; ++c) {
+    for (int c = 0; c < model::kNumContactPoints && options_.ground_rows && !project; ++c) {
       const int side = c / kCornersPerFoot;
       if (options_.pin_stance_feet && pins.pinned[side]) continue;
       const Vec3 p = dynamics::frame_position(robot_, ws.data, c);
@@ -131,6 +146,13 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       const auto jz = ws.jacobian.row(2);
       ws.h.noalias() += w.ground * jz.transpose() * jz;
       ws.g.noalias() += (w.ground * (1e-4 - p.z())) * jz.transpose();
+    }
+    // Smoothness: pull the joints toward the previous frame.
+    if (iterations == options_.iterations && !project) {
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        ws.h(6 + j, 6 + j) += w.joint_smoothness;
+        ws.g[6 + j] += w.joint_smoothness * (q_prev[7 + j] - q_[7 + j]);
+      }
     }
     // Bounds.
     ws.lo.head<6>().setConstant(-INFINITY);
@@ -153,7 +175,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     // The joint part of integrate() is additive: land exactly on a bound that was hit.
     for (int j = 0; j < model::kNumJoints; ++j)
       q_[7 + j] = std::clamp(q_[7 + j], lim.position_min_rad[j], lim.position_max_rad[j]);
-    if (ws.dx.norm() < options_.step_tolerance) break;
+    if (ws.dx.norm() < options_.step_tolerance && !project) it = std::max(it, iterations - 1);
   }
   FrameLimits out;
   for (int j = 0; j < model::kNumJoints; ++j) {

@@ -36,12 +36,16 @@ struct RetargetWeights {
   double knee = 2.0, shoulder = 1.0, elbow = 2.0, wrist = 4.0, hand = 2.0, head = 0.5;
   double stance_position = 2.0e4, stance_rotation = 2.0e3;
   double ground = 2.0e4;
+  // Joint motion from the previous frame (1/rad²): damps frame-to-frame chatter where the
+  // targets leave joints free (wrist roll, head yaw) or fight the velocity bounds.
+  double joint_smoothness = 0.05;
 };
 
 struct RetargetOptions {
   RetargetWeights weights;
   int iterations = 3;               // Gauss–Newton iterations per frame (warm start)
   int first_frame_iterations = 60;  // the first frame starts from the zero pose
+  int projection_iterations = 2;    // stance feet put exactly on their pins afterwards
   double damping = 1e-6;            // Levenberg–Marquardt λ
   double step_tolerance = 1e-12;    // stop iterating when ‖Δv‖ is below this
   bool pin_stance_feet = true;
