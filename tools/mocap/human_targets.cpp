@@ -272,6 +272,10 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   const Mat3 rest_frame = pelvis_frame(robot_rest);
   for (TargetFrame& f : out.frames) {
     for (Vec3& p : f.position_m) p += shift;
+    // Feet never aim below the floor: a flat robot foot has its ankle at ankle_h and its toe
+    // point on the sole, and neither can go lower without a sole corner going through.
+    for (int k : {kKpLeftAnkle, kKpRightAnkle}) f.position_m[k].z() = std::max(f.position_m[k].z(), ankle_h);
+    for (int k : {kKpLeftToe, kKpRightToe}) f.position_m[k].z() = std::max(f.position_m[k].z(), toe_h);
     f.base_rotation = pelvis_frame(f.position_m) * rest_frame.transpose();
   }
   return true;

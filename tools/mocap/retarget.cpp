@@ -15,11 +15,17 @@ using dynamics::VelocityVector;
 using Hessian = Eigen::Matrix<double, kNv, kNv>;
 
 constexpr int kFootBody[2] = {6, 12};  // leg_l6_link, leg_r6_link
+constexpr int kLeftHipYaw = 1, kRightHipYaw = 7;  // joint indices (leg_l2, leg_r2)
+// Stance feet stay this far inside the hip yaw range, leaving the pelvis room to turn.
+constexpr double kHipYawMargin_rad = 0.17;
 constexpr int kAnkleKp[2] = {kKpLeftAnkle, kKpRightAnkle};
 constexpr int kToeKp[2] = {kKpLeftToe, kKpRightToe};
 constexpr int kCornersPerFoot = model::kNumContactPoints / 2;
 // Levenberg damping of the stance projection: tiny, so the correction is minimum-norm.
 constexpr double kProjectionDamping = 1e-9;
+// Ankle-target height above flat-foot height below which a free foot is drawn flat [m]:
+// a human swing clears 5–10 cm, so feet flatten in the last third of their descent.
+constexpr double kFlatFootHeight_m = 0.08;
 
 Vec3 rotation_log(const Mat3& r) {
   const Eigen::AngleAxisd aa(r);
@@ -40,7 +46,8 @@ struct Retargeter::Workspace {
 };
 
 Retargeter::Retargeter(const model::Model& robot, const RetargetOptions& options, double rate_hz)
-    : robot_(robot), options_(options), dt_s_(1.0 / rate_hz), keypoints_(robot_keypoints(robot)),
+    : robot_(robot), options_(options), dt_s_(1.0 / rate_hz), ankle_height_m_(robot_ankle_height_m(robot)),
+      keypoints_(robot_keypoints(robot)),
       ws_(std::make_unique<Workspace>()) {
   const RetargetWeights& w = options.weights;
   position_weight_.fill(0.0);
@@ -136,6 +143,23 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
         add_rotation(kFootBody[side], yaw_rotation(pose->yaw_rad), b4 * w.stance_rotation);
       }
     }
+    // Free feet near the floor turn flat (keeping the human heading), so a toe-down or
+    // rolled human foot, which the robot's ±15° ankle roll often cannot copy, does not
+    // drive a sole corner through the floor: weight rises as the ankle target descends.
+    for (int side = 0; side < 2 && !project; ++side) {
+      if (options_.pin_stance_feet && pins.pinned[side]) continue;
+      const Vec3& ankle = target.position_m[kAnkleKp[side]];
+      const double proximity = std::clamp(1.0 - (ankle.z() - ankle_height_m_) / kFlatFootHeight_m, 0.0, 1.0);
+      if (proximity <= 0.0) continue;
+      double yaw = heading_of(target.base_rotation);
+      if (present[kToeKp[side]]) {
+        const Vec3 d = target.position_m[kToeKp[side]] - ankle;
+        if (std::hypot(d.x(), d.y()) > 1e-6) yaw = std::atan2(d.y(), d.x());
+      }
+      const Vec3 p = ws.data.position_m[kFootBody[side]];
+      dynamics::point_jacobian(robot_, ws.data, kFootBody[side], p, ws.jacobian);
+      add_rotation(kFootBody[side], yaw_rotation(yaw), proximity * proximity * w.swing_flat);
+    }
     // Sole corners of free feet stay above the ground (one-sided: only while below).
     for (int c = 0; c < model::kNumContactPoints && options_.ground_rows && !project; ++c) {
       const int side = c / kCornersPerFoot;
@@ -205,10 +229,12 @@ std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vec
       }
       std::size_t j = i;
       Vec3 sum = Vec3::Zero();
-      double cx = 0.0, cy = 0.0;
+      double cx = 0.0, cy = 0.0, px = 0.0, py = 0.0;
       while (j < n && in_contact(j)) {
         const TargetFrame& f = targets.frames[j];
         sum += f.position_m[kAnkleKp[side]];
+        px += f.base_rotation(0, 0);
+        py += f.base_rotation(1, 0);
         // Heading of the foot: ankle→toe if the toe is known, else the pelvis heading.
         double yaw = heading_of(f.base_rotation);
         if (targets.present[kToeKp[side]]) {
@@ -220,7 +246,13 @@ std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vec
         ++j;
       }
       const Vec3 mean = sum / static_cast<double>(j - i);
-      const double yaw = std::atan2(cy, cx);
+      // The robot turns a foot out only as far as its hip yaw allows (±45°, FACTS.md §2.2),
+      // not into a dancer's 70–90° turnout: clamp the heading relative to the pelvis.
+      const double pelvis_yaw = std::atan2(py, px);
+      const int hip_yaw = side == 0 ? kLeftHipYaw : kRightHipYaw;
+      const double relative = std::remainder(std::atan2(cy, cx) - pelvis_yaw, 2.0 * M_PI);
+      const double yaw = pelvis_yaw + std::clamp(relative, robot.limits.position_min_rad[hip_yaw] + kHipYawMargin_rad,
+                                                 robot.limits.position_max_rad[hip_yaw] - kHipYawMargin_rad);
       const FootPose2d pose{Vec3(mean.x(), mean.y(), ankle_h), yaw, 1.0};
       for (std::size_t k = i; k < j; ++k) {
         pins[k].pinned[side] = true;

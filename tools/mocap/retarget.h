@@ -36,6 +36,7 @@ struct RetargetWeights {
   double knee = 2.0, shoulder = 1.0, elbow = 2.0, wrist = 4.0, hand = 2.0, head = 0.5;
   double stance_position = 2.0e4, stance_rotation = 2.0e3;
   double ground = 2.0e4;
+  double swing_flat = 500.0;  // free foot near the floor: flat at the human heading
   // Joint motion from the previous frame (1/rad²): damps frame-to-frame chatter where the
   // targets leave joints free (wrist roll, head yaw) or fight the velocity bounds.
   double joint_smoothness = 0.05;
@@ -98,6 +99,7 @@ class Retargeter {
   const model::Model& robot_;
   RetargetOptions options_;
   double dt_s_;
+  double ankle_height_m_;
   std::array<RobotKeypoint, kNumKeypoints> keypoints_;
   std::array<double, kNumKeypoints> position_weight_{};
   ConfigVector q_;
