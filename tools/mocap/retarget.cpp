@@ -23,6 +23,11 @@ constexpr int kToeKp[2] = {kKpLeftToe, kKpRightToe};
 constexpr int kCornersPerFoot = model::kNumContactPoints / 2;
 // Levenberg damping of the stance projection: tiny, so the correction is minimum-norm.
 constexpr double kProjectionDamping = 1e-9;
+// Frames after touchdown during which the vertical part of a pin is soft, and its weight.
+constexpr int kSettleFrames = 10;
+constexpr double kSettleWeight = 1e-3;
+// A corner pushed out of the floor is lifted to this height [m] (above round-off).
+constexpr double kGroundClearance_m = 2e-4;
 // Ankle-target height above flat-foot height below which a free foot is drawn flat [m]:
 // a human swing clears 5–10 cm, so feet flatten in the last third of their descent.
 constexpr double kFlatFootHeight_m = 0.08;
@@ -69,6 +74,7 @@ void Retargeter::reset() {
   q_ = ConfigVector::Zero();
   q_[6] = 1.0;
   started_ = false;
+  locked_ = {false, false};
 }
 
 FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
@@ -92,11 +98,30 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
   }
   const ConfigVector q_prev = q_;
   const RetargetWeights& w = options_.weights;
+  // A foot is pinned where it touches down: its pose at the previous frame, set flat on the
+  // floor. The planned pose (mean human foot over the phase) only guides the approach, so
+  // a landing that velocity limits kept a few centimetres short never drags the feet.
+  std::array<FootPose2d, 2> stance = pins.stance;
+  for (int side = 0; side < 2; ++side) {
+    if (!pins.pinned[side] || !options_.pin_stance_feet) {
+      locked_[side] = false;
+      continue;
+    }
+    ++locked_frames_[side];
+    if (!locked_[side]) {
+      locked_frames_[side] = 0;
+      dynamics::forward_kinematics(robot_, ws.data, q_);
+      const Vec3 p = ws.data.position_m[kFootBody[side]];
+      locked_pose_[side] = {Vec3(p.x(), p.y(), ankle_height_m_), heading_of(ws.data.rotation[kFootBody[side]]), 1.0};
+      locked_[side] = true;
+    }
+    stance[side] = locked_pose_[side];
+  }
   // After the weighted solve, a few projection iterations put the stance feet exactly on
   // their pins (a minimum-norm correction under the same bounds): the weighted terms alone
   // leave millimetres of compromise whenever a velocity bound is active.
-  const bool any_pinned = options_.pin_stance_feet && (pins.pinned[0] || pins.pinned[1]);
-  const int total = iterations + (any_pinned ? options_.projection_iterations : 0);
+  // The same pass lifts any sole corner of a free foot that ended below the floor.
+  const int total = iterations + options_.projection_iterations;
   for (int it = 0; it < total; ++it) {
     const bool project = it >= iterations;
     dynamics::forward_kinematics(robot_, ws.data, q_);
@@ -116,11 +141,28 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       ws.h.noalias() += weight * ja.transpose() * ja;
       ws.g.noalias() += weight * ja.transpose() * rotation_log(target_r * ws.data.rotation[body].transpose());
     };
+    // A pose target with separate weights on the horizontal (x, y, yaw) and the vertical
+    // (z, roll, pitch) parts, world axes.
+    const auto add_foot_pose = [&](int body, const FootPose2d& pose, double horizontal, double vertical) {
+      const Vec3 p = ws.data.position_m[body];
+      dynamics::point_jacobian(robot_, ws.data, body, p, ws.jacobian);
+      const Eigen::Matrix<double, 6, 1> wdiag =
+          (Eigen::Matrix<double, 6, 1>() << horizontal, horizontal, vertical, vertical, vertical, horizontal).finished();
+      Eigen::Matrix<double, 6, 1> e;
+      e.head<3>() = pose.ankle_position_m - p;
+      e.tail<3>() = rotation_log(yaw_rotation(pose.yaw_rad) * ws.data.rotation[body].transpose());
+      ws.h.noalias() += ws.jacobian.transpose() * wdiag.asDiagonal() * ws.jacobian;
+      ws.g.noalias() += ws.jacobian.transpose() * (wdiag.asDiagonal() * e);
+    };
+    int rows = 0;
     if (project) {
-      for (int side = 0; side < 2; ++side) {
+      for (int side = 0; side < 2 && options_.pin_stance_feet; ++side) {
         if (!pins.pinned[side]) continue;
-        add_point(kFootBody[side], Vec3::Zero(), pins.stance[side].ankle_position_m, 1.0);
-        add_rotation(kFootBody[side], yaw_rotation(pins.stance[side].yaw_rad), 1.0);
+        // A foot that just landed keeps its place exactly but settles down and flat softly,
+        // so a landing a little high or tilted never drags the other foot.
+        const bool settling = locked_frames_[side] < kSettleFrames;
+        add_foot_pose(kFootBody[side], stance[side], 1.0, settling ? kSettleWeight : 1.0);
+        ++rows;
       }
     }
     // Keypoints.
@@ -136,7 +178,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     }
     // Stance feet: full pose pinned (free feet near a stance: blended in and out).
     for (int side = 0; side < 2 && options_.pin_stance_feet && !project; ++side) {
-      for (const FootPose2d* pose : {&pins.stance[side], &pins.release[side]}) {
+      for (const FootPose2d* pose : {static_cast<const FootPose2d*>(&stance[side]), &pins.release[side]}) {
         if (pose->blend <= 0.0 || (pins.pinned[side] && pose == &pins.release[side])) continue;
         const double b4 = pose->blend * pose->blend * pose->blend * pose->blend;
         add_point(kFootBody[side], Vec3::Zero(), pose->ankle_position_m, b4 * w.stance_position);
@@ -161,16 +203,19 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       add_rotation(kFootBody[side], yaw_rotation(yaw), proximity * proximity * w.swing_flat);
     }
     // Sole corners of free feet stay above the ground (one-sided: only while below).
-    for (int c = 0; c < model::kNumContactPoints && options_.ground_rows && !project; ++c) {
+    for (int c = 0; c < model::kNumContactPoints && options_.ground_rows; ++c) {
       const int side = c / kCornersPerFoot;
       if (options_.pin_stance_feet && pins.pinned[side]) continue;
       const Vec3 p = dynamics::frame_position(robot_, ws.data, c);
       if (p.z() >= 0.0) continue;
       dynamics::frame_jacobian(robot_, ws.data, c, ws.jacobian);
       const auto jz = ws.jacobian.row(2);
-      ws.h.noalias() += w.ground * jz.transpose() * jz;
-      ws.g.noalias() += (w.ground * (1e-4 - p.z())) * jz.transpose();
+      const double weight = project ? 1.0 : w.ground;
+      ws.h.noalias() += weight * jz.transpose() * jz;
+      ws.g.noalias() += (weight * (kGroundClearance_m - p.z())) * jz.transpose();
+      ++rows;
     }
+    if (project && rows == 0) break;  // nothing to correct
     // Smoothness: pull the joints toward the previous frame.
     if (iterations == options_.iterations && !project) {
       for (int j = 0; j < model::kNumJoints; ++j) {

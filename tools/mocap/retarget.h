@@ -104,6 +104,9 @@ class Retargeter {
   std::array<double, kNumKeypoints> position_weight_{};
   ConfigVector q_;
   bool started_ = false;
+  std::array<bool, 2> locked_{};           // stance foot pinned where it landed
+  std::array<FootPose2d, 2> locked_pose_{};
+  std::array<int, 2> locked_frames_{};
   std::array<bool, model::kNumJoints> at_position_bound_{}, at_velocity_bound_{};
   std::unique_ptr<Workspace> ws_;
 };
