@@ -182,6 +182,7 @@ int run(int argc, char** argv) {
   j["joint_limit_violations"] = r.joint_limit_violations;
   j["velocity_limit_violations"] = r.velocity_limit_violations;
   j["contact_phases"] = r.contact_phases;
+  j["schedule_contact_phases"] = r.schedule_phases;
   j["frames_per_s"] = seconds > 0.0 ? r.frames / seconds : 0.0;
   nlohmann::ordered_json limited = nlohmann::ordered_json::object();
   for (int k = 0; k < model::kNumJoints; ++k) {

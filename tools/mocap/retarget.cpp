@@ -23,6 +23,11 @@ constexpr int kToeKp[2] = {kKpLeftToe, kKpRightToe};
 constexpr int kCornersPerFoot = model::kNumContactPoints / 2;
 // Levenberg damping of the stance projection: tiny, so the correction is minimum-norm.
 constexpr double kProjectionDamping = 1e-9;
+// A landing foot locks when its ankle is this close to flat-foot height and its sole this
+// close to level: the soft settling after the lock then moves a sole corner by well under
+// 0.1 mm per frame (0.06 m × 0.01 rad spread over kSettleFrames).
+constexpr double kLandHeight_m = 0.003;
+constexpr double kLandTilt_rad = 0.01;
 // Frames after touchdown during which the vertical part of a pin is soft, and its weight.
 constexpr int kSettleFrames = 10;
 constexpr double kSettleWeight = 1e-3;
@@ -98,10 +103,14 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
   }
   const ConfigVector q_prev = q_;
   const RetargetWeights& w = options_.weights;
-  // A foot is pinned where it touches down: its pose at the previous frame, set flat on the
-  // floor. The planned pose (mean human foot over the phase) only guides the approach, so
-  // a landing that velocity limits kept a few centimetres short never drags the feet.
+  // A foot is pinned where it touches down. Once the schedule says stance, the foot first
+  // lands: it is drawn flat onto the floor where it is (no horizontal jump). When it is
+  // within kLandHeight_m and kLandTilt_rad of that, it locks: its pose (x, y, yaw) is held
+  // exactly until liftoff. The planned pose (mean human foot over the phase) only guides
+  // the approach, so a landing that velocity limits kept short never drags the feet, and
+  // the robot's own contact labels (contact_label()) start at the real touchdown.
   std::array<FootPose2d, 2> stance = pins.stance;
+  bool kinematics_fresh = false;
   for (int side = 0; side < 2; ++side) {
     if (!pins.pinned[side] || !options_.pin_stance_feet) {
       locked_[side] = false;
@@ -109,11 +118,15 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     }
     ++locked_frames_[side];
     if (!locked_[side]) {
-      locked_frames_[side] = 0;
-      dynamics::forward_kinematics(robot_, ws.data, q_);
+      if (!kinematics_fresh) dynamics::forward_kinematics(robot_, ws.data, q_);
+      kinematics_fresh = true;
       const Vec3 p = ws.data.position_m[kFootBody[side]];
-      locked_pose_[side] = {Vec3(p.x(), p.y(), ankle_height_m_), heading_of(ws.data.rotation[kFootBody[side]]), 1.0};
-      locked_[side] = true;
+      const Mat3& r = ws.data.rotation[kFootBody[side]];
+      locked_pose_[side] = {Vec3(p.x(), p.y(), ankle_height_m_), heading_of(r), 1.0};
+      if (p.z() - ankle_height_m_ < kLandHeight_m && std::acos(std::clamp(r(2, 2), -1.0, 1.0)) < kLandTilt_rad) {
+        locked_[side] = true;
+        locked_frames_[side] = 0;
+      }
     }
     stance[side] = locked_pose_[side];
   }
@@ -157,7 +170,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     int rows = 0;
     if (project) {
       for (int side = 0; side < 2 && options_.pin_stance_feet; ++side) {
-        if (!pins.pinned[side]) continue;
+        if (!locked_[side]) continue;
         // A foot that just landed keeps its place exactly but settles down and flat softly,
         // so a landing a little high or tilted never drags the other foot.
         const bool settling = locked_frames_[side] < kSettleFrames;
@@ -205,7 +218,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     // Sole corners of free feet stay above the ground (one-sided: only while below).
     for (int c = 0; c < model::kNumContactPoints && options_.ground_rows; ++c) {
       const int side = c / kCornersPerFoot;
-      if (options_.pin_stance_feet && pins.pinned[side]) continue;
+      if (locked_[side]) continue;
       const Vec3 p = dynamics::frame_position(robot_, ws.data, c);
       if (p.z() >= 0.0) continue;
       dynamics::frame_jacobian(robot_, ws.data, c, ws.jacobian);
@@ -321,9 +334,11 @@ std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vec
 void retarget_motion(const model::Model& robot, const HumanTargets& targets, const std::vector<ContactLabel>& labels,
                      const RetargetOptions& options, RetargetResult& out) {
   out = RetargetResult{};
-  out.contacts = labels;
-  out.contacts.resize(targets.frames.size(), ContactLabel::kFlight);
-  const std::vector<FootPins> pins = options.pin_stance_feet ? plan_foot_pins(targets, out.contacts, robot, targets.rate_hz)
+  std::vector<ContactLabel> schedule = labels;
+  schedule.resize(targets.frames.size(), ContactLabel::kFlight);
+  out.report.schedule_phases = count_contact_phases(schedule);
+  out.contacts.reserve(targets.frames.size());
+  const std::vector<FootPins> pins = options.pin_stance_feet ? plan_foot_pins(targets, schedule, robot, targets.rate_hz)
                                                              : std::vector<FootPins>(targets.frames.size());
   Retargeter solver(robot, options, targets.rate_hz);
   out.q.reserve(targets.frames.size());
@@ -331,6 +346,7 @@ void retarget_motion(const model::Model& robot, const HumanTargets& targets, con
   for (std::size_t i = 0; i < targets.frames.size(); ++i) {
     const FrameLimits l = solver.step(targets.frames[i], targets.present, pins[i]);
     out.q.push_back(solver.q());
+    out.contacts.push_back(options.pin_stance_feet ? solver.contact_label() : schedule[i]);
     r.position_bound_active_samples += l.position_bounds_active;
     r.velocity_bound_active_samples += l.velocity_bounds_active;
     for (int j = 0; j < model::kNumJoints; ++j) {

@@ -90,6 +90,8 @@ class Retargeter {
   void reset();
   FrameLimits step(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present, const FootPins& pins);
   const ConfigVector& q() const { return q_; }
+  // The robot's contact state after the last step: feet locked on the floor.
+  ContactLabel contact_label() const { return make_label(locked_[0], locked_[1]); }
   // Joints at a bound in the last step (true per joint), for the report.
   const std::array<bool, model::kNumJoints>& at_position_bound() const { return at_position_bound_; }
   const std::array<bool, model::kNumJoints>& at_velocity_bound() const { return at_velocity_bound_; }
@@ -120,14 +122,15 @@ struct RetargetReport {
   double float_max_m = 0.0;         // highest sole corner of a pinned (stance) foot
   int joint_limit_violations = 0;   // (frame, joint) samples outside the position limits
   int velocity_limit_violations = 0;
-  int contact_phases = 0;
+  int contact_phases = 0;           // of the robot's labels (feet locked on the floor)
+  int schedule_phases = 0;          // of the schedule the retargeting was given
   long position_bound_active_samples = 0, velocity_bound_active_samples = 0;
   std::array<int, model::kNumJoints> position_bound_active_per_joint{}, velocity_bound_active_per_joint{};
 };
 
 struct RetargetResult {
   std::vector<ConfigVector> q;
-  std::vector<ContactLabel> contacts;
+  std::vector<ContactLabel> contacts;  // the robot's: a foot counts from its real touchdown
   RetargetReport report;
 };
 
