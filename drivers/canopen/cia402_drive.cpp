@@ -111,8 +111,11 @@ bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const D
              can_frame& out) {
   switch (st.phase) {
     case DrivePhase::kIdle:
-    case DrivePhase::kFailed:
       return false;
+    case DrivePhase::kFailed:
+      if (!st.was_operational) return false;
+      encode_rpdo1_rt(cfg.node_id, RxPdo1{controlword::kDisableVoltage, 0, 0}, out);
+      return true;
     case DrivePhase::kWaitBoot:
       if (now_ns - st.phase_since_ns > kBootTimeout_ns) fail(st, DriverError::kBootTimeout, now_ns);
       return false;
@@ -138,6 +141,7 @@ bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const D
     case DrivePhase::kStarting:
       if (st.nmt == NmtState::kOperational) {
         enter(st, DrivePhase::kOperational, now_ns);
+        st.was_operational = true;
         break;  // fall through to the cyclic frame below
       }
       if (now_ns - st.phase_since_ns > kStartTimeout_ns) {
@@ -151,11 +155,11 @@ bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const D
   // Operational: heartbeat consumer, then the cyclic RPDO1.
   if (now_ns - st.heartbeat_ns > cfg.heartbeat_timeout_ns) {
     fail(st, DriverError::kHeartbeatLost, now_ns);
-    return false;
+    return step_rt(cfg, st, now_ns, cmd, out);  // the safe frame, this cycle
   }
   if (st.nmt != NmtState::kOperational) {
     fail(st, DriverError::kUnexpectedNmtState, now_ns);
-    return false;
+    return step_rt(cfg, st, now_ns, cmd, out);
   }
   // Silent drive: the reference is the last TPDO1, or the entry to operational.
   const hal::TimeNs last_seen = st.have_tpdo1 && st.tpdo1_ns > st.phase_since_ns ? st.tpdo1_ns

@@ -50,7 +50,9 @@ enum class DrivePhase : std::uint8_t {
   kConfiguring = 2,
   kStarting = 3,
   kOperational = 4,
-  kFailed = 5,       // `error` says why; restart with start_drive
+  kFailed = 5,       // `error` says why; restart with start_drive. A drive that had
+                     // reached operational keeps getting a safe RPDO1 (disable
+                     // voltage, zero torque): in CST the last target would persist.
 };
 
 struct DriveCommand {
@@ -87,6 +89,7 @@ struct DriveState {
   hal::TimeNs tpdo1_ns = 0;
   bool have_tpdo1 = false, have_tpdo2 = false;
   bool stale = false;  // no TPDO1 within tpdo_timeout_ns (sample invalid)
+  bool was_operational = false;  // PDO mapping is ours: safe RPDO1 allowed after a failure
   Emergency last_emergency{};
   std::uint32_t emergencies = 0;
   std::uint32_t torque_clamps = 0;
@@ -100,7 +103,8 @@ DriverError handle_frame_rt(const DriveConfig& cfg, DriveState& st, const can_fr
                             hal::TimeNs stamp_ns);
 
 // Advances the supervisor; returns true with `out` filled when a frame is owed.
-// In kOperational it always emits RPDO1 (disabled drives get zero torque).
+// In kOperational it always emits RPDO1 (disabled drives get zero torque); in
+// kFailed after operational, RPDO1 with controlword 0 and zero torque.
 bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const DriveCommand& cmd,
              can_frame& out);
 

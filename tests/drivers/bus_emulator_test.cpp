@@ -287,8 +287,13 @@ TEST_F(CanopenLoop, DisablingRemovesTorqueAtTheDrive) {
 }
 
 TEST_F(CanopenLoop, SilentDriveGoesStaleThenLosesHeartbeat) {
-  for (auto& c : cmd) c.enable = true;
+  for (auto& c : cmd) {
+    c.enable = true;
+    c.torque_Nm = 5.0;
+  }
   ASSERT_GE(cycles_until_enabled(500), 0);
+  cycle();
+  ASSERT_NEAR(emulator::drive_torque_Nm(emu.drives[1]), 5.0, 0.1);
   EXPECT_FALSE(emulator::set_drive_silent(emu, 2, true)) << "disarmed injection must be refused";
   emulator::arm_fault_injection(emu.faults, 3);
   ASSERT_TRUE(emulator::set_drive_silent(emu, 2, true));
@@ -302,6 +307,11 @@ TEST_F(CanopenLoop, SilentDriveGoesStaleThenLosesHeartbeat) {
   EXPECT_EQ(st[1].phase, canopen::DrivePhase::kFailed);
   EXPECT_EQ(st[1].error, DriverError::kHeartbeatLost);
   EXPECT_EQ(st[0].error, DriverError::kOk);
+  // A drive that only lost its transmitter still listens: the master's safe
+  // RPDO1 takes its torque away instead of leaving the last target latched.
+  cycle();
+  EXPECT_EQ(emulator::drive_torque_Nm(emu.drives[1]), 0.0);
+  EXPECT_EQ(emu.drives[1].power, canopen::Cia402State::kSwitchOnDisabled);
 }
 
 TEST_F(CanopenLoop, DriveFaultIsReportedAndResetByEdge) {

@@ -115,7 +115,16 @@ TEST_F(DriveSupervisor, HeartbeatLossFails) {
   ASSERT_TRUE(step_rt(cfg, st, now, DriveCommand{}, out));
   now += cfg.heartbeat_timeout_ns + 1;
   tpdos();
-  EXPECT_FALSE(step_rt(cfg, st, now, DriveCommand{}, out));
+  DriveCommand cmd;
+  cmd.enable = true;
+  cmd.torque_Nm = 50.0;
+  // Failed, but the drive may still listen: it gets disable voltage and zero
+  // torque every cycle, never the last target again.
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(step_rt(cfg, st, now, cmd, out));
+    expect_bytes(out, 0x204, {0, 0, 0, 0, 0, 0, 0, 0});
+    now += 2'000'000;
+  }
   EXPECT_EQ(st.phase, DrivePhase::kFailed);
   EXPECT_EQ(st.error, DriverError::kHeartbeatLost);
 }
