@@ -10,6 +10,8 @@
 
 #include "controllers/model/model.h"
 #include "drivers/canopen/cia402_drive.h"
+#include "drivers/cycle/canopen_io.h"
+#include "drivers/cycle/ruiwo_io.h"
 #include "drivers/emulator/bus_fault.h"
 #include "drivers/emulator/cia402_emulator.h"
 #include "drivers/emulator/ruiwo_emulator.h"
@@ -71,19 +73,14 @@ class RuiwoLoop : public ::testing::Test {
       if (as_classic(rx, f)) (void)ruiwo::handle_reply_rt(bus, f, now, sensors);
     }
   }
-  // One 4 ms cycle: commands out, emulated boards answer, replies in, timeouts.
+  // One 4 ms cycle as the firmware runs it: commands out, the emulated boards
+  // answer, and at the next cycle start the replies come in and timeouts are checked.
   int cycle() {
-    for (int i = 0; i < bus.count; ++i) {
-      can_frame f;
-      ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], f);
-      EXPECT_EQ(send_rt(wire.host, f), DriverError::kOk);
-      ruiwo::note_sent_rt(bus, i, now);
-    }
+    const RuiwoSendReport sent = ruiwo_send_rt(wire.host, bus, commands, now);
+    EXPECT_EQ(sent.sent, bus.count);
     emulator::serve_rt(emu, wire.device);
-    now += 1'000'000;
-    drain();
-    now += 3'000'000;
-    return ruiwo::check_timeouts_rt(bus, now, sensors);
+    now += 4'000'000;
+    return ruiwo_receive_rt(wire.host, bus, now, 0, sensors).silent;
   }
 };
 
@@ -222,17 +219,8 @@ class CanopenLoop : public ::testing::Test {
   // One control cycle as the firmware runs it.
   void cycle() {
     emulator::serve_rt(emu, wire.device, now);
-    RxFrame rx;
-    can_frame f;
-    while (receive_rt(wire.host, rx) == DriverError::kOk) {
-      if (!as_classic(rx, f)) continue;
-      for (int i = 0; i < kDrives; ++i) (void)canopen::handle_frame_rt(cfg[i], st[i], f, now);
-    }
-    for (int i = 0; i < kDrives; ++i) {
-      if (canopen::step_rt(cfg[i], st[i], now, cmd[i], f)) (void)send_rt(wire.host, f);
-    }
-    canopen::encode_sync_rt(f);
-    (void)send_rt(wire.host, f);
+    canopen_receive_rt(wire.host, cfg, st, now, 0);
+    canopen_send_rt(wire.host, cfg, st, cmd, now);
     now += kCycle_ns;
   }
   int cycles_until_enabled(int limit) {

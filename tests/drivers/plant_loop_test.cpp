@@ -11,6 +11,8 @@
 
 #include "controllers/model/model.h"
 #include "drivers/canopen/cia402_drive.h"
+#include "drivers/cycle/canopen_io.h"
+#include "drivers/cycle/ruiwo_io.h"
 #include "drivers/emulator/plant_binding.h"
 #include "drivers/ruiwo/ruiwo_bus.h"
 
@@ -77,12 +79,7 @@ TEST(PlantLoop, LegDrivesSettleOnJointTargetsThroughTheAnkleLinkage) {
   for (int cycle = 0; cycle < 1500; ++cycle) {
     ASSERT_EQ(emulator::write_leg_drives(leg, plant, emu), DriverError::kOk);
     emulator::serve_rt(emu, dev, now);
-    RxFrame rx;
-    can_frame f;
-    while (receive_rt(host, rx) == DriverError::kOk) {
-      if (!as_classic(rx, f)) continue;
-      for (int k = 0; k < kLegActuators; ++k) (void)canopen::handle_frame_rt(cfg[k], st[k], f, now);
-    }
+    canopen_receive_rt(host, cfg, st, now, 0);
     for (int k = 0; k < kLegActuators; ++k) motors[k] = canopen::motor_sample(cfg[k], st[k]);
     (void)leg_joints_from_motors_rt(leg.transmission, motors, joints);
     bool all_valid = true;
@@ -95,14 +92,11 @@ TEST(PlantLoop, LegDrivesSettleOnJointTargetsThroughTheAnkleLinkage) {
     if (all_valid) {
       ASSERT_EQ(leg_motor_torques_rt(leg.transmission, joints, joint_tau, motor_tau), DriverError::kOk);
     }
-    for (int k = 0; k < kLegActuators; ++k) {
-      canopen::DriveCommand cmd{true, all_valid ? motor_tau[k] : 0.0, 0.0};
-      if (canopen::step_rt(cfg[k], st[k], now, cmd, f)) {
-        ASSERT_EQ(send_rt(host, f), DriverError::kOk);
-      }
-    }
-    canopen::encode_sync_rt(f);
-    ASSERT_EQ(send_rt(host, f), DriverError::kOk);
+    std::array<canopen::DriveCommand, kLegActuators> cmds{};
+    for (int k = 0; k < kLegActuators; ++k) cmds[k] = canopen::DriveCommand{true, all_valid ? motor_tau[k] : 0.0, 0.0};
+    const CanopenSendReport sent = canopen_send_rt(host, cfg, st, cmds, now);
+    ASSERT_TRUE(sent.sync_sent);
+    ASSERT_EQ(sent.dropped + sent.failed, 0);
     std::array<double, model::kNumJoints> tau{};
     ASSERT_EQ(emulator::add_leg_torques(leg, plant, emu, tau), DriverError::kOk);
     integrate(plant, tau, leg.first_joint, kLegActuators);
@@ -145,18 +139,9 @@ TEST(PlantLoop, RuiwoArmSettlesOnTargetsWithSignsAndOffsets) {
   hal::TimeNs now = 0;
   for (int cycle = 0; cycle < 1500; ++cycle) {
     emulator::write_ruiwo_motors(bus, plant, emu);
-    can_frame f;
-    for (int i = 0; i < bus.count; ++i) {
-      ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], f);
-      ASSERT_EQ(send_rt(host, f), DriverError::kOk);
-      ruiwo::note_sent_rt(bus, i, now);
-    }
+    ASSERT_EQ(ruiwo_send_rt(host, bus, commands, now).sent, bus.count);
     emulator::serve_rt(emu, dev);
-    RxFrame rx;
-    while (receive_rt(host, rx) == DriverError::kOk) {
-      if (as_classic(rx, f)) (void)ruiwo::handle_reply_rt(bus, f, now, sensors);
-    }
-    ASSERT_EQ(ruiwo::check_timeouts_rt(bus, now + kCycle_ns, sensors), 0);
+    ASSERT_EQ(ruiwo_receive_rt(host, bus, now + kCycle_ns, 0, sensors).silent, 0);
     std::array<double, model::kNumJoints> tau{};
     emulator::add_ruiwo_torques(bus, emu, tau);
     integrate(plant, tau, model::kLeftArmFirst, model::kNumJoints - model::kLeftArmFirst);
