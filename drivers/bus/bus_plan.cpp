@@ -104,6 +104,20 @@ DriverError check_bus_plan(const BusPlan& plan, BusLoadReport& report, std::stri
       }
     }
   }
+  for (std::size_t b = 0; b < plan.buses.size(); ++b) {
+    bool ruiwo = false, canopen = false;
+    for (const DeviceConfig& d : plan.devices) {
+      if (d.bus != static_cast<int>(b)) continue;
+      ruiwo = ruiwo || d.kind == DeviceKind::kRuiwoMotor;
+      canopen = canopen || d.kind == DeviceKind::kCia402Drive;
+    }
+    // Ruiwo's zeroing frames (0x600 + ID) are SDO requests on a CANopen bus,
+    // and its replies (ID = motor) could answer nobody's request there.
+    if (ruiwo && canopen) {
+      message = plan.buses[b].interface + ": Ruiwo motors and CiA 402 drives on one bus";
+      return DriverError::kBadConfig;
+    }
+  }
   report = compute_bus_load(plan);
   for (std::size_t b = 0; b < plan.buses.size(); ++b) {
     if (report.load[b] >= kMaxBusLoad) {

@@ -90,6 +90,10 @@ TEST(BusPlan, InconsistentPlansAreRefused) {
   BusPlan dup_if = default_bus_plan();
   dup_if.buses[1].interface = dup_if.buses[0].interface;
   EXPECT_EQ(check_bus_plan(dup_if, rep, msg), DriverError::kDuplicateId);
+  BusPlan mixed = default_bus_plan();
+  mixed.devices.back().bus = 0;  // a Ruiwo motor onto a leg bus
+  EXPECT_EQ(check_bus_plan(mixed, rep, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("Ruiwo motors and CiA 402 drives"), std::string::npos) << msg;
   BusPlan bad_fd = default_bus_plan();
   bad_fd.buses[0].fd = true;
   bad_fd.buses[0].data_bitrate_bps = 0;
