@@ -12,6 +12,8 @@
 #include "drivers/can/can_port.h"
 #include "drivers/canopen/cia402_drive.h"
 #include "drivers/canopen/pdo_layout.h"
+#include "drivers/cycle/ruiwo_io.h"
+#include "drivers/emulator/ruiwo_emulator.h"
 #include "drivers/imu/mti_parser.h"
 #include "drivers/ruiwo/ruiwo_codec.h"
 #include "drivers/transmission/ankle_linkage.h"
@@ -153,5 +155,41 @@ static void BM_SocketpairSendReceive(benchmark::State& s) {
   close(fd[1]);
 }
 BENCHMARK(BM_SocketpairSendReceive);
+
+// A whole 8-motor Ruiwo bus cycle over a socketpair: commands out, the
+// emulated boards answer (their cost is included), replies in, timeouts.
+static void BM_RuiwoBusCycle8Motors(benchmark::State& s) {
+  int fd[2];
+  socketpair(AF_UNIX, SOCK_SEQPACKET, 0, fd);
+  kd::CanPort host = kd::attach_can_port(fd[0], false), dev = kd::attach_can_port(fd[1], false);
+  std::vector<kd::ruiwo::MotorConfig> motors;
+  std::uint8_t ids[8];
+  for (int i = 0; i < 8; ++i) {
+    kd::ruiwo::MotorConfig m;
+    m.motor_id = static_cast<std::uint8_t>(i + 1);
+    m.joint = 13 + i;
+    m.position_min_rad = -1.0;
+    m.position_max_rad = 1.0;
+    motors.push_back(m);
+    ids[i] = m.motor_id;
+  }
+  kd::ruiwo::Bus bus;
+  std::string msg;
+  kd::ruiwo::build_bus(motors, bus, msg);
+  kd::emulator::RuiwoEmulator emu;
+  kd::emulator::init_ruiwo_emulator(emu, ids, 8);
+  kuavo::hal::CommandFrame cmds;
+  kuavo::hal::SensorFrame sensors;
+  kuavo::hal::TimeNs now = 0;
+  for (auto _ : s) {
+    kd::ruiwo_send_rt(host, bus, cmds, now);
+    kd::emulator::serve_rt(emu, dev);
+    now += 4'000'000;
+    benchmark::DoNotOptimize(kd::ruiwo_receive_rt(host, bus, now, 0, sensors));
+  }
+  close(fd[0]);
+  close(fd[1]);
+}
+BENCHMARK(BM_RuiwoBusCycle8Motors);
 
 BENCHMARK_MAIN();
