@@ -15,23 +15,38 @@ constexpr int kBodyRightShoulder = 20, kBodyRightElbow = 23, kBodyRightWrist = 2
 constexpr int kBodyHead = 28;
 // The toe keypoint: the front edge of the sole, on the centre line (FACTS.md §2.2 l_foot_toe).
 const Vec3 kToePoint_m(0.17084, 0.0, -0.0595);
+const Vec3 kHeelPoint_m(-0.073164, 0.0, -0.0595);  // back edge of the sole (l_foot_heel)
 // A point on the face, so head pitch and yaw both move it (stature 1.66 m puts the crown
 // about 0.18 m above the head joints).
 const Vec3 kHeadPoint_m(0.06, 0.0, 0.15);
+// The thumb: in front of the palm, where a human thumb points with the arm hanging.
+const Vec3 kThumbPoint_m(0.05, 0.0, -0.08);
 
 // Chain used to rebuild keypoints with robot proportions: parent of each keypoint.
-constexpr int kChainParent[kNumKeypoints] = {
-    kKpPelvis,    kKpLeftHip,   kKpLeftKnee,   kKpLeftAnkle,   // left leg
-    kKpPelvis,    kKpRightHip,  kKpRightKnee,  kKpRightAnkle,  // right leg
-    kKpNeck,      kKpLeftShoulder, kKpLeftElbow, kKpLeftWrist,  // left arm
-    kKpNeck,      kKpRightShoulder, kKpRightElbow, kKpRightWrist,  // right arm
-    kKpNeck,                                                   // head
-    -1,           kKpPelvis};                                  // pelvis (root), neck
+int chain_parent(int k) {
+  switch (k) {
+    case kKpLeftHip: case kKpRightHip: case kKpNeck: return kKpPelvis;
+    case kKpLeftKnee: return kKpLeftHip;
+    case kKpLeftAnkle: return kKpLeftKnee;
+    case kKpLeftToe: case kKpLeftHeel: return kKpLeftAnkle;
+    case kKpRightKnee: return kKpRightHip;
+    case kKpRightAnkle: return kKpRightKnee;
+    case kKpRightToe: case kKpRightHeel: return kKpRightAnkle;
+    case kKpLeftShoulder: case kKpRightShoulder: case kKpHead: return kKpNeck;
+    case kKpLeftElbow: return kKpLeftShoulder;
+    case kKpLeftWrist: return kKpLeftElbow;
+    case kKpLeftHand: case kKpLeftThumb: return kKpLeftWrist;
+    case kKpRightElbow: return kKpRightShoulder;
+    case kKpRightWrist: return kKpRightElbow;
+    case kKpRightHand: case kKpRightThumb: return kKpRightWrist;
+    default: return -1;  // the pelvis is the root
+  }
+}
 // Order in which the chain is rebuilt (parents first).
 constexpr int kChainOrder[kNumKeypoints] = {
-    kKpPelvis,   kKpLeftHip,      kKpLeftKnee,   kKpLeftAnkle,  kKpLeftToe,     kKpRightHip,    kKpRightKnee,
-    kKpRightAnkle, kKpRightToe,   kKpNeck,       kKpHead,       kKpLeftShoulder, kKpLeftElbow,  kKpLeftWrist,
-    kKpLeftHand, kKpRightShoulder, kKpRightElbow, kKpRightWrist, kKpRightHand};
+    kKpPelvis,   kKpLeftHip,      kKpLeftKnee,   kKpLeftAnkle,  kKpLeftToe,      kKpLeftHeel,  kKpRightHip,
+    kKpRightKnee, kKpRightAnkle,  kKpRightToe,   kKpRightHeel,  kKpNeck,       kKpHead,       kKpLeftShoulder, kKpLeftElbow, kKpLeftWrist,
+    kKpLeftHand, kKpLeftThumb,    kKpRightShoulder, kKpRightElbow, kKpRightWrist, kKpRightHand, kKpRightThumb};
 
 struct Unit {
   const char* name;
@@ -79,6 +94,10 @@ std::array<RobotKeypoint, kNumKeypoints> robot_keypoints(const model::Model& rob
   k[kKpRightWrist] = {kBodyRightWrist, Vec3::Zero()};
   k[kKpRightHand] = {robot.frames[model::kFrameRightHand].body, robot.frames[model::kFrameRightHand].position_m};
   k[kKpHead] = {kBodyHead, kHeadPoint_m};
+  k[kKpLeftHeel] = {kBodyLeftFoot, kHeelPoint_m};
+  k[kKpRightHeel] = {kBodyRightFoot, kHeelPoint_m};
+  k[kKpLeftThumb] = {kBodyLeftWrist, kThumbPoint_m};
+  k[kKpRightThumb] = {kBodyRightWrist, kThumbPoint_m};
   // Pelvis and neck: midpoints of points fixed on the base (hip roll axes, shoulder axes).
   const Vec3 lh = robot.bodies[kBodyLeftHipRoll].joint_position_m, rh = robot.bodies[kBodyRightHipRoll].joint_position_m;
   const Vec3 ls = robot.bodies[kBodyLeftShoulder].joint_position_m, rs = robot.bodies[kBodyRightShoulder].joint_position_m;
@@ -154,12 +173,16 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   std::array<double, kNumKeypoints> human_length{}, segment_scale{};
   std::vector<double> lengths(src.size());
   for (int k = 0; k < kNumKeypoints; ++k) {
-    const int p = kChainParent[k];
+    const int p = chain_parent(k);
     if (p < 0 || !out.present[k]) continue;
     for (std::size_t f = 0; f < src.size(); ++f) lengths[f] = (src[f][k] - src[f][p]).norm();
     const double median = percentile(lengths, 0.5);
     const double rest = (human_rest[k] - human_rest[p]).norm();
     human_length[k] = std::abs(rest - median) <= 0.1 * median ? rest : median;
+    if (!(human_length[k] > 1e-9) && keypoint_optional(k)) {  // e.g. a thumb joint on the wrist
+      out.present[k] = false;
+      continue;
+    }
     if (!(human_length[k] > 1e-9)) {
       error = std::string("keypoint '") + keypoint_name(k) + "' coincides with '" + keypoint_name(p) +
               "' (zero-length segment): map it to another joint";
@@ -218,7 +241,8 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   out.up_axis[0] = up_sign > 0 ? '+' : '-';
   out.up_axis[1] = static_cast<char>('X' + up_axis);
   Vec3 lateral = Vec3::Zero();
-  const std::size_t head_frames = std::min<std::size_t>(src.size(), static_cast<std::size_t>(std::ceil(0.5 * out.source_rate_hz)) + 1);
+  const std::size_t head_frames = std::min<std::size_t>(
+      src.size(), static_cast<std::size_t>(std::ceil(std::max(0.0, options.heading_window_s) * out.source_rate_hz)) + 1);
   for (std::size_t f = 0; f < head_frames; ++f) lateral += src[f][kKpLeftHip] - src[f][kKpRightHip];
   lateral -= lateral.dot(up) * up;
   if (!(lateral.norm() > 1e-9)) {
@@ -239,7 +263,7 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     t[kKpPelvis] = out.root_scale * (to_robot * h[kKpPelvis]);
     for (int k : kChainOrder) {
       if (k == kKpPelvis) continue;
-      const int p = kChainParent[k];
+      const int p = chain_parent(k);
       t[k] = out.present[k] ? t[p] + segment_scale[k] * (to_robot * (h[k] - h[p])) : t[p];
     }
   }
@@ -274,8 +298,11 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     for (Vec3& p : f.position_m) p += shift;
     // Feet never aim below the floor: a flat robot foot has its ankle at ankle_h and its toe
     // point on the sole, and neither can go lower without a sole corner going through.
-    for (int k : {kKpLeftAnkle, kKpRightAnkle}) f.position_m[k].z() = std::max(f.position_m[k].z(), ankle_h);
-    for (int k : {kKpLeftToe, kKpRightToe}) f.position_m[k].z() = std::max(f.position_m[k].z(), toe_h);
+    if (options.feet_above_floor) {
+      for (int k : {kKpLeftAnkle, kKpRightAnkle}) f.position_m[k].z() = std::max(f.position_m[k].z(), ankle_h);
+      for (int k : {kKpLeftToe, kKpRightToe, kKpLeftHeel, kKpRightHeel})
+        f.position_m[k].z() = std::max(f.position_m[k].z(), toe_h);
+    }
     f.base_rotation = pelvis_frame(f.position_m) * rest_frame.transpose();
   }
   return true;

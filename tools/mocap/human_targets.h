@@ -7,8 +7,9 @@
 //     millimetres, inches or CMU units (×0.056444 m), whichever gives the most human height.
 //     Only the report uses it: all geometry below is scaled by ratios.
 //  3. Axes: the up axis is the file axis closest to the mean pelvis→neck direction (Y for
-//     most files, Z for SFU-style files); heading: the initial left-hip minus right-hip
-//     direction becomes the robot's +y, so the dancer starts facing +x.
+//     most files, Z for SFU-style files); heading: the left-hip minus right-hip direction,
+//     averaged over the first half second, becomes the robot's +y, so the dancer starts
+//     facing +x.
 //  4. Proportional scaling: the pelvis path is scaled by robot/human leg length; every other
 //     keypoint is rebuilt down the chain pelvis→hip→knee→ankle→toe and
 //     pelvis→neck→shoulder→elbow→wrist→hand, neck→head, each human segment vector scaled by the
@@ -54,6 +55,8 @@ struct TargetFrame {
 struct ImportOptions {
   double rate_hz = 100.0;
   int drop_first_frames = -1;  // -1: detect a reference frame 0; >= 0: drop exactly this many
+  double heading_window_s = 0.5;  // the start heading is the mean hip line over this time
+  bool feet_above_floor = true;   // clamp ankle/toe/heel targets to flat-foot height (step 6)
 };
 
 struct HumanTargets {

@@ -16,6 +16,11 @@ using Hessian = Eigen::Matrix<double, kNv, kNv>;
 
 constexpr int kFootBody[2] = {6, 12};  // leg_l6_link, leg_r6_link
 constexpr int kLeftHipYaw = 1, kRightHipYaw = 7;  // joint indices (leg_l2, leg_r2)
+constexpr int kLeftKnee = 3, kRightKnee = 9, kLeftElbow = 15, kRightElbow = 22;
+constexpr double kColdStartBend_rad = 0.3;
+constexpr int kColdStartSteps = 20;
+// The first frame starts far from the answer: a firmer Levenberg damping keeps its steps short.
+constexpr double kColdStartDamping = 1e-3;
 // Stance feet stay this far inside the hip yaw range, leaving the pelvis room to turn.
 constexpr double kHipYawMargin_rad = 0.17;
 constexpr int kAnkleKp[2] = {kKpLeftAnkle, kKpRightAnkle};
@@ -64,12 +69,14 @@ Retargeter::Retargeter(const model::Model& robot, const RetargetOptions& options
   position_weight_[kKpPelvis] = w.pelvis_position;
   position_weight_[kKpLeftAnkle] = position_weight_[kKpRightAnkle] = w.ankle;
   position_weight_[kKpLeftToe] = position_weight_[kKpRightToe] = w.toe;
+  position_weight_[kKpLeftHeel] = position_weight_[kKpRightHeel] = w.toe;
   position_weight_[kKpLeftKnee] = position_weight_[kKpRightKnee] = w.knee;
   position_weight_[kKpLeftShoulder] = position_weight_[kKpRightShoulder] = w.shoulder;
   position_weight_[kKpLeftElbow] = position_weight_[kKpRightElbow] = w.elbow;
   position_weight_[kKpLeftWrist] = position_weight_[kKpRightWrist] = w.wrist;
   position_weight_[kKpLeftHand] = position_weight_[kKpRightHand] = w.hand;
   position_weight_[kKpHead] = w.head;
+  position_weight_[kKpLeftThumb] = position_weight_[kKpRightThumb] = w.thumb;
   reset();
 }
 
@@ -82,26 +89,11 @@ void Retargeter::reset() {
   locked_ = {false, false};
 }
 
-FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
-                             const FootPins& pins) {
+void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
+                       const FootPins& pins, int iterations, bool velocity_bounds, bool cold_start) {
   Workspace& ws = *ws_;
   const model::JointLimits& lim = robot_.limits;
-  int iterations = options_.iterations;
-  bool velocity_bounds = options_.velocity_limits;
-  if (!started_) {
-    // Zero pose, base placed on the target pelvis.
-    const Eigen::Quaterniond quat(target.base_rotation);
-    q_.head<3>() = target.position_m[kKpPelvis] - target.base_rotation * keypoints_[kKpPelvis].point_m;
-    q_[3] = quat.x();
-    q_[4] = quat.y();
-    q_[5] = quat.z();
-    q_[6] = quat.w();
-    q_.tail<model::kNumJoints>().setZero();
-    iterations = options_.first_frame_iterations;
-    velocity_bounds = false;
-    started_ = true;
-  }
-  const ConfigVector q_prev = q_;
+  const ConfigVector& q_prev = q_prev_;
   const RetargetWeights& w = options_.weights;
   // A foot is pinned where it touches down. Once the schedule says stance, the foot first
   // lands: it is drawn flat onto the floor where it is (no horizontal jump). When it is
@@ -139,7 +131,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     const bool project = it >= iterations;
     dynamics::forward_kinematics(robot_, ws.data, q_);
     ws.h.setIdentity();
-    ws.h *= project ? kProjectionDamping : options_.damping;
+    ws.h *= project ? kProjectionDamping : (cold_start && 2 * it < iterations ? kColdStartDamping : options_.damping);
     ws.g.setZero();
     const auto add_point = [&](int body, const Vec3& point_body, const Vec3& target_m, double weight) {
       const Vec3 p = ws.data.position_m[body] + ws.data.rotation[body] * point_body;
@@ -181,9 +173,10 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     // Keypoints.
     for (int k = 0; k < kNumKeypoints && !project; ++k) {
       if (!present[k] || position_weight_[k] <= 0.0) continue;
-      const bool foot_kp = k == kAnkleKp[0] || k == kToeKp[0] || k == kAnkleKp[1] || k == kToeKp[1];
-      if (foot_kp && options_.pin_stance_feet) {
-        const int side = (k == kAnkleKp[0] || k == kToeKp[0]) ? 0 : 1;
+      const bool left_foot = k == kAnkleKp[0] || k == kToeKp[0] || k == kKpLeftHeel;
+      const bool right_foot = k == kAnkleKp[1] || k == kToeKp[1] || k == kKpRightHeel;
+      if ((left_foot || right_foot) && options_.pin_stance_feet) {
+        const int side = left_foot ? 0 : 1;
         if (pins.pinned[side]) continue;
       }
       add_point(keypoints_[k].body, keypoints_[k].point_m, target.position_m[k], position_weight_[k]);
@@ -201,7 +194,7 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     // Free feet near the floor turn flat (keeping the human heading), so a toe-down or
     // rolled human foot, which the robot's ±15° ankle roll often cannot copy, does not
     // drive a sole corner through the floor: weight rises as the ankle target descends.
-    for (int side = 0; side < 2 && !project; ++side) {
+    for (int side = 0; side < 2 && options_.ground_rows && !project; ++side) {
       if (options_.pin_stance_feet && pins.pinned[side]) continue;
       const Vec3& ankle = target.position_m[kAnkleKp[side]];
       const double proximity = std::clamp(1.0 - (ankle.z() - ankle_height_m_) / kFlatFootHeight_m, 0.0, 1.0);
@@ -259,6 +252,67 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       q_[7 + j] = std::clamp(q_[7 + j], lim.position_min_rad[j], lim.position_max_rad[j]);
     if (ws.dx.norm() < options_.step_tolerance && !project) it = std::max(it, iterations - 1);
   }
+}
+
+double Retargeter::keypoint_cost(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present) {
+  Workspace& ws = *ws_;
+  dynamics::forward_kinematics(robot_, ws.data, q_);
+  double cost = 0.0;
+  for (int k = 0; k < kNumKeypoints; ++k) {
+    if (!present[k]) continue;
+    const int b = keypoints_[k].body;
+    const Vec3 p = ws.data.position_m[b] + ws.data.rotation[b] * keypoints_[k].point_m;
+    cost += position_weight_[k] * (target.position_m[k] - p).squaredNorm();
+  }
+  return cost + options_.weights.pelvis_rotation *
+                    rotation_log(target.base_rotation * ws.data.rotation[0].transpose()).squaredNorm();
+}
+
+FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
+                             const FootPins& pins) {
+  const model::JointLimits& lim = robot_.limits;
+  bool velocity_bounds = options_.velocity_limits;
+  if (!started_) {
+    // Cold start by homotopy: from the zero pose (base on the target pelvis, knees and elbows
+    // slightly bent, off the straight-limb singularity) the targets are blended from where
+    // that pose puts the keypoints to the real ones in kColdStartSteps steps, each solved
+    // warm. Jumping straight to the targets can land a foot in a wrong basin (rolled against
+    // its hip yaw) that no later frame leaves.
+    const Eigen::Quaterniond quat(target.base_rotation);
+    q_.setZero();
+    q_.head<3>() = target.position_m[kKpPelvis] - target.base_rotation * keypoints_[kKpPelvis].point_m;
+    q_[3] = quat.x();
+    q_[4] = quat.y();
+    q_[5] = quat.z();
+    q_[6] = quat.w();
+    for (int j : {kLeftKnee, kRightKnee}) q_[7 + j] = kColdStartBend_rad;
+    for (int j : {kLeftElbow, kRightElbow}) q_[7 + j] = -kColdStartBend_rad;
+    Workspace& ws = *ws_;
+    dynamics::forward_kinematics(robot_, ws.data, q_);
+    TargetFrame from = target;
+    for (int k = 0; k < kNumKeypoints; ++k) {
+      const int b = keypoints_[k].body;
+      from.position_m[k] = ws.data.position_m[b] + ws.data.rotation[b] * keypoints_[k].point_m;
+    }
+    const Eigen::Quaterniond r0(ws.data.rotation[0]);
+    const int per_step = std::max(1, options_.first_frame_iterations / kColdStartSteps);
+    for (int step = 1; step <= kColdStartSteps; ++step) {
+      const double a = static_cast<double>(step) / kColdStartSteps;
+      TargetFrame blended = target;
+      for (int k = 0; k < kNumKeypoints; ++k) blended.position_m[k] = (1.0 - a) * from.position_m[k] + a * target.position_m[k];
+      blended.base_rotation = r0.slerp(a, quat).toRotationMatrix();
+      q_prev_ = q_;
+      locked_ = {false, false};
+      solve(blended, present, step == kColdStartSteps ? pins : FootPins{}, per_step, false, step < kColdStartSteps);
+    }
+    q_prev_ = q_;
+    velocity_bounds = false;
+    started_ = true;
+  } else {
+    q_prev_ = q_;
+    solve(target, present, pins, options_.iterations, velocity_bounds, false);
+  }
+  const ConfigVector& q_prev = q_prev_;
   FrameLimits out;
   for (int j = 0; j < model::kNumJoints; ++j) {
     const double qj = q_[7 + j];

@@ -33,7 +33,7 @@ struct RetargetWeights {
   // Squared-norm weights (1/m² and 1/rad²): pelvis and feet high, intermediate joints low.
   double pelvis_position = 20.0, pelvis_rotation = 3.0;
   double ankle = 20.0, toe = 10.0;
-  double knee = 2.0, shoulder = 1.0, elbow = 2.0, wrist = 4.0, hand = 2.0, head = 0.5;
+  double knee = 2.0, shoulder = 1.0, elbow = 2.0, wrist = 4.0, hand = 2.0, head = 0.5, thumb = 1.0;
   double stance_position = 2.0e4, stance_rotation = 2.0e3;
   double ground = 2.0e4;
   double swing_flat = 500.0;  // free foot near the floor: flat at the human heading
@@ -50,7 +50,7 @@ struct RetargetOptions {
   double damping = 1e-6;            // Levenberg–Marquardt λ
   double step_tolerance = 1e-12;    // stop iterating when ‖Δv‖ is below this
   bool pin_stance_feet = true;
-  bool ground_rows = true;
+  bool ground_rows = true;  // floor handling: free feet flatten near it, corners stay above it
   bool velocity_limits = true;
 };
 
@@ -98,13 +98,17 @@ class Retargeter {
 
  private:
   struct Workspace;
+  // Gauss–Newton iterations (then the stance/ground projection) from q_, bounds about q_prev_.
+  void solve(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present, const FootPins& pins,
+             int iterations, bool velocity_bounds, bool cold_start);
+  double keypoint_cost(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present);
   const model::Model& robot_;
   RetargetOptions options_;
   double dt_s_;
   double ankle_height_m_;
   std::array<RobotKeypoint, kNumKeypoints> keypoints_;
   std::array<double, kNumKeypoints> position_weight_{};
-  ConfigVector q_;
+  ConfigVector q_, q_prev_;
   bool started_ = false;
   std::array<bool, 2> locked_{};           // stance foot pinned where it landed
   std::array<FootPose2d, 2> locked_pose_{};

@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <string>
 
 #include "tools/mocap/human_targets.h"
 
@@ -60,6 +61,23 @@ Bvh robot_bvh(const model::Model& robot, const std::vector<dynamics::ConfigVecto
       e.offset = units_per_m * (p * point);
       b.joints.push_back(e);
     }
+    // Thumbs and heels: a channel-less joint on the hand / foot link (with its own End Site).
+    for (int k : {kKpLeftThumb, kKpRightThumb, kKpLeftHeel, kKpRightHeel}) {
+      if (kps[k].body != body) continue;
+      BvhJoint t;
+      constexpr const char* kNames[] = {"zarm_l7_thumb", "zarm_r7_thumb", "leg_l6_heel", "leg_r6_heel"};
+      t.name = kNames[k - kKpLeftThumb];
+      t.parent = joint_of_body[body];
+      t.offset = units_per_m * (p * kps[k].point_m);
+      t.first_column = b.channel_count;
+      b.joints.push_back(t);
+      BvhJoint e;
+      e.name = t.name + "_End";
+      e.parent = static_cast<int>(b.joints.size()) - 1;
+      e.end_site = true;
+      e.offset = units_per_m * Vec3(0, -0.02, 0);
+      b.joints.push_back(e);
+    }
   }
   b.frame_count = static_cast<int>(q.size());
   b.frame_time_s = frame_time_s;
@@ -112,9 +130,10 @@ std::vector<dynamics::ConfigVector> robot_test_motion(const model::Model& robot,
     for (int j = 0; j < model::kNumJoints; ++j) {
       const double lo = robot.limits.position_min_rad[j], hi = robot.limits.position_max_rad[j];
       const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
-      // Keep 15 % margin to the limits; knees and elbows stay bent (observable hinge plane).
-      double value = mid + 0.6 * half * std::sin(two_pi * (0.15 + 0.013 * j) * t + 0.7 * j);
-      value = std::min(std::max(value, lo + 0.15 * (hi - lo)), hi - 0.15 * (hi - lo));
+      // A third of each range around its middle: knees and elbows stay bent (observable hinge
+      // plane) and the three-axis hip and shoulder stay clear of gimbal lock, where the
+      // angles are not a function of the keypoints any more.
+      const double value = mid + 0.35 * half * std::sin(two_pi * (0.15 + 0.013 * j) * t + 0.7 * j);
       q[7 + j] = value;
     }
   }

@@ -16,8 +16,9 @@ namespace kuavo::mocap {
 Bvh robot_bvh(const model::Model& robot, const std::vector<dynamics::ConfigVector>& q, double frame_time_s,
               double units_per_m);
 
-// A smooth, limit-respecting test motion: every joint swings on its own sinusoid inside its
-// range, the base sways, turns and rises (feet clear of the ground). Deterministic.
+// A smooth, limit-respecting test motion: every joint swings on its own sinusoid over the
+// middle third of its range, the base sways, turns and floats (feet clear of the ground).
+// Deterministic.
 std::vector<dynamics::ConfigVector> robot_test_motion(const model::Model& robot, int frames, double rate_hz);
 
 }  // namespace kuavo::mocap

@@ -10,8 +10,8 @@ namespace {
 constexpr const char* kNames[kNumKeypoints] = {
     "left_hip",       "left_knee",   "left_ankle",  "left_toe",       "right_hip",   "right_knee",
     "right_ankle",    "right_toe",   "left_shoulder", "left_elbow",   "left_wrist",  "left_hand",
-    "right_shoulder", "right_elbow", "right_wrist", "right_hand",     "head",        "pelvis",
-    "neck"};
+    "right_shoulder", "right_elbow", "right_wrist", "right_hand",     "head",        "left_thumb",
+    "right_thumb",    "left_heel",   "right_heel",  "pelvis",      "neck"};
 
 // Candidate names per keypoint, normalized (lower case, alphanumerics only, namespace
 // prefix dropped), most specific first. The first one present wins; the order resolves the
@@ -42,6 +42,11 @@ constexpr Candidates kCandidates[kNumMappedKeypoints] = {
     {{"righthandmiddle1", "righthandindex1", "ccbasermid1", "righthandindex1end", "rightwristend", "righthandend",
       "rwristend", "rhandend", "zarmr7linkend"}},
     {{"headtopend", "headend", "headtop", "ccbasehead", "head", "zhead2linkend"}},
+    // CMU's LThumb sits on the wrist: its End Site is the thumb.
+    {{"lefthandthumb2", "lefthandthumb1", "ccbaselthumb2", "lthumbend", "leftthumb", "lthumb", "zarml7thumb"}},
+    {{"righthandthumb2", "righthandthumb1", "ccbaserthumb2", "rthumbend", "rightthumb", "rthumb", "zarmr7thumb"}},
+    {{"leftheel", "lheel", "legl6heel"}},
+    {{"rightheel", "rheel", "legr6heel"}},
 };
 
 std::string normalize(const std::string& name) {
@@ -125,7 +130,8 @@ void map_by_tables(const Bvh& bvh, SkeletonMap& out) {
 const char* keypoint_name(int kp) { return kp >= 0 && kp < kNumKeypoints ? kNames[kp] : "?"; }
 
 bool keypoint_optional(int kp) {
-  return kp == kKpLeftToe || kp == kKpRightToe || kp == kKpLeftHand || kp == kKpRightHand || kp == kKpHead;
+  return kp == kKpLeftToe || kp == kKpRightToe || kp == kKpLeftHand || kp == kKpRightHand || kp == kKpHead ||
+         kp == kKpLeftThumb || kp == kKpRightThumb || kp == kKpLeftHeel || kp == kKpRightHeel;
 }
 
 bool map_skeleton(const Bvh& bvh, SkeletonMap& out, std::string& error) {

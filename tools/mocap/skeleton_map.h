@@ -1,7 +1,7 @@
 // Human → robot correspondence: which BVH joint stands for which robot keypoint.
 //
 // Keypoints are anatomical landmarks both skeletons have (hip, knee, ankle, toe, shoulder,
-// elbow, wrist, hand, head). The pelvis and the neck are not looked up: they are the
+// elbow, wrist, hand, thumb, head). The pelvis and the neck are not looked up: they are the
 // midpoints of the two hips and of the two shoulders on both sides, which makes the
 // pelvis→hip and neck→shoulder vectors purely lateral on human and robot alike.
 //
@@ -37,6 +37,10 @@ enum Keypoint : int {
   kKpRightWrist,
   kKpRightHand,
   kKpHead,
+  kKpLeftThumb,   // optional: makes the wrist's three joints observable
+  kKpRightThumb,
+  kKpLeftHeel,    // optional: with the toe, fixes the foot's roll against the hip's yaw
+  kKpRightHeel,
   kNumMappedKeypoints,
   // Derived (midpoints), never looked up by name.
   kKpPelvis = kNumMappedKeypoints,
@@ -44,9 +48,11 @@ enum Keypoint : int {
   kNumKeypoints
 };
 
-// Stable keypoint names, as used in mapping files: "left_hip", ..., "head", "pelvis", "neck".
+// Stable keypoint names, as used in mapping files: "left_hip", ..., "head", "left_thumb",
+// "right_thumb", "left_heel", "right_heel", "pelvis", "neck".
 const char* keypoint_name(int kp);
-// Keypoints that may be missing: toes and hands fall back to their End Site or are dropped.
+// Keypoints that may be missing: toes and hands fall back to their End Site or are dropped;
+// head, thumbs and heels are dropped.
 bool keypoint_optional(int kp);
 
 struct SkeletonMap {
