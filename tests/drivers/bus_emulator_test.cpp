@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "controllers/model/model.h"
+#include "drivers/bus/bus_plan.h"
 #include "drivers/canopen/cia402_drive.h"
 #include "drivers/cycle/canopen_io.h"
 #include "drivers/cycle/ruiwo_io.h"
@@ -186,6 +187,20 @@ TEST_F(RuiwoLoop, BusOffStopsTransmissionUntilCleared) {
   EXPECT_EQ(cycle(), 0);  // replies resume
 }
 
+TEST_F(RuiwoLoop, FrameCountMatchesTheBusLoadModel) {
+  const std::uint64_t host_before = wire.host.stats.tx_frames, dev_before = wire.device.stats.tx_frames;
+  for (int k = 0; k < 250; ++k) ASSERT_EQ(cycle(), 0);  // one second at 250 Hz
+  const double measured = static_cast<double>(wire.host.stats.tx_frames - host_before +
+                                              wire.device.stats.tx_frames - dev_before);
+  BusPlan plan;
+  BusConfig b;
+  b.interface = "can0";
+  b.cycle_rate_hz = 250.0;
+  plan.buses.push_back(b);
+  for (int i = 0; i < bus.count; ++i) plan.devices.push_back({0, DeviceKind::kRuiwoMotor, bus.motors[i].motor_id, bus.motors[i].joint});
+  EXPECT_DOUBLE_EQ(measured, compute_bus_load(plan).frames_per_s[0]);
+}
+
 TEST_F(RuiwoLoop, CycleWithFrameIoDoesNotAllocate) {
   cycle();
   test::AllocTrap trap;
@@ -321,6 +336,28 @@ TEST_F(CanopenLoop, DriveFaultIsReportedAndResetByEdge) {
   EXPECT_EQ(st[0].control.fault_resets, 1);
   cycle();  // torque follows one cycle after the drive reports operation enabled
   EXPECT_NEAR(emulator::drive_torque_Nm(emu.drives[0]), 4.0, 0.1);
+}
+
+TEST_F(CanopenLoop, FrameCountMatchesTheBusLoadModel) {
+  // The load model must describe what the code really sends: count one
+  // second of operational traffic in both directions.
+  for (auto& c : cmd) c.enable = true;
+  ASSERT_GE(cycles_until_enabled(500), 0);
+  for (int k = 0; k < 50; ++k) cycle();  // let start-up traffic settle
+  const std::uint64_t host_before = wire.host.stats.tx_frames, dev_before = wire.device.stats.tx_frames;
+  const int cycles = static_cast<int>(1'000'000'000 / kCycle_ns);
+  for (int k = 0; k < cycles; ++k) cycle();
+  const double measured = static_cast<double>(wire.host.stats.tx_frames - host_before +
+                                              wire.device.stats.tx_frames - dev_before);
+  BusPlan plan;
+  BusConfig bus;
+  bus.interface = "can0";
+  bus.cycle_rate_hz = 1e9 / kCycle_ns;
+  bus.heartbeat_rate_hz = 1000.0 / cfg[0].heartbeat_period_ms;
+  plan.buses.push_back(bus);
+  for (int i = 0; i < kDrives; ++i) plan.devices.push_back({0, DeviceKind::kCia402Drive, cfg[i].node_id, i});
+  const double modelled = compute_bus_load(plan).frames_per_s[0];
+  EXPECT_NEAR(measured, modelled, 0.01 * modelled) << "measured " << measured << " modelled " << modelled;
 }
 
 TEST_F(CanopenLoop, OperationalCycleDoesNotAllocate) {
