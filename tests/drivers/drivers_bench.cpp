@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/can/can_port.h"
+#include "drivers/bus/bus_plan.h"
 #include "drivers/canopen/cia402_drive.h"
 #include "drivers/canopen/pdo_layout.h"
 #include "drivers/cycle/ruiwo_io.h"
@@ -191,5 +192,18 @@ static void BM_RuiwoBusCycle8Motors(benchmark::State& s) {
   close(fd[1]);
 }
 BENCHMARK(BM_RuiwoBusCycle8Motors);
+
+// Start-up cost of the plan check; the counters are the default plan's
+// worst-case load per bus in percent.
+static void BM_DefaultBusPlanCheck(benchmark::State& s) {
+  const kd::BusPlan plan = kd::default_bus_plan();
+  kd::BusLoadReport report;
+  std::string msg;
+  for (auto _ : s) benchmark::DoNotOptimize(kd::check_bus_plan(plan, report, msg));
+  for (std::size_t b = 0; b < plan.buses.size(); ++b) {
+    s.counters[plan.buses[b].interface + "_load_pct"] = 100.0 * report.load[b];
+  }
+}
+BENCHMARK(BM_DefaultBusPlanCheck);
 
 BENCHMARK_MAIN();
