@@ -10,10 +10,18 @@
 // (kuavo.json continuous velocity limits); the base is free. A bound that is active is
 // counted and reported, never hidden.
 //
-// Contacts: during a stance phase the foot's pose is fixed (mean human ankle position over
-// the phase, sole flat on z = 0, mean heading) and tracked with a high weight: no sliding,
-// no penetration, no floating. Outside stance, one-sided rows keep every sole corner above
-// the ground.
+// Contacts (no sliding, no penetration, no floating):
+//  - the schedule's stance phases are planned as foot poses (mean human ankle over the phase,
+//    sole flat on z = 0, heading clamped to the hip-yaw range); within kPinBlend_s of a phase
+//    a free foot is drawn toward that pose, so it arrives flat and in place;
+//  - when the schedule says stance the foot lands where it is (flat onto the floor) and locks
+//    once it is there: from then on its x, y and yaw are held exactly; the robot's contact
+//    labels (the ones written to the motion file) start at that real touchdown;
+//  - after the weighted iterations, a minimum-norm projection under the same bounds puts
+//    locked feet exactly on their pins and lifts any sole corner of a free foot out of the
+//    floor (a weighted objective alone leaves millimetres of compromise whenever a velocity
+//    bound is active); free feet near the floor are drawn flat.
+// The first frame starts cold: a homotopy from the zero pose to the first targets.
 #pragma once
 
 #include <array>
