@@ -5,11 +5,12 @@
 // Works in motor units (rad, rad/s, Nm at the drive output); the transmissions
 // map joints to motors.
 //
-// Per control cycle on a bus (bus thread), after start_drive() once:
-//   while receive_rt(port, rx) == kOk: for each drive: handle_frame_rt(...)
-//   motor_sample(cfg, st) -> transmissions -> controller -> DriveCommand
-//   for each drive: if (step_rt(cfg, st, now, cmd, frame)) send_rt(port, frame)
-//   encode_sync_rt(frame); send_rt(port, frame)   // latches RPDOs, triggers TPDOs
+// Per control cycle the firmware calls drivers/cycle/canopen_io.h, which does
+// (after start_drive() once per drive):
+//   receive: handle_frame_rt(cfg, st, frame, stamp) for every frame and drive
+//   (motor_sample(cfg, st) -> transmissions -> controller -> DriveCommand)
+//   send:    step_rt(cfg, st, now, cmd, frame) -> send_rt for every drive,
+//            then SYNC (latches the RPDOs, triggers the TPDOs read next cycle)
 #pragma once
 
 #include <cstdint>

@@ -3,11 +3,9 @@
 // reply-timeout tracking. Request/response protocol: every command frame is
 // answered by exactly one status frame whose byte 0 is the motor ID.
 //
-// Per control cycle (bus thread):
-//   for each motor i: encode_command_rt(bus, i, cmd.joints[joint], frame) -> send_rt
-//                     note_sent_rt(bus, i, now)
-//   while receive_rt(...) == kOk: handle_reply_rt(bus, frame, stamp, sensors)
-//   check_timeouts_rt(bus, now) -> faults to the firmware watchdog
+// Per control cycle the firmware calls drivers/cycle/ruiwo_io.h, which does:
+//   receive: handle_reply_rt for every frame, then check_timeouts_rt
+//   send:    encode_command_rt -> send_rt -> note_sent_rt for every motor
 #pragma once
 
 #include <array>
