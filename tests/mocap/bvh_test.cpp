@@ -31,7 +31,7 @@ constexpr const char* kSmall =
     "0 100 0 0 0 0 90 0 0\n"
     "1 100 0 0 0 0 0 0 0\n";
 
-TEST(Bvh, ParsesTheSharedClips) {
+TEST(mocap_bvh, ParsesTheSharedClips) {
   struct Clip {
     const char* file;
     int joints, channels, frames;
@@ -53,7 +53,7 @@ TEST(Bvh, ParsesTheSharedClips) {
   }
 }
 
-TEST(Bvh, ChannelOrderAndOffsets) {
+TEST(mocap_bvh, ChannelOrderAndOffsets) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(parse_bvh(kSmall, b, error)) << error;
@@ -70,7 +70,7 @@ TEST(Bvh, ChannelOrderAndOffsets) {
   EXPECT_NEAR(p[0].x(), 1.0, 1e-12);
 }
 
-TEST(Bvh, PerfumeYxzOrderMatchesComposedRotations) {
+TEST(mocap_bvh, PerfumeYxzOrderMatchesComposedRotations) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(load_bvh_file(kMocap + "perfume_C_test.bvh", b, error)) << error;
@@ -79,7 +79,7 @@ TEST(Bvh, PerfumeYxzOrderMatchesComposedRotations) {
   EXPECT_EQ(b.joints[0].channels[5], BvhChannel::kZrotation);
 }
 
-TEST(Bvh, CcBaseRootPositionIsAddedToOffset) {
+TEST(mocap_bvh, CcBaseRootPositionIsAddedToOffset) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(load_bvh_file(kMocap + "cmu_05_07_iclone_ccrig.bvh", b, error)) << error;
@@ -90,7 +90,7 @@ TEST(Bvh, CcBaseRootPositionIsAddedToOffset) {
   EXPECT_NEAR(p[0].y(), 105.214226 + b.row(1)[1], 1e-6);  // OFFSET + channel
 }
 
-TEST(Bvh, MixedLineEndingsReadTheSame) {
+TEST(mocap_bvh, MixedLineEndingsReadTheSame) {
   std::string crlf;
   for (char c : std::string(kSmall)) {
     if (c == '\n' && crlf.size() % 3 == 0) crlf += '\r';
@@ -103,7 +103,7 @@ TEST(Bvh, MixedLineEndingsReadTheSame) {
   EXPECT_EQ(a.motion, b.motion);
 }
 
-TEST(Bvh, WriteReadRoundTrip) {
+TEST(mocap_bvh, WriteReadRoundTrip) {
   const Bvh dance = default_dance_bvh();
   Bvh back;
   std::string error;
@@ -113,7 +113,7 @@ TEST(Bvh, WriteReadRoundTrip) {
   for (std::size_t i = 0; i < dance.motion.size(); ++i) ASSERT_NEAR(back.motion[i], dance.motion[i], 1e-6);
 }
 
-TEST(Bvh, MalformedFilesNameTheLineAndProblem) {
+TEST(mocap_bvh, MalformedFilesNameTheLineAndProblem) {
   struct Case {
     std::string text;
     std::string expect;
@@ -141,7 +141,7 @@ TEST(Bvh, MalformedFilesNameTheLineAndProblem) {
 }
 
 // Seeded mutation + truncation fuzz: every input either parses or fails with "line N: ...".
-TEST(Bvh, FuzzedInputNeverCrashesAndAlwaysExplains) {
+TEST(mocap_bvh, FuzzedInputNeverCrashesAndAlwaysExplains) {
   const std::string seed_text = read_file(kMocap + "cmu_05_20_mb.bvh").substr(0, 9000);
   const std::string seeds[] = {std::string(kSmall), seed_text};
   std::mt19937 rng(20251121u);

@@ -40,7 +40,7 @@ struct Fixture {
   }
 };
 
-TEST(Contacts, DetectsStepsWithHysteresisAndMinimumDuration) {
+TEST(mocap_contacts, DetectsStepsWithHysteresisAndMinimumDuration) {
   Fixture fx;
   fx.build();
   const auto labels = detect_contacts(fx.t, fx.robot);
@@ -52,7 +52,7 @@ TEST(Contacts, DetectsStepsWithHysteresisAndMinimumDuration) {
   EXPECT_EQ(count_contact_phases(labels), 3);
 }
 
-TEST(Contacts, OverrideFileReplacesRanges) {
+TEST(mocap_contacts, OverrideFileReplacesRanges) {
   Fixture fx;
   fx.build();
   auto labels = detect_contacts(fx.t, fx.robot);
@@ -66,7 +66,7 @@ TEST(Contacts, OverrideFileReplacesRanges) {
   EXPECT_EQ(labels[150], ContactLabel::kDoubleSupport);
 }
 
-TEST(Contacts, OverrideErrorsNameTheLine) {
+TEST(mocap_contacts, OverrideErrorsNameTheLine) {
   std::vector<ContactLabel> labels(10, ContactLabel::kDoubleSupport);
   std::string error;
   EXPECT_FALSE(apply_contact_overrides("0 1 left\n1 0.5 right\n", 100.0, labels, error));

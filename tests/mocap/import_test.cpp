@@ -33,7 +33,7 @@ Bvh load(const char* file) {
   return b;
 }
 
-TEST(Import, SharedClipsFamiliesUnitsAndReferenceFrames) {
+TEST(mocap_import, SharedClipsFamiliesUnitsAndReferenceFrames) {
   const Bvh perfume = load("perfume_C_test.bvh");
   const Imported p = import(perfume);
   EXPECT_EQ(p.map.family, "perfume");
@@ -66,7 +66,7 @@ TEST(Import, SharedClipsFamiliesUnitsAndReferenceFrames) {
 }
 
 // A Z-up, inch-unit, Mixamo-named copy of the dance imports to the same robot targets.
-TEST(Import, ZUpInchesMixamoNamesGiveTheSameTargets) {
+TEST(mocap_import, ZUpInchesMixamoNamesGiveTheSameTargets) {
   const Bvh dance = default_dance_bvh();
   Bvh other = dance;
   constexpr double kCmToInch = 1.0 / 2.54;
@@ -108,7 +108,7 @@ TEST(Import, ZUpInchesMixamoNamesGiveTheSameTargets) {
   EXPECT_LT(worst, 1e-6);
 }
 
-TEST(Import, UnmappedSkeletonListsWhatIsMissing) {
+TEST(mocap_import, UnmappedSkeletonListsWhatIsMissing) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(parse_bvh("HIERARCHY\nROOT Pelvis\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
@@ -124,7 +124,7 @@ TEST(Import, UnmappedSkeletonListsWhatIsMissing) {
   EXPECT_NE(error.find("mapping file"), std::string::npos) << error;
 }
 
-TEST(Import, MappingFileOverridesAndReportsBadLines) {
+TEST(mocap_import, MappingFileOverridesAndReportsBadLines) {
   const Bvh dance = default_dance_bvh();
   SkeletonMap map;
   std::string error;

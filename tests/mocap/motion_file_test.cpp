@@ -24,7 +24,7 @@ struct Fixture {
   }
 };
 
-TEST(MotionFile, RoundTripIsExact) {
+TEST(mocap_motion_file, RoundTripIsExact) {
   Fixture fx;
   const auto bytes = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
   EXPECT_EQ(bytes.size(), kMotionHeaderBytes + fx.q.size() * kMotionRecordBytes);
@@ -53,7 +53,7 @@ TEST(MotionFile, RoundTripIsExact) {
   std::remove(path.c_str());
 }
 
-TEST(MotionFile, CorruptionIsDetected) {
+TEST(mocap_motion_file, CorruptionIsDetected) {
   Fixture fx;
   const auto good = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
   MotionHeader h;
@@ -83,12 +83,12 @@ TEST(MotionFile, CorruptionIsDetected) {
     EXPECT_STRNE(to_string(e), "unknown motion error");
 }
 
-TEST(MotionFile, Crc32MatchesTheStandardCheckValue) {
+TEST(mocap_motion_file, Crc32MatchesTheStandardCheckValue) {
   const char* text = "123456789";
   EXPECT_EQ(crc32(reinterpret_cast<const std::uint8_t*>(text), 9), 0xCBF43926u);
 }
 
-TEST(MotionFile, CsvHasHeaderAndOneRowPerFrame) {
+TEST(mocap_motion_file, CsvHasHeaderAndOneRowPerFrame) {
   Fixture fx;
   const std::string csv = motion_csv(fx.s45, 100.0, fx.q, fx.labels);
   EXPECT_EQ(csv.rfind("t_s,base_x_m,base_y_m,base_z_m,base_qx,base_qy,base_qz,base_qw,leg_l1_joint_rad", 0), 0u);

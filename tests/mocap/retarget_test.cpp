@@ -50,28 +50,28 @@ void expect_acceptance(const std::string& name, const Bvh& bvh, model::Variant v
   for (const ConfigVector& q : r.q) ASSERT_TRUE(q.allFinite());
 }
 
-TEST(Retarget, PerfumeClip) {
+TEST(mocap_retarget, PerfumeClip) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(load_bvh_file(kMocap + "perfume_C_test.bvh", b, error)) << error;
   expect_acceptance("perfume", b, model::Variant::kS45, 32.45);  // 1300 frames minus the reference frame
 }
 
-TEST(Retarget, CmuMotionBuilderClip) {
+TEST(mocap_retarget, CmuMotionBuilderClip) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(load_bvh_file(kMocap + "cmu_05_20_mb.bvh", b, error)) << error;
   expect_acceptance("cmu 05_20", b, model::Variant::kS45, 1094 * 0.0083333);
 }
 
-TEST(Retarget, IcloneCcBaseClip) {
+TEST(mocap_retarget, IcloneCcBaseClip) {
   Bvh b;
   std::string error;
   ASSERT_TRUE(load_bvh_file(kMocap + "cmu_05_07_iclone_ccrig.bvh", b, error)) << error;
   expect_acceptance("cc_base 05_07", b, model::Variant::kS45, 595 * 0.016667);
 }
 
-TEST(Retarget, BuiltInDanceBothVariants) {
+TEST(mocap_retarget, BuiltInDanceBothVariants) {
   const Bvh dance = default_dance_bvh();
   expect_acceptance("dance s45", dance, model::Variant::kS45, kDefaultDanceDuration_s);
   expect_acceptance("dance s42", dance, model::Variant::kS42, kDefaultDanceDuration_s);
@@ -80,7 +80,7 @@ TEST(Retarget, BuiltInDanceBothVariants) {
 // Oracle: the BVH skeleton is the robot's own tree, written in centimetres and Y-up,
 // driven by known joint angles. Import (units, axes, scaling, resampling) and retargeting
 // must hand those angles back to solver tolerance.
-TEST(Retarget, OracleRobotSkeletonRecoversItsJointAngles) {
+TEST(mocap_retarget, OracleRobotSkeletonRecoversItsJointAngles) {
   const auto robot = make_robot();
   constexpr int kFrames = 240;
   const std::vector<ConfigVector> truth = robot_test_motion(*robot, kFrames, 100.0);
@@ -124,7 +124,7 @@ TEST(Retarget, OracleRobotSkeletonRecoversItsJointAngles) {
   EXPECT_LT(r.report.keypoint_error_max_m, 1e-7);
 }
 
-TEST(Retarget, DeterministicAndAllocationFreePerFrame) {
+TEST(mocap_retarget, DeterministicAndAllocationFreePerFrame) {
   const auto robot = make_robot();
   const HumanTargets t = targets_of(default_dance_bvh(), *robot);
   const auto labels = detect_contacts(t, *robot);
