@@ -38,8 +38,9 @@ TEST(mocap_bvh, ParsesTheSharedClips) {
     double frame_time;
   };
   // Counts from ../shared/mocap/README.md (joints there exclude End Sites).
-  for (const Clip& c : {Clip{"perfume_C_test.bvh", 23, 72, 1300, 0.025}, Clip{"cmu_05_20_mb.bvh", 31, 96, 1096, 0.0083333},
-                        Clip{"cmu_05_07_iclone_ccrig.bvh", 100, 303, 596, 0.016667}}) {
+  for (const Clip& c :
+       {Clip{"perfume_C_test.bvh", 23, 72, 1300, 0.025}, Clip{"cmu_05_20_mb.bvh", 31, 96, 1096, 0.0083333},
+        Clip{"cmu_05_07_iclone_ccrig.bvh", 100, 303, 596, 0.016667}}) {
     Bvh b;
     std::string error;
     ASSERT_TRUE(load_bvh_file(kMocap + c.file, b, error)) << error;
@@ -122,7 +123,8 @@ TEST(mocap_bvh, MalformedFilesNameTheLineAndProblem) {
   const Case cases[] = {
       {"", "line 1: empty file"},
       {"HIERARCHY\nROOT A\n{\nOFFSET 0 zero 0\n", "line 4: OFFSET of 'A' needs 3 finite numbers"},
-      {"HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Wrotation Zrotation\n", "line 5: unknown channel 'Wrotation'"},
+      {"HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Wrotation Zrotation\n",
+       "line 5: unknown channel 'Wrotation'"},
       {"HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n", "missing '}'"},
       {head + "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5\n", "line 11: motion row 1 has 2 values, expected 3"},
       {head + "MOTION\nFrames: 3\nFrame Time: 0.1\n1 2 3\n4 5 6\n", "file ends after 2 of 3 motion rows"},
@@ -153,11 +155,21 @@ TEST(mocap_bvh, FuzzedInputNeverCrashesAndAlwaysExplains) {
     for (int e = 0; e < edits && !s.empty(); ++e) {
       const std::size_t at = rng() % s.size();
       switch (rng() % 5) {
-        case 0: s[at] = alphabet[rng() % (sizeof alphabet - 1)]; break;
-        case 1: s.erase(at, 1 + rng() % 16); break;
-        case 2: s.insert(at, 1, alphabet[rng() % (sizeof alphabet - 1)]); break;
-        case 3: s.resize(at); break;  // truncation
-        case 4: s.insert(at, s.substr(rng() % s.size(), rng() % 64)); break;
+        case 0:
+          s[at] = alphabet[rng() % (sizeof alphabet - 1)];
+          break;
+        case 1:
+          s.erase(at, 1 + rng() % 16);
+          break;
+        case 2:
+          s.insert(at, 1, alphabet[rng() % (sizeof alphabet - 1)]);
+          break;
+        case 3:
+          s.resize(at);
+          break;  // truncation
+        case 4:
+          s.insert(at, s.substr(rng() % s.size(), rng() % 64));
+          break;
       }
     }
     Bvh b;

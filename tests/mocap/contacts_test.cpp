@@ -57,7 +57,8 @@ TEST(mocap_contacts, OverrideFileReplacesRanges) {
   fx.build();
   auto labels = detect_contacts(fx.t, fx.robot);
   std::string error;
-  ASSERT_TRUE(apply_contact_overrides("# manual fix\n0.0 0.2 flight\n1.0 1.5   left  # comment\n\n", 100.0, labels, error))
+  ASSERT_TRUE(
+      apply_contact_overrides("# manual fix\n0.0 0.2 flight\n1.0 1.5   left  # comment\n\n", 100.0, labels, error))
       << error;
   EXPECT_EQ(labels[0], ContactLabel::kFlight);
   EXPECT_EQ(labels[19], ContactLabel::kFlight);

@@ -111,10 +111,11 @@ TEST(mocap_import, ZUpInchesMixamoNamesGiveTheSameTargets) {
 TEST(mocap_import, UnmappedSkeletonListsWhatIsMissing) {
   Bvh b;
   std::string error;
-  ASSERT_TRUE(parse_bvh("HIERARCHY\nROOT Pelvis\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
-                        "JOINT Thigh_L\n{\nOFFSET 1 -1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
-                        "End Site\n{\nOFFSET 0 -1 0\n}\n}\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n",
-                        b, error))
+  ASSERT_TRUE(
+      parse_bvh("HIERARCHY\nROOT Pelvis\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
+                "JOINT Thigh_L\n{\nOFFSET 1 -1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
+                "End Site\n{\nOFFSET 0 -1 0\n}\n}\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n",
+                b, error))
       << error;
   SkeletonMap map;
   EXPECT_FALSE(map_skeleton(b, map, error));

@@ -42,10 +42,10 @@ void expect_acceptance(const std::string& name, const Bvh& bvh, model::Variant v
   EXPECT_EQ(rep.frames, static_cast<int>(r.q.size()));
   EXPECT_EQ(rep.joint_limit_violations, 0);
   EXPECT_EQ(rep.velocity_limit_violations, 0);
-  EXPECT_LT(rep.foot_slide_max_m_s, 0.01);   // issue 5: stance-foot slide below 1 cm/s
-  EXPECT_LE(rep.penetration_max_m, 0.005);   // no penetration beyond 5 mm
-  EXPECT_LE(rep.float_max_m, 0.005);         // stance feet on the floor
-  EXPECT_GT(rep.contact_phases, 2);          // the dancer does step
+  EXPECT_LT(rep.foot_slide_max_m_s, 0.01);  // issue 5: stance-foot slide below 1 cm/s
+  EXPECT_LE(rep.penetration_max_m, 0.005);  // no penetration beyond 5 mm
+  EXPECT_LE(rep.float_max_m, 0.005);        // stance feet on the floor
+  EXPECT_GT(rep.contact_phases, 2);         // the dancer does step
   EXPECT_LT(rep.keypoint_error_mean_m, 0.1);
   for (const ConfigVector& q : r.q) ASSERT_TRUE(q.allFinite());
 }
@@ -92,8 +92,8 @@ TEST(mocap_retarget, OracleRobotSkeletonRecoversItsJointAngles) {
   EXPECT_EQ(map.family, "robot");
   HumanTargets t;
   ImportOptions import;
-  import.heading_window_s = 0.0;     // heading from frame 0 alone, where the base yaw is 0
-  import.feet_above_floor = false;   // the robot floats: no floor to keep the feet above
+  import.heading_window_s = 0.0;    // heading from frame 0 alone, where the base yaw is 0
+  import.feet_above_floor = false;  // the robot floats: no floor to keep the feet above
   ASSERT_TRUE(make_targets(bvh, map, *robot, import, t, error)) << error;
   EXPECT_EQ(t.dropped_frames, 0);
   EXPECT_EQ(t.unit, "cm");

@@ -55,12 +55,18 @@ int run(int argc, char** argv) {
     };
     const char* a = argv[i];
     bool ok = true;
-    if (!std::strcmp(a, "-o") || !std::strcmp(a, "--out")) ok = value(output);
-    else if (!std::strcmp(a, "--report")) ok = value(report_path);
-    else if (!std::strcmp(a, "--contacts")) ok = value(contacts);
-    else if (!std::strcmp(a, "--map")) ok = value(map_path);
-    else if (!std::strcmp(a, "--csv")) ok = value(csv_path);
-    else if (!std::strcmp(a, "--dance-bvh")) ok = value(dance_path);
+    if (!std::strcmp(a, "-o") || !std::strcmp(a, "--out"))
+      ok = value(output);
+    else if (!std::strcmp(a, "--report"))
+      ok = value(report_path);
+    else if (!std::strcmp(a, "--contacts"))
+      ok = value(contacts);
+    else if (!std::strcmp(a, "--map"))
+      ok = value(map_path);
+    else if (!std::strcmp(a, "--csv"))
+      ok = value(csv_path);
+    else if (!std::strcmp(a, "--dance-bvh"))
+      ok = value(dance_path);
     else if (!std::strcmp(a, "--variant")) {
       std::string v;
       ok = value(v);
@@ -192,6 +198,8 @@ int run(int argc, char** argv) {
   }
   j["limited"] = {{"position_bound_active_samples", r.position_bound_active_samples},
                   {"velocity_bound_active_samples", r.velocity_bound_active_samples},
+                  {"stance_yaw_clamped_phases", r.stance_yaw_clamped_phases},
+                  {"feet_below_floor_frames", targets.feet_below_floor_frames},
                   {"joints", limited}};
   j["import"] = {{"family", targets.family},
                  {"unit", targets.unit},
@@ -206,12 +214,13 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", report_path.c_str());
     return 1;
   }
-  std::printf("kuavo retarget: %s -> %s: %d frames (%.2f s), keypoint error mean %.3f m max %.3f m, "
-              "stance slide max %.4f m/s, penetration max %.4f m, limit violations %d/%d, %d contact phases, "
-              "%.0f frames/s\n",
-              input.empty() ? "default dance" : input.c_str(), output.c_str(), r.frames, r.duration_s,
-              r.keypoint_error_mean_m, r.keypoint_error_max_m, r.foot_slide_max_m_s, r.penetration_max_m,
-              r.joint_limit_violations, r.velocity_limit_violations, r.contact_phases, j["frames_per_s"].get<double>());
+  std::printf(
+      "kuavo retarget: %s -> %s: %d frames (%.2f s), keypoint error mean %.3f m max %.3f m, "
+      "stance slide max %.4f m/s, penetration max %.4f m, limit violations %d/%d, %d contact phases, "
+      "%.0f frames/s\n",
+      input.empty() ? "default dance" : input.c_str(), output.c_str(), r.frames, r.duration_s, r.keypoint_error_mean_m,
+      r.keypoint_error_max_m, r.foot_slide_max_m_s, r.penetration_max_m, r.joint_limit_violations,
+      r.velocity_limit_violations, r.contact_phases, j["frames_per_s"].get<double>());
   return 0;
 }
 

@@ -82,10 +82,9 @@ bool parse_channel(std::string_view s, BvhChannel& c) {
     const char* text;
     BvhChannel channel;
   };
-  static constexpr Name kNames[] = {
-      {"Xposition", BvhChannel::kXposition}, {"Yposition", BvhChannel::kYposition},
-      {"Zposition", BvhChannel::kZposition}, {"Xrotation", BvhChannel::kXrotation},
-      {"Yrotation", BvhChannel::kYrotation}, {"Zrotation", BvhChannel::kZrotation}};
+  static constexpr Name kNames[] = {{"Xposition", BvhChannel::kXposition}, {"Yposition", BvhChannel::kYposition},
+                                    {"Zposition", BvhChannel::kZposition}, {"Xrotation", BvhChannel::kXrotation},
+                                    {"Yrotation", BvhChannel::kYrotation}, {"Zrotation", BvhChannel::kZrotation}};
   for (const Name& n : kNames) {
     const std::string_view t(n.text);
     if (s.size() != t.size()) continue;
@@ -175,7 +174,9 @@ class Parser {
     if (!open_joint(-1, t.line, false)) return false;
     stack.push_back(0);
     while (!stack.empty()) {
-      if (!lex_.next(t)) return fail(lex_.line(), "unexpected end of file inside joint " + quote(out_.joints[stack.back()].name) + " (missing '}')");
+      if (!lex_.next(t))
+        return fail(lex_.line(),
+                    "unexpected end of file inside joint " + quote(out_.joints[stack.back()].name) + " (missing '}')");
       if (t.text == "}") {
         stack.pop_back();
       } else if (t.text == "JOINT") {
@@ -248,8 +249,8 @@ class Parser {
       if (columns == 0) return fail(t.line, "motion values but the hierarchy declares no channels");
       if (in_row == 0) {
         if (t.line == last_row_line)
-          return fail(t.line, "motion row " + std::to_string(row - 1) + " has more than " +
-                                  std::to_string(columns) + " values");
+          return fail(t.line, "motion row " + std::to_string(row - 1) + " has more than " + std::to_string(columns) +
+                                  " values");
         if (row >= frames) return fail(t.line, "more motion rows than 'Frames: " + std::to_string(frames) + "'");
         row_line = t.line;
       } else if (t.line != row_line) {
@@ -385,12 +386,18 @@ void bvh_rest_pose(const Bvh& bvh, std::vector<Vec3>& position) {
 
 const char* channel_name(BvhChannel c) {
   switch (c) {
-    case BvhChannel::kXposition: return "Xposition";
-    case BvhChannel::kYposition: return "Yposition";
-    case BvhChannel::kZposition: return "Zposition";
-    case BvhChannel::kXrotation: return "Xrotation";
-    case BvhChannel::kYrotation: return "Yrotation";
-    case BvhChannel::kZrotation: return "Zrotation";
+    case BvhChannel::kXposition:
+      return "Xposition";
+    case BvhChannel::kYposition:
+      return "Yposition";
+    case BvhChannel::kZposition:
+      return "Zposition";
+    case BvhChannel::kXrotation:
+      return "Xrotation";
+    case BvhChannel::kYrotation:
+      return "Yrotation";
+    case BvhChannel::kZrotation:
+      return "Zrotation";
   }
   return "?";
 }
@@ -412,9 +419,12 @@ std::string write_bvh(const Bvh& bvh) {
     depth[i] = j.parent < 0 ? 0 : depth[j.parent] + 1;
     if (open_depth >= depth[i]) close_to(open_depth, depth[i]);
     indent(depth[i]);
-    if (j.parent < 0) s += "ROOT " + j.name + "\n";
-    else if (j.end_site) s += "End Site\n";
-    else s += "JOINT " + j.name + "\n";
+    if (j.parent < 0)
+      s += "ROOT " + j.name + "\n";
+    else if (j.end_site)
+      s += "End Site\n";
+    else
+      s += "JOINT " + j.name + "\n";
     indent(depth[i]);
     s += "{\n";
     indent(depth[i] + 1);

@@ -27,14 +27,14 @@ using Mat3 = Eigen::Matrix3d;
 enum class BvhChannel : std::uint8_t { kXposition, kYposition, kZposition, kXrotation, kYrotation, kZrotation };
 
 struct BvhJoint {
-  std::string name;          // End Sites are named "<parent name>_End"
-  int parent = -1;           // index into Bvh::joints, -1 for the root
+  std::string name;            // End Sites are named "<parent name>_End"
+  int parent = -1;             // index into Bvh::joints, -1 for the root
   Vec3 offset = Vec3::Zero();  // from the parent joint, parent axes, file units
   std::vector<BvhChannel> channels;
-  int first_column = 0;      // column of channels[0] in a motion row
+  int first_column = 0;  // column of channels[0] in a motion row
   bool end_site = false;
   bool position_absolute = false;  // position channels replace OFFSET instead of adding to it
-  int line = 0;              // line of the JOINT/ROOT/End Site keyword, for messages
+  int line = 0;                    // line of the JOINT/ROOT/End Site keyword, for messages
 };
 
 struct Bvh {
@@ -42,7 +42,7 @@ struct Bvh {
   int channel_count = 0;
   int frame_count = 0;
   double frame_time_s = 0.0;
-  std::vector<double> motion;    // frame_count rows of channel_count values (degrees, file units)
+  std::vector<double> motion;  // frame_count rows of channel_count values (degrees, file units)
 
   const double* row(int frame) const { return motion.data() + static_cast<std::size_t>(frame) * channel_count; }
   int find(std::string_view name) const;  // joint index or -1

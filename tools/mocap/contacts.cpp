@@ -47,8 +47,10 @@ std::vector<bool> detect_foot(const HumanTargets& t, int ankle, int toe, double 
     // A foot pivoting on its heel or ball moves the other end: take the faster of the two.
     double speed = horizontal_speed(ankle);
     if (t.present[toe]) speed = std::max(speed, horizontal_speed(toe));
-    if (!on && height < th.touchdown_height_m && speed < th.touchdown_speed_m_s) on = true;
-    else if (on && (height > th.liftoff_height_m || speed > th.liftoff_speed_m_s)) on = false;
+    if (!on && height < th.touchdown_height_m && speed < th.touchdown_speed_m_s)
+      on = true;
+    else if (on && (height > th.liftoff_height_m || speed > th.liftoff_speed_m_s))
+      on = false;
     contact[i] = on;
   }
   merge_short_runs(contact, std::max(1, static_cast<int>(std::lround(th.min_phase_s * t.rate_hz))));
@@ -59,17 +61,21 @@ std::vector<bool> detect_foot(const HumanTargets& t, int ankle, int toe, double 
 
 const char* to_string(ContactLabel c) {
   switch (c) {
-    case ContactLabel::kFlight: return "flight";
-    case ContactLabel::kLeftSupport: return "left";
-    case ContactLabel::kRightSupport: return "right";
-    case ContactLabel::kDoubleSupport: return "double";
+    case ContactLabel::kFlight:
+      return "flight";
+    case ContactLabel::kLeftSupport:
+      return "left";
+    case ContactLabel::kRightSupport:
+      return "right";
+    case ContactLabel::kDoubleSupport:
+      return "double";
   }
   return "?";
 }
 
 bool parse_contact_label(const std::string& text, ContactLabel& out) {
-  for (ContactLabel c : {ContactLabel::kFlight, ContactLabel::kLeftSupport, ContactLabel::kRightSupport,
-                         ContactLabel::kDoubleSupport}) {
+  for (ContactLabel c :
+       {ContactLabel::kFlight, ContactLabel::kLeftSupport, ContactLabel::kRightSupport, ContactLabel::kDoubleSupport}) {
     if (text == to_string(c)) {
       out = c;
       return true;

@@ -20,8 +20,12 @@ enum class ContactLabel : std::uint8_t { kFlight = 0, kLeftSupport = 1, kRightSu
 
 const char* to_string(ContactLabel c);
 bool parse_contact_label(const std::string& text, ContactLabel& out);
-inline bool left_in_contact(ContactLabel c) { return c == ContactLabel::kLeftSupport || c == ContactLabel::kDoubleSupport; }
-inline bool right_in_contact(ContactLabel c) { return c == ContactLabel::kRightSupport || c == ContactLabel::kDoubleSupport; }
+inline bool left_in_contact(ContactLabel c) {
+  return c == ContactLabel::kLeftSupport || c == ContactLabel::kDoubleSupport;
+}
+inline bool right_in_contact(ContactLabel c) {
+  return c == ContactLabel::kRightSupport || c == ContactLabel::kDoubleSupport;
+}
 inline ContactLabel make_label(bool left, bool right) {
   return left ? (right ? ContactLabel::kDoubleSupport : ContactLabel::kLeftSupport)
               : (right ? ContactLabel::kRightSupport : ContactLabel::kFlight);

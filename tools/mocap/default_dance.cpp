@@ -21,9 +21,33 @@ constexpr double kStanceHalfWidth = 0.09;    // feet ±9 cm from the centre line
 constexpr double kSwingLift = 0.06, kSwingTime = 0.4;
 
 enum Joint {
-  kHips, kLUpLeg, kLLeg, kLFoot, kLToe, kLToeEnd, kRUpLeg, kRLeg, kRFoot, kRToe, kRToeEnd,
-  kSpine, kSpine1, kNeck, kHead, kHeadEnd, kLShoulder, kLArm, kLForeArm, kLHand, kLHandEnd,
-  kRShoulder, kRArm, kRForeArm, kRHand, kRHandEnd, kJointCount
+  kHips,
+  kLUpLeg,
+  kLLeg,
+  kLFoot,
+  kLToe,
+  kLToeEnd,
+  kRUpLeg,
+  kRLeg,
+  kRFoot,
+  kRToe,
+  kRToeEnd,
+  kSpine,
+  kSpine1,
+  kNeck,
+  kHead,
+  kHeadEnd,
+  kLShoulder,
+  kLArm,
+  kLForeArm,
+  kLHand,
+  kLHandEnd,
+  kRShoulder,
+  kRArm,
+  kRForeArm,
+  kRHand,
+  kRHandEnd,
+  kJointCount
 };
 
 struct JointDef {
@@ -70,8 +94,12 @@ struct Step {
   FootPose to;
 };
 
-double smooth(double s) { return 0.5 - 0.5 * std::cos(kPi * std::clamp(s, 0.0, 1.0)); }
-double bump(double s) { return s <= 0.0 || s >= 1.0 ? 0.0 : std::sin(kPi * s); }
+double smooth(double s) {
+  return 0.5 - 0.5 * std::cos(kPi * std::clamp(s, 0.0, 1.0));
+}
+double bump(double s) {
+  return s <= 0.0 || s >= 1.0 ? 0.0 : std::sin(kPi * s);
+}
 
 // Footstep plan (see the header for the phases).
 std::vector<Step> plan_steps() {
@@ -172,9 +200,13 @@ ArmParams arm_at(double t, double side) {
   return out;
 }
 
-Mat3 yaw_matrix(double yaw) { return Eigen::AngleAxisd(yaw, Vec3::UnitY()).toRotationMatrix(); }
+Mat3 yaw_matrix(double yaw) {
+  return Eigen::AngleAxisd(yaw, Vec3::UnitY()).toRotationMatrix();
+}
 
-Vec3 ground_point(const FootPose& f, double height) { return {f.left, height, f.fwd}; }
+Vec3 ground_point(const FootPose& f, double height) {
+  return {f.left, height, f.fwd};
+}
 
 // Two-link IK: thigh and shin world rotations for hip H, ankle A, knee bending toward fwd.
 void leg_ik(const Vec3& hip, const Vec3& ankle, const Vec3& fwd, Mat3& thigh, Mat3& shin) {
@@ -200,8 +232,9 @@ void leg_ik(const Vec3& hip, const Vec3& ankle, const Vec3& fwd, Mat3& thigh, Ma
 // Upper-arm and forearm rotations in the chest frame.
 void arm_rotations(const ArmParams& p, double side, Mat3& upper, Mat3& fore) {
   const Vec3 x = Vec3::UnitX(), y = Vec3::UnitY(), z = Vec3::UnitZ();
-  const Vec3 d = (std::cos(p.swing) * (side * std::sin(p.abduction) * x - std::cos(p.abduction) * y) +
-                  std::sin(p.swing) * z).normalized();
+  const Vec3 d =
+      (std::cos(p.swing) * (side * std::sin(p.abduction) * x - std::cos(p.abduction) * y) + std::sin(p.swing) * z)
+          .normalized();
   Vec3 bend = z - z.dot(d) * d;
   if (bend.norm() < 1e-3) bend = y - y.dot(d) * d;
   bend.normalize();
@@ -308,6 +341,8 @@ Bvh default_dance_bvh() {
   return b;
 }
 
-std::string default_dance_bvh_text() { return write_bvh(default_dance_bvh()); }
+std::string default_dance_bvh_text() {
+  return write_bvh(default_dance_bvh());
+}
 
 }  // namespace kuavo::mocap

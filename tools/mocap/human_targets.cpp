@@ -25,28 +25,52 @@ const Vec3 kThumbPoint_m(0.05, 0.0, -0.08);
 // Chain used to rebuild keypoints with robot proportions: parent of each keypoint.
 int chain_parent(int k) {
   switch (k) {
-    case kKpLeftHip: case kKpRightHip: case kKpNeck: return kKpPelvis;
-    case kKpLeftKnee: return kKpLeftHip;
-    case kKpLeftAnkle: return kKpLeftKnee;
-    case kKpLeftToe: case kKpLeftHeel: return kKpLeftAnkle;
-    case kKpRightKnee: return kKpRightHip;
-    case kKpRightAnkle: return kKpRightKnee;
-    case kKpRightToe: case kKpRightHeel: return kKpRightAnkle;
-    case kKpLeftShoulder: case kKpRightShoulder: case kKpHead: return kKpNeck;
-    case kKpLeftElbow: return kKpLeftShoulder;
-    case kKpLeftWrist: return kKpLeftElbow;
-    case kKpLeftHand: case kKpLeftThumb: return kKpLeftWrist;
-    case kKpRightElbow: return kKpRightShoulder;
-    case kKpRightWrist: return kKpRightElbow;
-    case kKpRightHand: case kKpRightThumb: return kKpRightWrist;
-    default: return -1;  // the pelvis is the root
+    case kKpLeftHip:
+    case kKpRightHip:
+    case kKpNeck:
+      return kKpPelvis;
+    case kKpLeftKnee:
+      return kKpLeftHip;
+    case kKpLeftAnkle:
+      return kKpLeftKnee;
+    case kKpLeftToe:
+    case kKpLeftHeel:
+      return kKpLeftAnkle;
+    case kKpRightKnee:
+      return kKpRightHip;
+    case kKpRightAnkle:
+      return kKpRightKnee;
+    case kKpRightToe:
+    case kKpRightHeel:
+      return kKpRightAnkle;
+    case kKpLeftShoulder:
+    case kKpRightShoulder:
+    case kKpHead:
+      return kKpNeck;
+    case kKpLeftElbow:
+      return kKpLeftShoulder;
+    case kKpLeftWrist:
+      return kKpLeftElbow;
+    case kKpLeftHand:
+    case kKpLeftThumb:
+      return kKpLeftWrist;
+    case kKpRightElbow:
+      return kKpRightShoulder;
+    case kKpRightWrist:
+      return kKpRightElbow;
+    case kKpRightHand:
+    case kKpRightThumb:
+      return kKpRightWrist;
+    default:
+      return -1;  // the pelvis is the root
   }
 }
 // Order in which the chain is rebuilt (parents first).
-constexpr int kChainOrder[kNumKeypoints] = {
-    kKpPelvis,   kKpLeftHip,      kKpLeftKnee,   kKpLeftAnkle,  kKpLeftToe,      kKpLeftHeel,  kKpRightHip,
-    kKpRightKnee, kKpRightAnkle,  kKpRightToe,   kKpRightHeel,  kKpNeck,       kKpHead,       kKpLeftShoulder, kKpLeftElbow, kKpLeftWrist,
-    kKpLeftHand, kKpLeftThumb,    kKpRightShoulder, kKpRightElbow, kKpRightWrist, kKpRightHand, kKpRightThumb};
+constexpr int kChainOrder[kNumKeypoints] = {kKpPelvis,     kKpLeftHip,   kKpLeftKnee,  kKpLeftAnkle,     kKpLeftToe,
+                                            kKpLeftHeel,   kKpRightHip,  kKpRightKnee, kKpRightAnkle,    kKpRightToe,
+                                            kKpRightHeel,  kKpNeck,      kKpHead,      kKpLeftShoulder,  kKpLeftElbow,
+                                            kKpLeftWrist,  kKpLeftHand,  kKpLeftThumb, kKpRightShoulder, kKpRightElbow,
+                                            kKpRightWrist, kKpRightHand, kKpRightThumb};
 
 struct Unit {
   const char* name;
@@ -99,8 +123,10 @@ std::array<RobotKeypoint, kNumKeypoints> robot_keypoints(const model::Model& rob
   k[kKpLeftThumb] = {kBodyLeftWrist, kThumbPoint_m};
   k[kKpRightThumb] = {kBodyRightWrist, kThumbPoint_m};
   // Pelvis and neck: midpoints of points fixed on the base (hip roll axes, shoulder axes).
-  const Vec3 lh = robot.bodies[kBodyLeftHipRoll].joint_position_m, rh = robot.bodies[kBodyRightHipRoll].joint_position_m;
-  const Vec3 ls = robot.bodies[kBodyLeftShoulder].joint_position_m, rs = robot.bodies[kBodyRightShoulder].joint_position_m;
+  const Vec3 lh = robot.bodies[kBodyLeftHipRoll].joint_position_m,
+             rh = robot.bodies[kBodyRightHipRoll].joint_position_m;
+  const Vec3 ls = robot.bodies[kBodyLeftShoulder].joint_position_m,
+             rs = robot.bodies[kBodyRightShoulder].joint_position_m;
   k[kKpPelvis] = {0, 0.5 * (lh + rh)};
   k[kKpNeck] = {0, 0.5 * (ls + rs)};
   return k;
@@ -120,8 +146,12 @@ std::array<Vec3, kNumKeypoints> robot_rest_keypoints(const model::Model& robot) 
   return out;
 }
 
-double robot_ankle_height_m(const model::Model& robot) { return -robot.frames[0].position_m.z(); }
-double robot_toe_height_m(const model::Model& robot) { return kToePoint_m.z() - robot.frames[0].position_m.z(); }
+double robot_ankle_height_m(const model::Model& robot) {
+  return -robot.frames[0].position_m.z();
+}
+double robot_toe_height_m(const model::Model& robot) {
+  return kToePoint_m.z() - robot.frames[0].position_m.z();
+}
 
 Mat3 pelvis_frame(const std::array<Vec3, kNumKeypoints>& p) {
   Vec3 y = p[kKpLeftHip] - p[kKpRightHip];
@@ -190,8 +220,8 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     }
     segment_scale[k] = (robot_rest[k] - robot_rest[p]).norm() / human_length[k];
   }
-  const double human_leg = 0.5 * (human_length[kKpLeftKnee] + human_length[kKpLeftAnkle] +
-                                  human_length[kKpRightKnee] + human_length[kKpRightAnkle]);
+  const double human_leg = 0.5 * (human_length[kKpLeftKnee] + human_length[kKpLeftAnkle] + human_length[kKpRightKnee] +
+                                  human_length[kKpRightAnkle]);
   const double robot_leg = 0.5 * ((robot_rest[kKpLeftKnee] - robot_rest[kKpLeftHip]).norm() +
                                   (robot_rest[kKpLeftAnkle] - robot_rest[kKpLeftKnee]).norm() +
                                   (robot_rest[kKpRightKnee] - robot_rest[kKpRightHip]).norm() +
@@ -242,7 +272,8 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   out.up_axis[1] = static_cast<char>('X' + up_axis);
   Vec3 lateral = Vec3::Zero();
   const std::size_t head_frames = std::min<std::size_t>(
-      src.size(), static_cast<std::size_t>(std::ceil(std::max(0.0, options.heading_window_s) * out.source_rate_hz)) + 1);
+      src.size(),
+      static_cast<std::size_t>(std::ceil(std::max(0.0, options.heading_window_s) * out.source_rate_hz)) + 1);
   for (std::size_t f = 0; f < head_frames; ++f) lateral += src[f][kKpLeftHip] - src[f][kKpRightHip];
   lateral -= lateral.dot(up) * up;
   if (!(lateral.norm() > 1e-9)) {
@@ -299,9 +330,14 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     // Feet never aim below the floor: a flat robot foot has its ankle at ankle_h and its toe
     // point on the sole, and neither can go lower without a sole corner going through.
     if (options.feet_above_floor) {
-      for (int k : {kKpLeftAnkle, kKpRightAnkle}) f.position_m[k].z() = std::max(f.position_m[k].z(), ankle_h);
-      for (int k : {kKpLeftToe, kKpRightToe, kKpLeftHeel, kKpRightHeel})
-        f.position_m[k].z() = std::max(f.position_m[k].z(), toe_h);
+      bool raised = false;
+      const auto raise = [&](int k, double floor_z) {
+        raised |= f.position_m[k].z() < floor_z - 1e-3;
+        f.position_m[k].z() = std::max(f.position_m[k].z(), floor_z);
+      };
+      for (int k : {kKpLeftAnkle, kKpRightAnkle}) raise(k, ankle_h);
+      for (int k : {kKpLeftToe, kKpRightToe, kKpLeftHeel, kKpRightHeel}) raise(k, toe_h);
+      out.feet_below_floor_frames += raised;
     }
     f.base_rotation = pelvis_frame(f.position_m) * rest_frame.transpose();
   }

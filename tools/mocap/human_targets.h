@@ -54,7 +54,7 @@ struct TargetFrame {
 
 struct ImportOptions {
   double rate_hz = 100.0;
-  int drop_first_frames = -1;  // -1: detect a reference frame 0; >= 0: drop exactly this many
+  int drop_first_frames = -1;     // -1: detect a reference frame 0; >= 0: drop exactly this many
   double heading_window_s = 0.5;  // the start heading is the mean hip line over this time
   bool feet_above_floor = true;   // clamp ankle/toe/heel targets to flat-foot height (step 6)
 };
@@ -66,12 +66,13 @@ struct HumanTargets {
 
   // What the import decided (for the report).
   std::string family;
-  std::string unit;             // "m", "cm", "mm", "inch", "cmu"
+  std::string unit;  // "m", "cm", "mm", "inch", "cmu"
   double unit_to_m = 1.0;
   double human_height_m = 0.0;  // estimated stature
   double root_scale = 1.0;      // robot / human leg length
   char up_axis[3] = "+Y";
   int dropped_frames = 0;
+  int feet_below_floor_frames = 0;  // frames where a foot target was raised by more than 1 mm
   double source_rate_hz = 0.0;
   int source_frames = 0;
 };

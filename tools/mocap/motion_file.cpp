@@ -26,7 +26,9 @@ void put_f64(std::uint8_t* p, double v) {
   std::memcpy(&bits, &v, 8);
   for (int i = 0; i < 8; ++i) p[i] = static_cast<std::uint8_t>(bits >> (8 * i));
 }
-std::uint16_t get_u16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
+std::uint16_t get_u16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
 std::uint32_t get_u32(const std::uint8_t* p) {
   std::uint32_t v = 0;
   for (int i = 3; i >= 0; --i) v = (v << 8) | p[i];
@@ -51,18 +53,30 @@ std::uint32_t header_crc(const std::uint8_t* data) {
 
 const char* to_string(MotionError e) {
   switch (e) {
-    case MotionError::kOk: return "ok";
-    case MotionError::kTooShort: return "file too short for a motion header";
-    case MotionError::kBadMagic: return "not a Kuavo motion file (bad magic)";
-    case MotionError::kBadVersion: return "unsupported motion format version";
-    case MotionError::kBadHeaderChecksum: return "header checksum mismatch (corrupted header)";
-    case MotionError::kWrongVariant: return "motion was made for the other robot variant";
-    case MotionError::kLayoutMismatch: return "joint layout differs from this robot model";
-    case MotionError::kTruncated: return "file truncated: fewer frames than the header says";
-    case MotionError::kBadPayloadChecksum: return "frame data checksum mismatch (corrupted frames)";
-    case MotionError::kBadRate: return "frame rate is not a positive finite number";
-    case MotionError::kBadLabel: return "contact label out of range";
-    case MotionError::kIo: return "file could not be read or written";
+    case MotionError::kOk:
+      return "ok";
+    case MotionError::kTooShort:
+      return "file too short for a motion header";
+    case MotionError::kBadMagic:
+      return "not a Kuavo motion file (bad magic)";
+    case MotionError::kBadVersion:
+      return "unsupported motion format version";
+    case MotionError::kBadHeaderChecksum:
+      return "header checksum mismatch (corrupted header)";
+    case MotionError::kWrongVariant:
+      return "motion was made for the other robot variant";
+    case MotionError::kLayoutMismatch:
+      return "joint layout differs from this robot model";
+    case MotionError::kTruncated:
+      return "file truncated: fewer frames than the header says";
+    case MotionError::kBadPayloadChecksum:
+      return "frame data checksum mismatch (corrupted frames)";
+    case MotionError::kBadRate:
+      return "frame rate is not a positive finite number";
+    case MotionError::kBadLabel:
+      return "contact label out of range";
+    case MotionError::kIo:
+      return "file could not be read or written";
   }
   return "unknown motion error";
 }
@@ -86,8 +100,7 @@ MotionError read_motion_header(const std::uint8_t* data, std::size_t size, const
   if (size < kMotionHeaderBytes) return MotionError::kTooShort;
   if (get_u32(data + kCrcFieldOffset) != header_crc(data)) return MotionError::kBadHeaderChecksum;
   if (data[16] != static_cast<std::uint8_t>(robot.variant)) return MotionError::kWrongVariant;
-  if (get_u16(data + 18) != kNq || get_u16(data + 20) != model::kNumJoints ||
-      get_u16(data + 22) != kMotionRecordBytes)
+  if (get_u16(data + 18) != kNq || get_u16(data + 20) != model::kNumJoints || get_u16(data + 22) != kMotionRecordBytes)
     return MotionError::kLayoutMismatch;
   for (int j = 0; j < model::kNumJoints; ++j) {
     const char* stored = reinterpret_cast<const char*>(data + kMotionFixedHeaderBytes + kMotionNameBytes * j);
@@ -165,9 +178,8 @@ bool load_motion_file(const std::string& path, const model::Model& robot, Motion
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   MotionError e = read_motion_header(bytes.data(), bytes.size(), robot, header);
   if (e == MotionError::kWrongVariant) {
-    error = path + ": " + to_string(e) + " (file: " +
-            model::to_string(static_cast<model::Variant>(bytes[16])) + ", expected: " +
-            model::to_string(robot.variant) + ")";
+    error = path + ": " + to_string(e) + " (file: " + model::to_string(static_cast<model::Variant>(bytes[16])) +
+            ", expected: " + model::to_string(robot.variant) + ")";
     return false;
   }
   if (e != MotionError::kOk) {

@@ -48,17 +48,17 @@ inline constexpr std::size_t kMotionRecordBytes = 288;
 // Stable numbers; never reuse one.
 enum class MotionError : std::uint8_t {
   kOk = 0,
-  kTooShort = 1,         // fewer bytes than a header
-  kBadMagic = 2,         // not a motion file
-  kBadVersion = 3,       // written by a newer or unknown format version
+  kTooShort = 1,    // fewer bytes than a header
+  kBadMagic = 2,    // not a motion file
+  kBadVersion = 3,  // written by a newer or unknown format version
   kBadHeaderChecksum = 4,
-  kWrongVariant = 5,     // recorded for the other arm variant
-  kLayoutMismatch = 6,   // nq, joint count, record size or joint names differ from this build
-  kTruncated = 7,        // fewer frame bytes than the header promises
+  kWrongVariant = 5,    // recorded for the other arm variant
+  kLayoutMismatch = 6,  // nq, joint count, record size or joint names differ from this build
+  kTruncated = 7,       // fewer frame bytes than the header promises
   kBadPayloadChecksum = 8,
   kBadRate = 9,
-  kBadLabel = 10,        // a contact label outside 0..3
-  kIo = 11,              // the file could not be read or written
+  kBadLabel = 10,  // a contact label outside 0..3
+  kIo = 11,        // the file could not be read or written
 };
 const char* to_string(MotionError e);
 

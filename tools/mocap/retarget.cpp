@@ -14,7 +14,7 @@ using dynamics::kNv;
 using dynamics::VelocityVector;
 using Hessian = Eigen::Matrix<double, kNv, kNv>;
 
-constexpr int kFootBody[2] = {6, 12};  // leg_l6_link, leg_r6_link
+constexpr int kFootBody[2] = {6, 12};             // leg_l6_link, leg_r6_link
 constexpr int kLeftHipYaw = 1, kRightHipYaw = 7;  // joint indices (leg_l2, leg_r2)
 constexpr int kLeftKnee = 3, kRightKnee = 9, kLeftElbow = 15, kRightElbow = 22;
 constexpr double kColdStartBend_rad = 0.3;
@@ -47,9 +47,13 @@ Vec3 rotation_log(const Mat3& r) {
   return aa.angle() * aa.axis();
 }
 
-Mat3 yaw_rotation(double yaw) { return Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix(); }
+Mat3 yaw_rotation(double yaw) {
+  return Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix();
+}
 
-double heading_of(const Mat3& r) { return std::atan2(r(1, 0), r(0, 0)); }
+double heading_of(const Mat3& r) {
+  return std::atan2(r(1, 0), r(0, 0));
+}
 
 }  // namespace
 
@@ -61,7 +65,10 @@ struct Retargeter::Workspace {
 };
 
 Retargeter::Retargeter(const model::Model& robot, const RetargetOptions& options, double rate_hz)
-    : robot_(robot), options_(options), dt_s_(1.0 / rate_hz), ankle_height_m_(robot_ankle_height_m(robot)),
+    : robot_(robot),
+      options_(options),
+      dt_s_(1.0 / rate_hz),
+      ankle_height_m_(robot_ankle_height_m(robot)),
       keypoints_(robot_keypoints(robot)),
       ws_(std::make_unique<Workspace>()) {
   const RetargetWeights& w = options.weights;
@@ -89,8 +96,8 @@ void Retargeter::reset() {
   locked_ = {false, false};
 }
 
-void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present,
-                       const FootPins& pins, int iterations, bool velocity_bounds, bool cold_start) {
+void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present, const FootPins& pins,
+                       int iterations, bool velocity_bounds, bool cold_start) {
   Workspace& ws = *ws_;
   const model::JointLimits& lim = robot_.limits;
   const ConfigVector& q_prev = q_prev_;
@@ -152,7 +159,8 @@ void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKey
       const Vec3 p = ws.data.position_m[body];
       dynamics::point_jacobian(robot_, ws.data, body, p, ws.jacobian);
       const Eigen::Matrix<double, 6, 1> wdiag =
-          (Eigen::Matrix<double, 6, 1>() << horizontal, horizontal, vertical, vertical, vertical, horizontal).finished();
+          (Eigen::Matrix<double, 6, 1>() << horizontal, horizontal, vertical, vertical, vertical, horizontal)
+              .finished();
       Eigen::Matrix<double, 6, 1> e;
       e.head<3>() = pose.ankle_position_m - p;
       e.tail<3>() = rotation_log(yaw_rotation(pose.yaw_rad) * ws.data.rotation[body].transpose());
@@ -299,7 +307,8 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
     for (int step = 1; step <= kColdStartSteps; ++step) {
       const double a = static_cast<double>(step) / kColdStartSteps;
       TargetFrame blended = target;
-      for (int k = 0; k < kNumKeypoints; ++k) blended.position_m[k] = (1.0 - a) * from.position_m[k] + a * target.position_m[k];
+      for (int k = 0; k < kNumKeypoints; ++k)
+        blended.position_m[k] = (1.0 - a) * from.position_m[k] + a * target.position_m[k];
       blended.base_rotation = r0.slerp(a, quat).toRotationMatrix();
       q_prev_ = q_;
       locked_ = {false, false};
@@ -326,7 +335,8 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
 }
 
 std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vector<ContactLabel>& labels,
-                                     const model::Model& robot, double rate_hz) {
+                                     const model::Model& robot, double rate_hz, int* yaw_clamped_phases) {
+  if (yaw_clamped_phases) *yaw_clamped_phases = 0;
   const std::size_t n = targets.frames.size();
   std::vector<FootPins> pins(n);
   const double ankle_h = robot_ankle_height_m(robot);
@@ -363,8 +373,10 @@ std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vec
       const double pelvis_yaw = std::atan2(py, px);
       const int hip_yaw = side == 0 ? kLeftHipYaw : kRightHipYaw;
       const double relative = std::remainder(std::atan2(cy, cx) - pelvis_yaw, 2.0 * M_PI);
-      const double yaw = pelvis_yaw + std::clamp(relative, robot.limits.position_min_rad[hip_yaw] + kHipYawMargin_rad,
-                                                 robot.limits.position_max_rad[hip_yaw] - kHipYawMargin_rad);
+      const double clamped = std::clamp(relative, robot.limits.position_min_rad[hip_yaw] + kHipYawMargin_rad,
+                                        robot.limits.position_max_rad[hip_yaw] - kHipYawMargin_rad);
+      if (yaw_clamped_phases && clamped != relative) ++*yaw_clamped_phases;
+      const double yaw = pelvis_yaw + clamped;
       const FootPose2d pose{Vec3(mean.x(), mean.y(), ankle_h), yaw, 1.0};
       for (std::size_t k = i; k < j; ++k) {
         pins[k].pinned[side] = true;
@@ -375,7 +387,8 @@ std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vec
       for (int d = 1; d <= window; ++d) {
         FootPose2d faded = pose;
         faded.blend = 1.0 - static_cast<double>(d) / (window + 1);
-        const std::ptrdiff_t before = static_cast<std::ptrdiff_t>(i) - d, after = static_cast<std::ptrdiff_t>(j) - 1 + d;
+        const std::ptrdiff_t before = static_cast<std::ptrdiff_t>(i) - d,
+                             after = static_cast<std::ptrdiff_t>(j) - 1 + d;
         if (before >= 0 && !pins[before].pinned[side]) pins[before].stance[side] = faded;
         if (after < static_cast<std::ptrdiff_t>(n) && !pins[after].pinned[side]) pins[after].release[side] = faded;
       }
@@ -392,7 +405,8 @@ void retarget_motion(const model::Model& robot, const HumanTargets& targets, con
   schedule.resize(targets.frames.size(), ContactLabel::kFlight);
   out.report.schedule_phases = count_contact_phases(schedule);
   out.contacts.reserve(targets.frames.size());
-  const std::vector<FootPins> pins = options.pin_stance_feet ? plan_foot_pins(targets, schedule, robot, targets.rate_hz)
+  const std::vector<FootPins> pins = options.pin_stance_feet ? plan_foot_pins(targets, schedule, robot, targets.rate_hz,
+                                                                              &out.report.stance_yaw_clamped_phases)
                                                              : std::vector<FootPins>(targets.frames.size());
   Retargeter solver(robot, options, targets.rate_hz);
   out.q.reserve(targets.frames.size());
@@ -446,8 +460,8 @@ void evaluate_motion(const model::Model& robot, const HumanTargets& targets, Ret
       if (!now) continue;
       for (int c = side * kCornersPerFoot; c < (side + 1) * kCornersPerFoot; ++c)
         r.float_max_m = std::max(r.float_max_m, corners[c].z());
-      const bool before = i > 0 && (side == 0 ? left_in_contact(result.contacts[i - 1])
-                                              : right_in_contact(result.contacts[i - 1]));
+      const bool before =
+          i > 0 && (side == 0 ? left_in_contact(result.contacts[i - 1]) : right_in_contact(result.contacts[i - 1]));
       if (!before) continue;
       for (int c = side * kCornersPerFoot; c < (side + 1) * kCornersPerFoot; ++c) {
         const Vec3 d = corners[c] - prev_corners[c];

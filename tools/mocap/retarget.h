@@ -74,12 +74,13 @@ struct FootPose2d {
   double blend = 0.0;  // 1 when pinned
 };
 struct FootPins {
-  std::array<bool, 2> pinned{};       // left, right
-  std::array<FootPose2d, 2> stance{};  // pinned pose (blend 1) or the approaching stance's
+  std::array<bool, 2> pinned{};         // left, right
+  std::array<FootPose2d, 2> stance{};   // pinned pose (blend 1) or the approaching stance's
   std::array<FootPose2d, 2> release{};  // the stance just left, while blending out
 };
+// yaw_clamped_phases (optional) counts stance phases whose heading was limited.
 std::vector<FootPins> plan_foot_pins(const HumanTargets& targets, const std::vector<ContactLabel>& labels,
-                                     const model::Model& robot, double rate_hz);
+                                     const model::Model& robot, double rate_hz, int* yaw_clamped_phases = nullptr);
 
 struct FrameLimits {
   int position_bounds_active = 0;  // joints ending the frame at a position limit
@@ -118,7 +119,7 @@ class Retargeter {
   std::array<double, kNumKeypoints> position_weight_{};
   ConfigVector q_, q_prev_;
   bool started_ = false;
-  std::array<bool, 2> locked_{};           // stance foot pinned where it landed
+  std::array<bool, 2> locked_{};  // stance foot pinned where it landed
   std::array<FootPose2d, 2> locked_pose_{};
   std::array<int, 2> locked_frames_{};
   std::array<bool, model::kNumJoints> at_position_bound_{}, at_velocity_bound_{};
@@ -131,11 +132,12 @@ struct RetargetReport {
   double keypoint_error_mean_m = 0.0, keypoint_error_max_m = 0.0;
   double foot_slide_max_m_s = 0.0;  // sole corners of stance feet, horizontal
   double penetration_max_m = 0.0;
-  double float_max_m = 0.0;         // highest sole corner of a pinned (stance) foot
-  int joint_limit_violations = 0;   // (frame, joint) samples outside the position limits
+  double float_max_m = 0.0;        // highest sole corner of a pinned (stance) foot
+  int joint_limit_violations = 0;  // (frame, joint) samples outside the position limits
   int velocity_limit_violations = 0;
-  int contact_phases = 0;           // of the robot's labels (feet locked on the floor)
-  int schedule_phases = 0;          // of the schedule the retargeting was given
+  int contact_phases = 0;             // of the robot's labels (feet locked on the floor)
+  int schedule_phases = 0;            // of the schedule the retargeting was given
+  int stance_yaw_clamped_phases = 0;  // stance headings limited to the hip-yaw range
   long position_bound_active_samples = 0, velocity_bound_active_samples = 0;
   std::array<int, model::kNumJoints> position_bound_active_per_joint{}, velocity_bound_active_per_joint{};
 };

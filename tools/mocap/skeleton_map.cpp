@@ -8,10 +8,10 @@ namespace kuavo::mocap {
 namespace {
 
 constexpr const char* kNames[kNumKeypoints] = {
-    "left_hip",       "left_knee",   "left_ankle",  "left_toe",       "right_hip",   "right_knee",
-    "right_ankle",    "right_toe",   "left_shoulder", "left_elbow",   "left_wrist",  "left_hand",
-    "right_shoulder", "right_elbow", "right_wrist", "right_hand",     "head",        "left_thumb",
-    "right_thumb",    "left_heel",   "right_heel",  "pelvis",      "neck"};
+    "left_hip",       "left_knee",   "left_ankle",    "left_toe",   "right_hip",  "right_knee",
+    "right_ankle",    "right_toe",   "left_shoulder", "left_elbow", "left_wrist", "left_hand",
+    "right_shoulder", "right_elbow", "right_wrist",   "right_hand", "head",       "left_thumb",
+    "right_thumb",    "left_heel",   "right_heel",    "pelvis",     "neck"};
 
 // Candidate names per keypoint, normalized (lower case, alphanumerics only, namespace
 // prefix dropped), most specific first. The first one present wins; the order resolves the
@@ -26,7 +26,8 @@ constexpr Candidates kCandidates[kNumMappedKeypoints] = {
     {{"leftfoot", "leftankle", "ccbaselfoot", "lankle", "lfoot", "legl6link"}},
     {{"lefttoebase", "lefttoe", "ccbaseltoebase", "lefttoes", "ltoe", "ltoes", "lefttoeend", "legl6linkend",
       "leftfootend", "leftankleend"}},
-    {{"rightupleg", "righthip", "ccbaserthigh", "rightthigh", "rightupperleg", "rhip", "rthigh", "rupleg", "legr1link"}},
+    {{"rightupleg", "righthip", "ccbaserthigh", "rightthigh", "rightupperleg", "rhip", "rthigh", "rupleg",
+      "legr1link"}},
     {{"rightleg", "rightknee", "ccbasercalf", "rightshin", "rightlowerleg", "rknee", "rshin", "rcalf", "legr4link"}},
     {{"rightfoot", "rightankle", "ccbaserfoot", "rankle", "rfoot", "legr6link"}},
     {{"righttoebase", "righttoe", "ccbasertoebase", "righttoes", "rtoe", "rtoes", "righttoeend", "legr6linkend",
@@ -54,7 +55,8 @@ std::string normalize(const std::string& name) {
   if (const auto colon = s.rfind(':'); colon != std::string::npos) s = s.substr(colon + 1);
   std::string out;
   for (char c : s)
-    if (std::isalnum(static_cast<unsigned char>(c))) out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (std::isalnum(static_cast<unsigned char>(c)))
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   // "mixamorig_LeftArm" style prefixes without a colon.
   if (out.rfind("mixamorig", 0) == 0) out = out.substr(9);
   return out;
@@ -113,8 +115,10 @@ void map_by_tables(const Bvh& bvh, SkeletonMap& out) {
     }
   }
   // Toe / hand fallbacks: the End Site (or the only child) below the ankle / wrist.
-  const int pairs[4][2] = {{kKpLeftToe, kKpLeftAnkle}, {kKpRightToe, kKpRightAnkle},
-                           {kKpLeftHand, kKpLeftWrist}, {kKpRightHand, kKpRightWrist}};
+  const int pairs[4][2] = {{kKpLeftToe, kKpLeftAnkle},
+                           {kKpRightToe, kKpRightAnkle},
+                           {kKpLeftHand, kKpLeftWrist},
+                           {kKpRightHand, kKpRightWrist}};
   for (const auto& p : pairs) {
     if (out.joint[p[0]] >= 0 || out.joint[p[1]] < 0) continue;
     for (std::size_t i = 0; i < bvh.joints.size(); ++i)
@@ -127,7 +131,9 @@ void map_by_tables(const Bvh& bvh, SkeletonMap& out) {
 
 }  // namespace
 
-const char* keypoint_name(int kp) { return kp >= 0 && kp < kNumKeypoints ? kNames[kp] : "?"; }
+const char* keypoint_name(int kp) {
+  return kp >= 0 && kp < kNumKeypoints ? kNames[kp] : "?";
+}
 
 bool keypoint_optional(int kp) {
   return kp == kKpLeftToe || kp == kKpRightToe || kp == kKpLeftHand || kp == kKpRightHand || kp == kKpHead ||
@@ -141,8 +147,7 @@ bool map_skeleton(const Bvh& bvh, SkeletonMap& out, std::string& error) {
   return finish(bvh, out, error);
 }
 
-bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, SkeletonMap& out,
-                            std::string& error) {
+bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, SkeletonMap& out, std::string& error) {
   out.joint.fill(-1);
   out.family = "file";
   std::istringstream in(mapping_text);

@@ -37,9 +37,9 @@ enum Keypoint : int {
   kKpRightWrist,
   kKpRightHand,
   kKpHead,
-  kKpLeftThumb,   // optional: makes the wrist's three joints observable
+  kKpLeftThumb,  // optional: makes the wrist's three joints observable
   kKpRightThumb,
-  kKpLeftHeel,    // optional: with the toe, fixes the foot's roll against the hip's yaw
+  kKpLeftHeel,  // optional: with the toe, fixes the foot's roll against the hip's yaw
   kKpRightHeel,
   kNumMappedKeypoints,
   // Derived (midpoints), never looked up by name.
@@ -66,7 +66,6 @@ bool map_skeleton(const Bvh& bvh, SkeletonMap& out, std::string& error);
 
 // A mapping file: one "keypoint = BVH joint name" per line, '#' starts a comment, blank
 // lines ignored. Entries override the built-in tables; the rest is still matched by name.
-bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, SkeletonMap& out,
-                            std::string& error);
+bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, SkeletonMap& out, std::string& error);
 
 }  // namespace kuavo::mocap
