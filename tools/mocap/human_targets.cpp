@@ -3,6 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
 
 namespace kuavo::mocap {
 namespace {
@@ -134,15 +137,14 @@ std::array<RobotKeypoint, kNumKeypoints> robot_keypoints(const model::Model& rob
 
 std::array<Vec3, kNumKeypoints> robot_rest_keypoints(const model::Model& robot) {
   const auto kps = robot_keypoints(robot);
+  // Zero pose with the base at the origin: world axes are base axes.
+  dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
+  q[6] = 1.0;
+  const auto data = std::make_unique<dynamics::Data>();
+  dynamics::forward_kinematics(robot, *data, q);
   std::array<Vec3, kNumKeypoints> out{};
-  // Zero pose: every joint rotation is the identity (all URDF rpy are zero), so a body's
-  // origin is the sum of the joint offsets down its chain.
-  for (int k = 0; k < kNumKeypoints; ++k) {
-    Vec3 p = kps[k].point_m;
-    for (int b = kps[k].body; b > 0; b = robot.bodies[b].parent)
-      p = robot.bodies[b].joint_position_m + robot.bodies[b].joint_rotation * p;
-    out[k] = p;
-  }
+  for (int k = 0; k < kNumKeypoints; ++k)
+    out[k] = data->position_m[kps[k].body] + data->rotation[kps[k].body] * kps[k].point_m;
   return out;
 }
 
