@@ -2,6 +2,9 @@
 // proportional scaling, on the shared clips and on transformed copies of the built-in dance.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
+
 #include "tools/mocap/default_dance.h"
 #include "tools/mocap/human_targets.h"
 #include "tools/mocap/skeleton_map.h"
@@ -100,6 +103,42 @@ TEST(mocap_import, ZUpInchesMixamoNamesGiveTheSameTargets) {
   EXPECT_EQ(b.map.family, "mixamo");
   EXPECT_EQ(b.targets.unit, "inch");
   EXPECT_STREQ(b.targets.up_axis, "+Z");
+  ASSERT_EQ(a.targets.frames.size(), b.targets.frames.size());
+  double worst = 0.0;
+  for (std::size_t f = 0; f < a.targets.frames.size(); ++f)
+    for (int k = 0; k < kNumKeypoints; ++k)
+      worst = std::max(worst, (a.targets.frames[f].position_m[k] - b.targets.frames[f].position_m[k]).norm());
+  EXPECT_LT(worst, 1e-6);
+}
+
+// SFU-style: the hierarchy's rest pose lies Z-up while the animation is Y-up (every joint's
+// rotation compensates). Only the world pose matters, so the targets are the same.
+TEST(mocap_import, ZUpRestPoseWithYUpAnimationGivesTheSameTargets) {
+  const Bvh dance = default_dance_bvh();
+  Bvh sfu = dance;
+  const Mat3 r = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()).toRotationMatrix();  // rest Y → Z
+  for (BvhJoint& j : sfu.joints) j.offset = r * j.offset;
+  std::vector<Vec3> pos;
+  std::vector<Mat3> rot;
+  for (int f = 0; f < sfu.frame_count; ++f) {
+    bvh_pose(dance, f, pos, rot);
+    double* row = sfu.motion.data() + static_cast<std::size_t>(f) * sfu.channel_count;
+    for (std::size_t i = 0; i < sfu.joints.size(); ++i) {
+      const BvhJoint& j = sfu.joints[i];
+      if (j.end_site) continue;
+      // New global = old global · rᵀ, so local = parent_newᵀ · global_new.
+      const Mat3 parent = j.parent < 0 ? Mat3::Identity() : Mat3(rot[j.parent] * r.transpose());
+      const Mat3 local = parent.transpose() * rot[i] * r.transpose();
+      const Vec3 e = local.eulerAngles(2, 0, 1);  // the dance writes Z X Y
+      const int c = j.first_column + (j.parent < 0 ? 3 : 0);
+      for (int a = 0; a < 3; ++a) row[c + a] = e[a] * 180.0 / M_PI;
+    }
+  }
+  Bvh reread;
+  std::string error;
+  ASSERT_TRUE(parse_bvh(write_bvh(sfu), reread, error)) << error;
+  const Imported a = import(dance), b = import(reread);
+  EXPECT_STREQ(b.targets.up_axis, "+Y");
   ASSERT_EQ(a.targets.frames.size(), b.targets.frames.size());
   double worst = 0.0;
   for (std::size_t f = 0; f < a.targets.frames.size(); ++f)
