@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <random>
 
 #include "tests/support/alloc_trap.h"
 #include "tools/mocap/default_dance.h"
@@ -122,6 +123,41 @@ TEST(mocap_retarget, OracleRobotSkeletonRecoversItsJointAngles) {
   }
   EXPECT_LT(worst, 1e-6) << "worst joint " << (worst_joint >= 0 ? model::joint_name(*robot, worst_joint) : "-");
   EXPECT_LT(r.report.keypoint_error_max_m, 1e-7);
+}
+
+// The whole pipeline on mutated dances (wild values in the motion rows, swapped joint
+// names): every stage either refuses with a message or produces a finite, in-limit motion.
+TEST(mocap_retarget, MutatedDancesNeverYieldNonFiniteMotion) {
+  const auto robot = make_robot();
+  Bvh base = default_dance_bvh();
+  base.frame_count = 40;
+  base.motion.resize(static_cast<std::size_t>(base.frame_count) * base.channel_count);
+  std::mt19937 rng(5u);
+  std::uniform_real_distribution<double> wild(-1e4, 1e4);
+  int refused = 0, produced = 0;
+  for (int iter = 0; iter < 40; ++iter) {
+    Bvh b = base;
+    const int edits = 1 + static_cast<int>(rng() % 20);
+    for (int e = 0; e < edits; ++e) b.motion[rng() % b.motion.size()] = wild(rng);
+    if (iter % 4 == 0) std::swap(b.joints[1].name, b.joints[6].name);           // left/right hips swapped
+    if (iter % 5 == 0) b.joints[1].offset = b.joints[6].offset = Vec3::Zero();  // hips on one point
+    SkeletonMap map;
+    HumanTargets t;
+    std::string error;
+    if (!map_skeleton(b, map, error) || !make_targets(b, map, *robot, {}, t, error)) {
+      EXPECT_FALSE(error.empty());
+      ++refused;
+      continue;
+    }
+    RetargetResult r;
+    retarget_motion(*robot, t, detect_contacts(t, *robot), {}, r);
+    for (const ConfigVector& q : r.q) ASSERT_TRUE(q.allFinite()) << "iteration " << iter;
+    EXPECT_EQ(r.report.joint_limit_violations, 0);
+    EXPECT_EQ(r.report.velocity_limit_violations, 0);
+    ++produced;
+  }
+  EXPECT_GT(produced, 0);
+  EXPECT_GT(refused, 0);
 }
 
 TEST(mocap_retarget, DeterministicAndAllocationFreePerFrame) {

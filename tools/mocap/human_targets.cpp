@@ -343,6 +343,17 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     }
     f.base_rotation = pelvis_frame(f.position_m) * rest_frame.transpose();
   }
+  // A pose whose hips coincide, or whose neck sits on the hip line, has no pelvis frame.
+  for (std::size_t i = 0; i < out.frames.size(); ++i) {
+    bool finite = out.frames[i].base_rotation.allFinite();
+    for (const Vec3& p : out.frames[i].position_m) finite = finite && p.allFinite();
+    if (!finite) {
+      error = "degenerate pose at output frame " + std::to_string(i) +
+              " (hips coincide or the neck lies on the hip line): check the joint mapping";
+      out.frames.clear();
+      return false;
+    }
+  }
   return true;
 }
 
