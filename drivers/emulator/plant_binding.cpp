@@ -33,16 +33,16 @@ EmulatedDrive* find_drive(Cia402Emulator& emu, std::uint8_t node) {
 
 DriverError write_leg_drives(const LegWiring& leg, const PlantJoints& plant, Cia402Emulator& emu) {
   std::array<EmulatedDrive*, kLegActuators> d{};
-  for (int k = 0; k < kLegActuators; ++k) {
-    d[k] = find_drive(emu, leg.node_ids[k]);
-    if (d[k] == nullptr) return DriverError::kBadConfig;
-  }
+  for (int k = 0; k < kLegActuators; ++k) d[k] = find_drive(emu, leg.node_ids[k]);
+  if ((d[4] == nullptr) != (d[5] == nullptr)) return DriverError::kBadConfig;
   const LegTransmission& t = leg.transmission;
   const int j0 = leg.first_joint;
   for (int k = 0; k < 4; ++k) {
+    if (d[k] == nullptr) continue;
     d[k]->position_rad = motor_position_rad(t.serial[k], plant.position_rad[j0 + k]);
     d[k]->velocity_rad_s = motor_velocity_rad_s(t.serial[k], plant.velocity_rad_s[j0 + k]);
   }
+  if (d[4] == nullptr) return DriverError::kOk;
   const Vec2 q(plant.position_rad[j0 + 4], plant.position_rad[j0 + 5]);
   Vec2 crank;
   if (!ankle_motor_from_joint_rt(t.ankle, q, crank)) return DriverError::kTransmissionUnsolved;
@@ -58,19 +58,22 @@ DriverError write_leg_drives(const LegWiring& leg, const PlantJoints& plant, Cia
 DriverError add_leg_torques(const LegWiring& leg, const PlantJoints& plant, const Cia402Emulator& emu,
                             std::array<double, model::kNumJoints>& joint_torque_Nm) {
   std::array<double, kLegActuators> motor_tau{};
+  std::array<bool, kLegActuators> present{};
   for (int k = 0; k < kLegActuators; ++k) {
-    bool found = false;
     for (int i = 0; i < emu.count; ++i) {
       if (emu.drives[i].config.node_id == leg.node_ids[k]) {
         motor_tau[k] = drive_torque_Nm(emu.drives[i]);
-        found = true;
+        present[k] = true;
       }
     }
-    if (!found) return DriverError::kBadConfig;
   }
+  if (present[4] != present[5]) return DriverError::kBadConfig;
   const LegTransmission& t = leg.transmission;
   const int j0 = leg.first_joint;
-  for (int k = 0; k < 4; ++k) joint_torque_Nm[j0 + k] += drivers::joint_torque_Nm(t.serial[k], motor_tau[k]);
+  for (int k = 0; k < 4; ++k) {
+    if (present[k]) joint_torque_Nm[j0 + k] += drivers::joint_torque_Nm(t.serial[k], motor_tau[k]);
+  }
+  if (!present[4]) return DriverError::kOk;
   const Vec2 q(plant.position_rad[j0 + 4], plant.position_rad[j0 + 5]);
   Vec2 crank;
   if (!ankle_motor_from_joint_rt(t.ankle, q, crank)) return DriverError::kTransmissionUnsolved;

@@ -38,8 +38,10 @@ struct LegWiring {
   std::array<std::uint8_t, kLegActuators> node_ids{};
 };
 
-// kTransmissionUnsolved if the plant's ankle pose has no linkage solution;
-// kBadConfig if a node ID is not emulated.
+// A leg may span buses (one emulator each): every call handles the drives of
+// the leg that `emu` holds and skips the others. Ankle motors A and B must sit
+// on the same emulator (kBadConfig otherwise); kTransmissionUnsolved if the
+// plant's ankle pose has no linkage solution.
 DriverError write_leg_drives(const LegWiring& leg, const PlantJoints& plant, Cia402Emulator& emu);
 DriverError add_leg_torques(const LegWiring& leg, const PlantJoints& plant, const Cia402Emulator& emu,
                             std::array<double, model::kNumJoints>& joint_torque_Nm);
