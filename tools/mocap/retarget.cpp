@@ -97,7 +97,7 @@ void Retargeter::reset() {
 }
 
 void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKeypoints>& present, const FootPins& pins,
-                       int iterations, bool velocity_bounds, bool cold_start) {
+                       int iterations, bool velocity_bounds, bool cold_start, bool smooth) {
   Workspace& ws = *ws_;
   const model::JointLimits& lim = robot_.limits;
   const ConfigVector& q_prev = q_prev_;
@@ -230,11 +230,14 @@ void Retargeter::solve(const TargetFrame& target, const std::array<bool, kNumKey
       ++rows;
     }
     if (project && rows == 0) break;  // nothing to correct
-    // Smoothness: pull the joints toward the previous frame.
-    if (iterations == options_.iterations && !project) {
+    // Smoothness: pull the joints toward the previous frame (velocity) and toward the
+    // previous frame's velocity continued (acceleration).
+    if (smooth && !project) {
       for (int j = 0; j < model::kNumJoints; ++j) {
-        ws.h(6 + j, 6 + j) += w.joint_smoothness;
-        ws.g[6 + j] += w.joint_smoothness * (q_prev[7 + j] - q_[7 + j]);
+        const double predicted = q_prev[7 + j] + (q_prev[7 + j] - q_prev2_[7 + j]);
+        ws.h(6 + j, 6 + j) += w.joint_smoothness + w.joint_acceleration;
+        ws.g[6 + j] +=
+            w.joint_smoothness * (q_prev[7 + j] - q_[7 + j]) + w.joint_acceleration * (predicted - q_[7 + j]);
       }
     }
     // Bounds.
@@ -312,14 +315,17 @@ FrameLimits Retargeter::step(const TargetFrame& target, const std::array<bool, k
       blended.base_rotation = r0.slerp(a, quat).toRotationMatrix();
       q_prev_ = q_;
       locked_ = {false, false};
-      solve(blended, present, step == kColdStartSteps ? pins : FootPins{}, per_step, false, step < kColdStartSteps);
+      solve(blended, present, step == kColdStartSteps ? pins : FootPins{}, per_step, false, step < kColdStartSteps,
+            false);
     }
     q_prev_ = q_;
+    q_prev2_ = q_;
     velocity_bounds = false;
     started_ = true;
   } else {
+    q_prev2_ = q_prev_;
     q_prev_ = q_;
-    solve(target, present, pins, options_.iterations, velocity_bounds, false);
+    solve(target, present, pins, options_.iterations, velocity_bounds, false, true);
   }
   const ConfigVector& q_prev = q_prev_;
   FrameLimits out;
