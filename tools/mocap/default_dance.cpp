@@ -122,15 +122,16 @@ std::vector<Step> plan_steps() {
   step(12.0, 1, 0.25, 0), step(12.5, 0, 0.25, 0), step(13.0, 1, -0.25, 0), step(13.5, 0, -0.25, 0);
   // Stepping turn: 8 steps of 45° about the body centre, left foot first (turning left).
   const double cf = 0.5 * (feet[0].fwd + feet[1].fwd), cl = 0.5 * (feet[0].left + feet[1].left);
-  for (int k = 1; k <= 8; ++k) {
+  // A ninth step brings the left foot (last at 315°) alongside the right at 360°.
+  for (int k = 1; k <= 9; ++k) {
     const int foot = (k - 1) % 2;
-    const double yaw = kPi / 4.0 * k;
+    const double yaw = kPi / 4.0 * std::min(k, 8);
     const double side = foot == 0 ? kStanceHalfWidth : -kStanceHalfWidth;
     feet[foot] = {cf - std::sin(yaw) * side, cl + std::cos(yaw) * side, yaw};
     steps.push_back({18.0 + 0.5 * (k - 1), foot, feet[foot]});
   }
   // After the turn both feet face 360° = 0 again (keep the heading continuous).
-  side_steps(22.0);
+  side_steps(22.5);
   std::stable_sort(steps.begin(), steps.end(), [](const Step& a, const Step& b) { return a.t0 < b.t0; });
   return steps;
 }
