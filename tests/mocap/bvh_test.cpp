@@ -91,6 +91,28 @@ TEST(mocap_bvh, CcBaseRootPositionIsAddedToOffset) {
   EXPECT_NEAR(p[0].y(), 105.214226 + b.row(1)[1], 1e-6);  // OFFSET + channel
 }
 
+// MotionBuilder-style 6-channel child joints carry absolute local positions (around their
+// OFFSET); CMU/CC-style root positions are added to OFFSET. Both read right.
+TEST(mocap_bvh, AbsoluteAndAdditivePositionChannels) {
+  const std::string text =
+      "HIERARCHY\nROOT Hips\n{\nOFFSET 0 90 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
+      "Yrotation\nJOINT Leg\n{\nOFFSET 0 -40 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
+      "Yrotation\nEnd Site\n{\nOFFSET 0 -40 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: 0.01\n"
+      "1 2 0 0 0 0 0 -40 0 0 0 0\n"
+      "1 3 0 0 0 0 1 -41 0 0 0 0\n";
+  Bvh b;
+  std::string error;
+  ASSERT_TRUE(parse_bvh(text, b, error)) << error;
+  EXPECT_FALSE(b.joints[0].position_absolute);  // values near 0, OFFSET 90: added
+  EXPECT_TRUE(b.joints[1].position_absolute);   // values near OFFSET: replace it
+  std::vector<Vec3> p;
+  std::vector<Mat3> r;
+  bvh_pose(b, 1, p, r);
+  EXPECT_NEAR(p[0].y(), 93.0, 1e-12);
+  EXPECT_NEAR(p[1].x(), 2.0, 1e-12);
+  EXPECT_NEAR(p[1].y(), 52.0, 1e-12);
+}
+
 TEST(mocap_bvh, MixedLineEndingsReadTheSame) {
   std::string crlf;
   for (char c : std::string(kSmall)) {
