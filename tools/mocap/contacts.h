@@ -11,25 +11,13 @@
 #include <string>
 #include <vector>
 
+#include "tools/mocap/contact_label.h"
 #include "tools/mocap/human_targets.h"
 
 namespace kuavo::mocap {
 
-// Stable numbers: they are stored in motion files.
-enum class ContactLabel : std::uint8_t { kFlight = 0, kLeftSupport = 1, kRightSupport = 2, kDoubleSupport = 3 };
-
-const char* to_string(ContactLabel c);
+const char* to_string(ContactLabel c);  // "flight", "left", "right", "double"
 bool parse_contact_label(const std::string& text, ContactLabel& out);
-inline bool left_in_contact(ContactLabel c) {
-  return c == ContactLabel::kLeftSupport || c == ContactLabel::kDoubleSupport;
-}
-inline bool right_in_contact(ContactLabel c) {
-  return c == ContactLabel::kRightSupport || c == ContactLabel::kDoubleSupport;
-}
-inline ContactLabel make_label(bool left, bool right) {
-  return left ? (right ? ContactLabel::kDoubleSupport : ContactLabel::kLeftSupport)
-              : (right ? ContactLabel::kRightSupport : ContactLabel::kFlight);
-}
 
 struct ContactThresholds {
   // Lowest sole point above the ground [m]. A flat foot reads 0; 2.5 cm covers heel/toe
