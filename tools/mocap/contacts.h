@@ -20,10 +20,13 @@ const char* to_string(ContactLabel c);  // "flight", "left", "right", "double"
 bool parse_contact_label(const std::string& text, ContactLabel& out);
 
 struct ContactThresholds {
-  // Lowest sole point above the ground [m]. A flat foot reads 0; 2.5 cm covers heel/toe
-  // rolls, 5 cm is clearly lifted (a walking swing clears 5–10 cm).
-  double touchdown_height_m = 0.025;
-  double liftoff_height_m = 0.05;
+  // Lowest foot point above the ground [m]: the lower of (ankle above its flat-foot height)
+  // and (toe keypoint above the sole). A flat foot reads 0, but the human toe keypoint is
+  // the ball joint, which sits 2–4 cm up while a dancer stands on the ball (relevé), so
+  // contact reads up to ~4 cm; 6 cm is clearly lifted (a swing clears 5–10 cm). With 2.5/5 cm
+  // the CMU ballet clips read as flight for 60–65 % of their frames, with 4/6 cm for 30–35 %.
+  double touchdown_height_m = 0.04;
+  double liftoff_height_m = 0.06;
   // Horizontal speed of the faster of ankle and toe [m/s]: a planted foot reads < 0.1 m/s
   // of capture noise; a swing foot, or one pivoting on heel or ball (which a pinned robot
   // foot cannot do), moves its far end faster than 0.4 m/s.
