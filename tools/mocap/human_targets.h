@@ -11,15 +11,17 @@
 //     averaged over the first half second, becomes the robot's +y, so the dancer starts
 //     facing +x.
 //  4. Proportional scaling: the pelvis path is scaled by robot/human leg length; every other
-//     keypoint is rebuilt down the chain pelvis→hip→knee→ankle→toe and
-//     pelvis→neck→shoulder→elbow→wrist→hand, neck→head, each human segment vector scaled by the
-//     ratio of robot to human segment length in the rest pose. An identical skeleton therefore
-//     maps onto itself exactly (the retargeting oracle relies on it).
+//     keypoint is rebuilt down the chain pelvis→hip→knee→ankle→toe/heel and
+//     pelvis→neck→shoulder→elbow→wrist→hand/thumb, neck→head, each human segment vector scaled
+//     by the ratio of robot to human segment length. Human lengths come from the hierarchy's
+//     zero-rotation pose unless that is more than 10 % off the clip's median (iClone CC_Base),
+//     then from the median. An identical skeleton therefore maps onto itself exactly (the
+//     retargeting oracle relies on it). Pelvis and neck are the hip and shoulder midpoints.
 //  5. Resampling to the output rate (linear in positions; the pelvis orientation is rebuilt
 //     from the resampled hips and neck).
 //  6. Ground and origin: the 5th percentile of the lowest foot point is put at z = 0 (robot
 //     sole height, so a flat human stance foot becomes a flat robot foot); the start pelvis at
-//     x = y = 0.
+//     x = y = 0; foot targets below the floor are raised to it (counted in the report).
 #pragma once
 
 #include <array>
