@@ -17,6 +17,7 @@
 // (NE + max_iterations) · O(NV²).
 #pragma once
 
+#include <Eigen/Householder>
 #include <algorithm>
 #include <cmath>
 

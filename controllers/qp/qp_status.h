@@ -13,6 +13,7 @@ enum class QpStatus : std::uint8_t {
   kNotConvex = 3,      // a Hessian (or reduced Hessian) is not positive definite
   kBadInput = 4,       // non-finite data, lower > upper, or a size beyond capacity
   kRankDeficient = 5,  // stage equality constraints whose input matrix lacks full row rank (OCP)
+  kNumericalError = 6, // factorization broke down from roundoff mid-solve; last iterate returned
 };
 
 inline const char* to_string(QpStatus s) {
@@ -23,6 +24,7 @@ inline const char* to_string(QpStatus s) {
     case QpStatus::kNotConvex: return "not_convex";
     case QpStatus::kBadInput: return "bad_input";
     case QpStatus::kRankDeficient: return "rank_deficient";
+    case QpStatus::kNumericalError: return "numerical_error";
   }
   return "unknown";
 }
