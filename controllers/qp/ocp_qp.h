@@ -62,7 +62,7 @@ struct OcpSettings {
   int max_iterations = 30;
   // Both relative to the data scale max(1, |q|, |r|, |b|, |e|, |h|, |x_initial|) (∞-norms):
   double residual_tolerance = 1e-9;          // equalities, inequalities, stationarity
-  double complementarity_tolerance = 1e-12;  // mean sᵢλᵢ, also relative to max(1, max λ)
+  double complementarity_tolerance = 1e-10;  // mean sᵢλᵢ
   // A multiplier this large means no interior point exists: report kInfeasible.
   double infeasible_multiplier = 1e12;
   // Start from the slacks and multipliers left in the workspace by the previous solve.

@@ -2,6 +2,7 @@
 // problem, KKT certificates at MPC size, degenerate cases and zero allocation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <random>
 
@@ -43,12 +44,21 @@ void expect_matches_dense(const OcpFixture<NX, NU, N, NC, NG>& f, double tol) {
   }
 }
 
-void expect_kkt(const OcpKkt& k, double tol) {
+// Residuals to tol; complementarity is an interior-point's approximate quantity: the solver
+// stops at mean sᵢλᵢ ≤ 1e-10·(data scale), so one row may carry up to (rows)·that.
+template <int NX, int NU, int N, int NC, int NG>
+void expect_kkt(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpKkt& k, double tol) {
+  double scale = 1.0;
+  for (int j = 0; j <= qp.horizon; ++j) {
+    const auto& s = qp.stages[j];
+    scale = std::max({scale, s.q.cwiseAbs().maxCoeff(), s.r.cwiseAbs().maxCoeff(), s.b.cwiseAbs().maxCoeff()});
+    if constexpr (NG > 0) scale = std::max(scale, s.h.cwiseAbs().maxCoeff());
+  }
   EXPECT_LE(k.equality, tol);
   EXPECT_LE(k.inequality, tol);
   EXPECT_LE(k.stationarity, tol);
   EXPECT_LE(k.dual_sign, 0.0);
-  EXPECT_LE(k.complementarity, 10 * tol);
+  EXPECT_LE(k.complementarity, 1e-10 * scale * (qp.horizon + 1) * NG + 1e-12);
 }
 
 TEST(OcpQp, EqualityOnlyMatchesDenseExactly) {
@@ -58,7 +68,7 @@ TEST(OcpQp, EqualityOnlyMatchesDenseExactly) {
     make_random_ocp(f->qp, rng, 5);
     ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
     EXPECT_EQ(f->sol.iterations, 0);
-    expect_kkt(ocp_kkt(f->qp, f->sol), 1e-10);
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-10);
     expect_matches_dense<4, 3, 5, 2, 0, 5>(*f, 1e-10);
   }
 }
@@ -70,7 +80,7 @@ TEST(OcpQp, WithInequalitiesMatchesDense) {
   for (int n = 0; n < 30; ++n) {
     make_random_ocp(f->qp, rng, 5);
     ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
-    expect_kkt(ocp_kkt(f->qp, f->sol), 1e-8);
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
     expect_matches_dense<4, 3, 5, 2, 3, 5>(*f, 1e-7);
     for (int k = 0; k <= 5; ++k) active += (f->sol.lambda[k].array() > 1e-6).count();
   }
@@ -93,7 +103,7 @@ TEST(OcpQp, MpcSizeRandomProblemsSatisfyKkt) {
   for (int n = 0; n < 3; ++n) {
     make_random_ocp(f->qp, rng, 12);
     ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
-    expect_kkt(ocp_kkt(f->qp, f->sol), 1e-8);
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
   }
 }
 
@@ -149,7 +159,11 @@ TEST(OcpQp, IllConditionedCostMatchesDense) {
       f->qp.stages[k].S *= 1e-2;
       f->qp.stages[k].R(0, 0) += 1e4;
     }
-    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    // λ/s spans ~20 decades at 1e-10 complementarity here, past what the factorization
+    // resolves; the documented remedy is a looser complementarity tolerance.
+    OcpSettings settings;
+    settings.complementarity_tolerance = 1e-8;
+    ASSERT_EQ(solve_ocp_qp(f->qp, settings, f->ws, f->sol), QpStatus::kSolved) << n << " " << f->sol.iterations;
     expect_matches_dense<4, 3, 5, 2, 3, 5>(*f, 1e-6);
   }
 }
