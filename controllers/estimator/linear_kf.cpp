@@ -1,0 +1,76 @@
+#include "controllers/estimator/linear_kf.h"
+
+namespace kuavo::estimator {
+
+namespace {
+
+constexpr int kPoints = model::kNumContactPoints;
+
+// Row m of C as up to two (index, coefficient) pairs; b < 0 when absent.
+struct SparseRow {
+  int a;
+  double ca;
+  int b;
+  double cb;
+};
+
+SparseRow row_of(int m) {
+  if (m < kVelocityRows) {
+    const int i = m / 3, k = m % 3;
+    return {point_index(i, k), 1.0, k, -1.0};
+  }
+  if (m < kHeightRows) return {3 + (m - kVelocityRows) % 3, -1.0, -1, 0.0};
+  return {point_index(m - kHeightRows, 2), 1.0, -1, 0.0};
+}
+
+}  // namespace
+
+void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_m_s2,
+                   const KfVector& process_variance, double dt_s) {
+  x.head<3>() += dt_s * x.segment<3>(3) + (0.5 * dt_s * dt_s) * a_world_m_s2;
+  x.segment<3>(3) += dt_s * a_world_m_s2;
+  // A P Aᵀ with A = I + dt·E (E maps velocity rows onto position rows).
+  p.topRows<3>() += dt_s * p.middleRows<3>(3);
+  p.leftCols<3>() += dt_s * p.middleCols<3>(3);
+  p.diagonal() += process_variance;
+}
+
+void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
+                  const KfMeasurementVector& measurement_variance, KfMeasurementVector& innovation) {
+  innovation = y - kf_predicted_measurement(x);
+  KfVector pc;  // P cᵀ for the current row
+  for (int m = 0; m < kMeasurementDim; ++m) {
+    const SparseRow r = row_of(m);
+    pc = r.ca * p.col(r.a);
+    double cx = r.ca * x[r.a];
+    if (r.b >= 0) {
+      pc += r.cb * p.col(r.b);
+      cx += r.cb * x[r.b];
+    }
+    const double s = r.ca * pc[r.a] + (r.b >= 0 ? r.cb * pc[r.b] : 0.0) + measurement_variance[m];
+    const double gain_scale = 1.0 / s;
+    x += (gain_scale * (y[m] - cx)) * pc;
+    p.noalias() -= (gain_scale * pc) * pc.transpose();
+  }
+  // Rounding in 56 rank-one downdates leaves P slightly asymmetric; Leju symmetrises too.
+  // In place, pairwise: no 7 KB temporary on the real-time stack.
+  for (int j = 0; j < kStateDim; ++j) {
+    for (int i = j + 1; i < kStateDim; ++i) {
+      const double mean = 0.5 * (p(i, j) + p(j, i));
+      p(i, j) = mean;
+      p(j, i) = mean;
+    }
+  }
+}
+
+KfMeasurementVector kf_predicted_measurement(const KfVector& x) {
+  KfMeasurementVector y;
+  for (int i = 0; i < kPoints; ++i) {
+    y.segment<3>(kPositionRows + 3 * i) = x.segment<3>(point_index(i, 0)) - x.head<3>();
+    y.segment<3>(kVelocityRows + 3 * i) = -x.segment<3>(3);
+    y[kHeightRows + i] = x[point_index(i, 2)];
+  }
+  return y;
+}
+
+}  // namespace kuavo::estimator

@@ -1,0 +1,46 @@
+// The linear Kalman filter behind the state estimator (Leju's KalmanFilterEstimate,
+// FACTS.md §6), kept apart from the robot so its algebra can be tested alone.
+//
+// State x (30), world axes:   [p_base (3); v_base (3); c_0 … c_7 (8×3)]
+// Measurements y (56):        [c_i − p_base (24); ċ_i − v_base relative (24); c_i,z (8)]
+//   rows 0..23   y = c_i,k − p_k        (relative position, leg kinematics)
+//   rows 24..47  y = −v_k               (relative velocity of a fixed point: ċ_i = 0)
+//   rows 48..55  y = c_i,z              (stance height)
+// Every row of C has at most two ±1 entries and R is diagonal, so the update is
+// done as 56 sequential scalar updates: mathematically the batch update (tests
+// check it against the textbook form), but O(56·30²) with no 56×56 solve.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "controllers/model/model_tables.h"
+
+namespace kuavo::estimator {
+
+inline constexpr int kStateDim = 6 + 3 * model::kNumContactPoints;  // 30
+inline constexpr int kMeasurementDim = 7 * model::kNumContactPoints;  // 56
+inline constexpr int kPositionRows = 0;
+inline constexpr int kVelocityRows = 3 * model::kNumContactPoints;
+inline constexpr int kHeightRows = 6 * model::kNumContactPoints;
+
+using KfVector = Eigen::Matrix<double, kStateDim, 1>;
+using KfCovariance = Eigen::Matrix<double, kStateDim, kStateDim>;
+using KfMeasurementVector = Eigen::Matrix<double, kMeasurementDim, 1>;
+
+// Index of contact point i, axis k in the state.
+constexpr int point_index(int i, int k) { return 6 + 3 * i + k; }
+
+// p += v·dt + ½a·dt², v += a·dt, points constant; P = A P Aᵀ + diag(q).
+// A is the identity plus a dt block, so A P Aᵀ is two row/column axpys, not a product.
+void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_m_s2,
+                   const KfVector& process_variance, double dt_s);
+
+// Applies all 56 measurements (variance per row, diagonal R), then symmetrises P.
+// innovation receives y − C x before the update (for the watchdog).
+void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
+                  const KfMeasurementVector& measurement_variance, KfMeasurementVector& innovation);
+
+// C x: what the state predicts for the measurements.
+KfMeasurementVector kf_predicted_measurement(const KfVector& x);
+
+}  // namespace kuavo::estimator
