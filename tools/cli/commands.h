@@ -6,5 +6,6 @@ namespace kuavo::cli {
 
 int run_model(int argc, char** argv);  // kuavo model [--variant s45|s42] [--mass KG] --json
 int run_demo(int argc, char** argv);   // kuavo demo: the main job
+int run_simulate(int argc, char** argv);  // kuavo simulate --stand SECONDS ...
 
 }  // namespace kuavo::cli
