@@ -1,0 +1,125 @@
+#include "drivers/can/can_port.h"
+
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <sys/socket.h>
+#include <sys/uio.h>
+
+namespace kuavo::drivers {
+
+CanPort attach_can_port(int fd, bool fd_frames) {
+  CanPort port;
+  port.fd = fd;
+  port.fd_frames = fd_frames;
+  return port;
+}
+
+bool enable_rx_timestamps(int fd) {
+  const int on = 1;
+  return setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof(on)) == 0;
+}
+
+DriverError classify_send_errno(int err) {
+  switch (err) {
+    case ENOBUFS:  // CAN_RAW: the netdev TX queue is full (never blocks)
+    case EAGAIN:   // socketpair / socket send buffer full
+      return DriverError::kTxQueueFull;
+    case EPIPE:
+    case ECONNRESET:
+      return DriverError::kPeerClosed;
+    default:
+      return DriverError::kIoError;
+  }
+}
+
+namespace {
+
+DriverError send_bytes_rt(CanPort& port, const void* bytes, std::size_t size) {
+  // MSG_NOSIGNAL: a closed socketpair peer must not kill the process with SIGPIPE.
+  const ssize_t n = ::send(port.fd, bytes, size, MSG_DONTWAIT | MSG_NOSIGNAL);
+  if (n == static_cast<ssize_t>(size)) {
+    ++port.stats.tx_frames;
+    return DriverError::kOk;
+  }
+  const DriverError e = n < 0 ? classify_send_errno(errno) : DriverError::kIoError;
+  if (e == DriverError::kTxQueueFull) {
+    ++port.stats.tx_dropped;
+  } else {
+    ++port.stats.io_errors;
+  }
+  return e;
+}
+
+}  // namespace
+
+DriverError send_rt(CanPort& port, const can_frame& frame) {
+  if (port.health.bus_off) return DriverError::kBusOff;
+  return send_bytes_rt(port, &frame, CAN_MTU);
+}
+
+DriverError send_fd_rt(CanPort& port, const canfd_frame& frame) {
+  if (!port.fd_frames) return DriverError::kFdNotEnabled;
+  if (port.health.bus_off) return DriverError::kBusOff;
+  return send_bytes_rt(port, &frame, CANFD_MTU);
+}
+
+DriverError receive_rt(CanPort& port, RxFrame& out) {
+  iovec iov{&out.frame, sizeof(out.frame)};
+  // Room for one timestamp control message; aligned storage on the stack.
+  alignas(cmsghdr) unsigned char control[CMSG_SPACE(sizeof(timespec))];
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof(control);
+
+  const ssize_t n = ::recvmsg(port.fd, &msg, MSG_DONTWAIT);
+  if (n < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK) return DriverError::kRxEmpty;
+    ++port.stats.io_errors;
+    return DriverError::kIoError;
+  }
+  if (n == 0) return DriverError::kPeerClosed;  // SEQPACKET end-of-stream
+  if (n == CAN_MTU) {
+    out.is_fd = false;
+    out.frame.len = out.frame.len > CAN_MAX_DLEN ? CAN_MAX_DLEN : out.frame.len;
+  } else if (n == CANFD_MTU) {
+    out.is_fd = true;
+    out.frame.len = out.frame.len > CANFD_MAX_DLEN ? CANFD_MAX_DLEN : out.frame.len;
+  } else {
+    ++port.stats.rx_bad;
+    return DriverError::kBadDatagram;
+  }
+
+  out.rx_realtime_ns = 0;
+  for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+      timespec ts;
+      std::memcpy(&ts, CMSG_DATA(c), sizeof(ts));
+      out.rx_realtime_ns = static_cast<hal::TimeNs>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+    }
+  }
+
+  if (out.frame.can_id & CAN_ERR_FLAG) {
+    can_frame classic{};
+    classic.can_id = out.frame.can_id;
+    classic.len = out.frame.len > CAN_MAX_DLEN ? CAN_MAX_DLEN : out.frame.len;
+    std::memcpy(classic.data, out.frame.data, CAN_MAX_DLEN);
+    apply_error_frame_rt(classic, port.health);
+    return DriverError::kErrorFrame;
+  }
+  ++port.stats.rx_frames;
+  return DriverError::kOk;
+}
+
+bool as_classic(const RxFrame& rx, can_frame& out) {
+  if (rx.is_fd && rx.frame.len > CAN_MAX_DLEN) return false;
+  out = can_frame{};
+  out.can_id = rx.frame.can_id;
+  out.len = rx.frame.len;
+  std::memcpy(out.data, rx.frame.data, CAN_MAX_DLEN);
+  return true;
+}
+
+}  // namespace kuavo::drivers

@@ -1,0 +1,144 @@
+#include "drivers/config/drivers_config.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "drivers/config/drive_defaults.h"
+
+namespace kuavo::drivers {
+
+DriversConfig default_drivers_config(const model::Model& model) {
+  DriversConfig c;
+  c.plan = default_bus_plan();
+  c.ruiwo_motors = ruiwo::default_motors(model);
+  c.legs = {default_leg_transmission(true), default_leg_transmission(false)};
+  sync_drives_with_plan(c);
+  return c;
+}
+
+void sync_drives_with_plan(DriversConfig& config) {
+  std::vector<DriveEntry> old = std::move(config.drives);
+  config.drives.clear();
+  for (const DeviceConfig& d : config.plan.devices) {
+    if (d.kind != DeviceKind::kCia402Drive || d.bus < 0 ||
+        d.bus >= static_cast<int>(config.plan.buses.size())) {
+      continue;
+    }
+    const BusConfig& bus = config.plan.buses[d.bus];
+    DriveEntry e;
+    e.slot = d.slot;
+    e.bus = d.bus;
+    e.config = default_drive_config(d.slot, d.id, bus.cycle_rate_hz, bus.heartbeat_rate_hz);
+    for (const DriveEntry& o : old) {
+      if (o.slot != d.slot) continue;
+      // Keep the motor parameters; IDs and timing always follow the plan.
+      e.config.counts_per_rev = o.config.counts_per_rev;
+      e.config.rated_torque_Nm = o.config.rated_torque_Nm;
+      e.config.torque_limit_Nm = o.config.torque_limit_Nm;
+    }
+    config.drives.push_back(e);
+  }
+}
+
+namespace {
+
+bool finite_nonzero(double x) { return std::isfinite(x) && x != 0.0; }
+
+DriverError check_transmissions(const DriversConfig& c, std::string& message) {
+  for (int side = 0; side < 2; ++side) {
+    const LegTransmission& t = c.legs[side];
+    const char* name = side == 0 ? "left leg" : "right leg";
+    for (const LinearTransmission& s : t.serial) {
+      if (!finite_nonzero(s.ratio_motor_per_joint) || !std::isfinite(s.motor_offset_rad)) {
+        message = std::string(name) + ": transmission ratio must be finite and non-zero, offset finite";
+        return DriverError::kBadConfig;
+      }
+    }
+    for (const LinearTransmission& s : t.ankle_motor) {
+      if (!finite_nonzero(s.ratio_motor_per_joint) || !std::isfinite(s.motor_offset_rad)) {
+        message = std::string(name) + ": ankle motor ratio must be finite and non-zero, offset finite";
+        return DriverError::kBadConfig;
+      }
+    }
+    Vec2 m;
+    if (!ankle_motor_from_joint_rt(t.ankle, Vec2::Zero(), m) || m.cwiseAbs().maxCoeff() > 1e-9) {
+      message = std::string(name) + ": ankle linkage does not assemble at the zero pose";
+      return DriverError::kBadConfig;
+    }
+  }
+  return DriverError::kOk;
+}
+
+}  // namespace
+
+DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& report, std::string& message) {
+  if (const DriverError e = check_bus_plan(c.plan, report, message); e != DriverError::kOk) return e;
+  for (std::size_t b = 0; b < c.plan.buses.size(); ++b) {
+    ruiwo::Bus bus;
+    const std::vector<ruiwo::MotorConfig> motors = ruiwo_motors_on_bus(c, static_cast<int>(b));
+    if (const DriverError e = ruiwo::build_bus(motors, bus, message); e != DriverError::kOk) {
+      message = c.plan.buses[b].interface + ": " + message;
+      return e;
+    }
+  }
+  for (const DeviceConfig& d : c.plan.devices) {
+    const std::string where = c.plan.buses[d.bus].interface + " ID " + std::to_string(d.id);
+    if (d.kind == DeviceKind::kRuiwoMotor) {
+      int found = 0;
+      for (const ruiwo::MotorConfig& m : c.ruiwo_motors) {
+        if (m.motor_id != d.id) continue;
+        ++found;
+        if (m.joint != d.slot) {
+          message = where + ": Ruiwo motor configured for joint " + std::to_string(m.joint) +
+                    " but the bus plan puts it on slot " + std::to_string(d.slot);
+          return DriverError::kBadConfig;
+        }
+      }
+      if (found != 1) {
+        message = where + ": " + std::to_string(found) + " Ruiwo motor configurations (need exactly 1)";
+        return found == 0 ? DriverError::kBadConfig : DriverError::kDuplicateId;
+      }
+    } else {
+      const DriveEntry* e = nullptr;
+      for (const DriveEntry& x : c.drives)
+        if (x.slot == d.slot) e = &x;
+      if (e == nullptr || e->config.node_id != d.id || e->bus != d.bus) {
+        message = where + ": drive entry missing or out of date (call sync_drives_with_plan)";
+        return DriverError::kBadConfig;
+      }
+      const canopen::DriveConfig& k = e->config;
+      if (!(k.counts_per_rev > 0) || !(k.rated_torque_Nm > 0) || !(k.torque_limit_Nm > 0) ||
+          !std::isfinite(k.counts_per_rev + k.rated_torque_Nm + k.torque_limit_Nm) ||
+          k.torque_limit_Nm / k.rated_torque_Nm * 1000.0 > 32767.0) {
+        message = where + ": counts per turn and torques must be positive and finite, and the torque "
+                          "limit within the int16 per-mille range";
+        return DriverError::kBadConfig;
+      }
+    }
+  }
+  if (c.ruiwo_motors.size() != static_cast<std::size_t>(std::count_if(
+                                   c.plan.devices.begin(), c.plan.devices.end(),
+                                   [](const DeviceConfig& d) { return d.kind == DeviceKind::kRuiwoMotor; }))) {
+    message = "Ruiwo motor configurations without a device in the bus plan";
+    return DriverError::kBadConfig;
+  }
+  if (const DriverError e = check_transmissions(c, message); e != DriverError::kOk) return e;
+  if (c.imu_device.empty()) {
+    message = "IMU device path empty";
+    return DriverError::kBadConfig;
+  }
+  message.clear();
+  return DriverError::kOk;
+}
+
+std::vector<ruiwo::MotorConfig> ruiwo_motors_on_bus(const DriversConfig& config, int bus) {
+  std::vector<ruiwo::MotorConfig> out;
+  for (const DeviceConfig& d : config.plan.devices) {
+    if (d.bus != bus || d.kind != DeviceKind::kRuiwoMotor) continue;
+    for (const ruiwo::MotorConfig& m : config.ruiwo_motors)
+      if (m.motor_id == d.id) out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace kuavo::drivers

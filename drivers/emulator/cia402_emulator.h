@@ -1,0 +1,61 @@
+// Emulated CiA 402 drives on one CANopen bus (far end of a socketpair): NMT,
+// boot-up and heartbeat production, expedited SDO downloads into a small
+// object dictionary, the 402 power state machine driven by RPDO1's
+// controlword, CST target torque, and TPDO1/TPDO2 answered on every SYNC once
+// mapped. The simulator writes the motor state and reads the applied torque.
+// Heap-free; `serve_rt` never blocks.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "controllers/hal/types.h"
+#include "drivers/can/can_port.h"
+#include "drivers/canopen/canopen_frames.h"
+#include "drivers/canopen/cia402_drive.h"
+#include "drivers/canopen/cia402_state.h"
+#include "drivers/emulator/fault_injection.h"
+
+namespace kuavo::drivers::emulator {
+
+struct EmulatedDrive {
+  canopen::DriveConfig config{};  // node ID, counts per turn, rated torque
+  canopen::NmtState nmt = canopen::NmtState::kUnknown;  // kUnknown = powered off / not booted
+  canopen::Cia402State power = canopen::Cia402State::kSwitchOnDisabled;
+  bool last_reset_bit = false;
+  bool silent = false;           // fault injection: sends nothing
+  bool rpdo1_mapped = false, tpdo1_mapped = false, tpdo2_mapped = false;
+  std::uint16_t heartbeat_period_ms = 0;  // 0x1017
+  std::int8_t mode = 0;                   // 0x6060
+  std::int16_t target_torque_permille = 0;
+  std::uint16_t error_code = 0;           // 0x603F
+  hal::TimeNs next_heartbeat_ns = 0;
+  double position_rad = 0.0;   // plant state, motor side
+  double velocity_rad_s = 0.0;
+  std::uint32_t sdo_writes = 0;
+};
+
+inline constexpr int kMaxEmulatedDrives = 8;
+
+struct Cia402Emulator {
+  std::array<EmulatedDrive, kMaxEmulatedDrives> drives{};
+  int count = 0;
+  FaultInjection faults{};
+  std::uint32_t frames_in = 0, frames_out = 0, syncs = 0;
+};
+
+// Adds a drive (start-up). It boots (sends its boot-up message) on the first
+// serve_rt after an NMT reset, like a drive powered on with the bus.
+void add_drive(Cia402Emulator& emu, const canopen::DriveConfig& config);
+
+// Handles every waiting frame and produces due heartbeats. Returns frames handled.
+int serve_rt(Cia402Emulator& emu, CanPort& port, hal::TimeNs now_ns);
+
+// Torque the plant applies (motor side): target torque while operation enabled.
+double drive_torque_Nm(const EmulatedDrive& d);
+
+// Fault injection (refused while disarmed): silence a drive or latch a fault.
+bool set_drive_silent(Cia402Emulator& emu, std::uint8_t node, bool silent);
+bool inject_drive_fault(Cia402Emulator& emu, std::uint8_t node, std::uint16_t error_code);
+
+}  // namespace kuavo::drivers::emulator

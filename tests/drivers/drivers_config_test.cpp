@@ -1,0 +1,158 @@
+// Drivers configuration: defaults from FACTS.md / kuavo.json, JSON overrides
+// with strict keys, and validation that refuses inconsistent robots.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "drivers/config/drive_defaults.h"
+#include "drivers/config/drivers_config.h"
+#include "drivers/config/drivers_config_json.h"
+
+namespace kuavo::drivers {
+namespace {
+
+class DriversConfigTest : public ::testing::Test {
+ protected:
+  model::Model model;
+  DriversConfig config;
+  BusLoadReport report;
+  std::string msg;
+  void SetUp() override {
+    ASSERT_EQ(model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, model), model::ModelError::kOk);
+    config = default_drivers_config(model);
+  }
+};
+
+TEST_F(DriversConfigTest, DefaultsAreValid) {
+  ASSERT_EQ(validate_drivers_config(config, report, msg), DriverError::kOk) << msg;
+  EXPECT_EQ(config.drives.size(), 14u);
+  EXPECT_EQ(config.ruiwo_motors.size(), 14u);
+  EXPECT_EQ(ruiwo_motors_on_bus(config, 5).size(), 8u);  // left arm + head
+  EXPECT_EQ(ruiwo_motors_on_bus(config, 6).size(), 6u);
+  EXPECT_EQ(config.imu_device, "/dev/ttyUSB0");
+  EXPECT_EQ(config.legs[0].serial[3].ratio_motor_per_joint, -1.0);
+}
+
+TEST_F(DriversConfigTest, DriveDefaultsFollowKuavoJson) {
+  // Knee: PA100_18, 2^17 x 18 counts, 94.5 Nm continuous, 135 Nm peak.
+  const canopen::DriveConfig knee = default_drive_config(3, 4, 500.0, 50.0);
+  EXPECT_DOUBLE_EQ(knee.counts_per_rev, 131072.0 * 18);
+  EXPECT_DOUBLE_EQ(knee.rated_torque_Nm, 94.5);
+  EXPECT_DOUBLE_EQ(knee.torque_limit_Nm, 135.0);
+  EXPECT_EQ(knee.cycle_period_us, 2000u);
+  EXPECT_EQ(knee.heartbeat_period_ms, 20);
+  EXPECT_EQ(knee.heartbeat_timeout_ns, 60'000'000);
+  EXPECT_EQ(knee.tpdo_timeout_ns, 6'000'000);
+  // Right ankle motor B (slot 11): CK, 2^17 x 36.
+  EXPECT_DOUBLE_EQ(default_drive_config(11, 12, 500.0, 50.0).counts_per_rev, 131072.0 * 36);
+  EXPECT_DOUBLE_EQ(default_drive_config(model::kRightArmFirst, 14, 500.0, 50.0).torque_limit_Nm, 66.67);
+}
+
+TEST_F(DriversConfigTest, JsonOverridesApply) {
+  const char* text = R"({
+    "ruiwo_motors": [{"id": 5, "sign": 1, "zero_offset_rad": 0.02}],
+    "drives": [{"slot": 4, "rated_torque_Nm": 20.0}],
+    "knee_ratio_motor_per_joint": -1.0,
+    "ankle_motor_offset_rad": [-0.2618, -0.2618],
+    "imu": {"device": "/dev/xsens", "baud": 921600}
+  })";
+  ASSERT_EQ(apply_drivers_json(text, config, msg), DriverError::kOk) << msg;
+  ASSERT_EQ(validate_drivers_config(config, report, msg), DriverError::kOk) << msg;
+  for (const auto& m : config.ruiwo_motors) {
+    if (m.motor_id == 5) {
+      EXPECT_EQ(m.sign, 1);
+      EXPECT_DOUBLE_EQ(m.zero_offset_rad, 0.02);
+    }
+  }
+  for (const auto& d : config.drives) {
+    if (d.slot == 4) {
+      EXPECT_DOUBLE_EQ(d.config.rated_torque_Nm, 20.0);
+    }
+  }
+  EXPECT_DOUBLE_EQ(config.legs[1].ankle_motor[1].motor_offset_rad, -0.2618);
+  EXPECT_EQ(config.imu_device, "/dev/xsens");
+  EXPECT_EQ(config.imu_baud, 921600);
+}
+
+TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
+  const DriversConfig before = config;
+  struct Case {
+    const char* text;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {"{ not json", "not valid JSON"},
+      {R"({"ruiwo_motor": []})", "unknown key 'ruiwo_motor'"},
+      {R"({"ruiwo_motors": [{"id": 99, "sign": 1}]})", "no Ruiwo motor with ID 99"},
+      {R"({"ruiwo_motors": [{"id": 5, "sign": "minus"}]})", "ruiwo_motors[0].sign: expected an integer"},
+      {R"({"drives": [{"slot": 20, "rated_torque_Nm": 1}]})", "no CiA 402 drive on slot 20"},
+      {R"({"imu": {"device": "/dev/x", "bauds": 1}})", "imu: unknown key 'bauds'"},
+      {R"({"ankle_motor_offset_rad": [0.1]})", "ankle_motor_offset_rad"},
+      {R"({"devices": [{"bus": 0, "kind": "ethercat", "id": 1, "slot": 0}]})", "devices[0].kind"},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(apply_drivers_json(c.text, config, msg), DriverError::kBadConfig) << c.text;
+    EXPECT_NE(msg.find(c.expected), std::string::npos) << c.text << " -> " << msg;
+  }
+  EXPECT_EQ(config.ruiwo_motors[4].sign, before.ruiwo_motors[4].sign);
+  EXPECT_EQ(config.plan.devices.size(), before.plan.devices.size());
+}
+
+TEST_F(DriversConfigTest, ValidationRefusesInconsistentRobots) {
+  DriversConfig c = config;
+  ASSERT_EQ(apply_drivers_json(R"({"ruiwo_motors": [{"id": 3, "sign": 0}]})", c, msg), DriverError::kOk);
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("0x03"), std::string::npos) << msg;
+
+  c = config;
+  c.ruiwo_motors[0].joint = 14;  // disagrees with the plan's slot
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("slot"), std::string::npos) << msg;
+
+  c = config;
+  c.legs[0].serial[3].ratio_motor_per_joint = 0.0;
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig);
+
+  c = config;
+  c.drives[0].config.torque_limit_Nm = 1e6;  // beyond the int16 per-mille range
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig);
+}
+
+TEST_F(DriversConfigTest, JsonPlanReplacesBusesAndResyncsDrives) {
+  // Leju's wiring: all Ruiwo motors on one bus at 250 Hz -> refused at validation.
+  std::string devices;
+  for (const DeviceConfig& d : config.plan.devices) {
+    const bool ruiwo = d.kind == DeviceKind::kRuiwoMotor;
+    const int bus = ruiwo ? 5 : d.bus;
+    devices += std::string(devices.empty() ? "" : ",") + R"({"bus": )" + std::to_string(bus) + R"(, "kind": ")" +
+               (ruiwo ? "ruiwo" : "cia402") + R"(", "id": )" + std::to_string(d.id) + R"(, "slot": )" +
+               std::to_string(d.slot) + "}";
+  }
+  const std::string text = R"({"buses": [{"interface": "can0"}, {"interface": "can1"}, {"interface": "can2"},
+      {"interface": "can3"}, {"interface": "can4"}, {"interface": "can5", "cycle_rate_hz": 250}],
+      "devices": [)" + devices + "]}";
+  ASSERT_EQ(apply_drivers_json(text, config, msg), DriverError::kOk) << msg;
+  EXPECT_EQ(validate_drivers_config(config, report, msg), DriverError::kBusOverloaded);
+  EXPECT_NE(msg.find("can5"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("94.5 %"), std::string::npos) << msg;
+  EXPECT_EQ(config.drives.size(), 14u);
+}
+
+TEST_F(DriversConfigTest, LoadFromFile) {
+  EXPECT_EQ(load_drivers_config("/nonexistent/drivers.json", model, config, report, msg), DriverError::kDeviceMissing);
+  EXPECT_NE(msg.find("/nonexistent/drivers.json"), std::string::npos);
+  const std::string path = std::string(KUAVO_BINARY_DIR) + "/drivers_config_test.json";
+  {
+    std::ofstream out(path);
+    out << R"({"imu": {"device": "/dev/ttyUSB1"}})";
+  }
+  DriversConfig loaded;
+  ASSERT_EQ(load_drivers_config(path, model, loaded, report, msg), DriverError::kOk) << msg;
+  EXPECT_EQ(loaded.imu_device, "/dev/ttyUSB1");
+  EXPECT_EQ(report.load.size(), 7u);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace kuavo::drivers

@@ -1,0 +1,78 @@
+// `kuavo retarget` end to end: the report keys the issue lists, the motion file it writes,
+// and the exit code and message for a broken input. Skipped when the CLI is not built.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tools/mocap/motion_file.h"
+
+namespace kuavo::mocap {
+namespace {
+
+const std::string kBin = std::string(KUAVO_BINARY_DIR) + "/kuavo";
+const std::string kOut = std::string(KUAVO_BINARY_DIR) + "/mocap_cli_test";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs `kuavo retarget ARGS`; stderr goes to <kOut><tag>.stderr (tests may run in parallel).
+int run(const std::string& args, const std::string& tag) {
+  const std::string redirect = " >" + kOut + tag + ".stdout 2>" + kOut + tag + ".stderr";
+  const int status = std::system((kBin + " retarget " + args + redirect).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(mocap_cli, DefaultDanceReportAndMotionFile) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  ASSERT_EQ(run("-o " + kOut + ".motion --variant s42 --report " + kOut + ".json", "_dance"), 0)
+      << slurp(kOut + "_dance.stderr");
+  const auto report = nlohmann::json::parse(slurp(kOut + ".json"));
+  for (const char* key : {"frames", "duration_s", "keypoint_pos_err_m", "foot_slide_m_per_s_max", "penetration_m_max",
+                          "joint_limit_violations", "velocity_limit_violations", "contact_phases", "frames_per_s"})
+    EXPECT_TRUE(report.contains(key)) << key;
+  EXPECT_TRUE(report["keypoint_pos_err_m"].contains("mean"));
+  EXPECT_TRUE(report["keypoint_pos_err_m"].contains("max"));
+  EXPECT_EQ(report["frames"].get<int>(), 3001);
+  EXPECT_EQ(report["joint_limit_violations"].get<int>(), 0);
+  EXPECT_EQ(report["velocity_limit_violations"].get<int>(), 0);
+  EXPECT_LT(report["foot_slide_m_per_s_max"].get<double>(), 0.01);
+  EXPECT_LE(report["penetration_m_max"].get<double>(), 0.005);
+
+  model::Model s42, s45;
+  model::build_model(model::Variant::kS42, model::kDefaultTotalMass_kg, s42);
+  model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, s45);
+  MotionHeader h;
+  std::vector<dynamics::ConfigVector> q;
+  std::vector<ContactLabel> labels;
+  std::string error;
+  ASSERT_TRUE(load_motion_file(kOut + ".motion", s42, h, q, labels, error)) << error;
+  EXPECT_EQ(q.size(), 3001u);
+  EXPECT_EQ(h.rate_hz, 100.0);
+  EXPECT_FALSE(load_motion_file(kOut + ".motion", s45, h, q, labels, error));  // made for s42
+}
+
+TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string bvh = kOut + "_broken.bvh";
+  std::ofstream(bvh) << "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Xrotation Yrotation Zrotation\n}\n"
+                        "MOTION\nFrames: 2\nFrame Time: 0.01\n0 0 0\n";
+  EXPECT_EQ(run(bvh + " -o " + kOut + "_broken.motion", "_broken"), 2);
+  const std::string message = slurp(kOut + "_broken.stderr");
+  EXPECT_NE(message.find("line 11: "), std::string::npos) << message;
+  EXPECT_NE(message.find("file ends after 1 of 2 motion rows"), std::string::npos) << message;
+  EXPECT_EQ(run("-o", "_broken"), 2);  // usage
+  EXPECT_EQ(run("--variant s44 -o x.motion", "_broken"), 2);
+}
+
+}  // namespace
+}  // namespace kuavo::mocap

@@ -1,0 +1,240 @@
+// Dense QP (Goldfarb–Idnani): KKT certificates on random WBC/IK-sized problems, degenerate
+// cases, warm start, the iteration cap and zero allocation.
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+
+#include <memory>
+#include <random>
+
+#include "controllers/qp/dense_qp_solver.h"
+#include "tests/qp/dense_qp_fixtures.h"
+#include "tests/support/alloc_trap.h"
+
+namespace kuavo::qp::test {
+namespace {
+
+// Tolerances of the certificate. The solver stops at 1e-9 normalized violation; rows are
+// O(10) long, so 1e-7 leaves a margin of 10 for roundoff. Stationarity is relative to the gradient.
+constexpr double kPrimalTol = 1e-7;
+constexpr double kStationarityTol = 1e-9;
+constexpr double kComplementarityTol = 1e-7;
+
+template <int NV, int NE, int NI>
+struct Fixture {
+  DenseQp<NV, NE, NI> qp;
+  DenseQpWorkspace<NV, NE, NI> ws;
+  DenseQpSolution<NV, NE, NI> sol;
+};
+
+void expect_kkt(const KktResiduals& k, double scale = 1.0) {
+  EXPECT_LE(k.equality, kPrimalTol * scale);
+  EXPECT_LE(k.inequality, kPrimalTol * scale);
+  EXPECT_LE(k.stationarity, kStationarityTol * scale);
+  EXPECT_LE(k.dual_sign, 0.0);
+  EXPECT_LE(k.complementarity, kComplementarityTol * scale);
+}
+
+template <int NV, int NE, int NI>
+void random_problems_satisfy_kkt(int count, std::uint64_t seed) {
+  auto f = std::make_unique<Fixture<NV, NE, NI>>();
+  std::mt19937_64 rng(seed);
+  int total_active = 0;
+  for (int n = 0; n < count; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(dense_kkt(f->qp, f->sol));
+    total_active += f->sol.working_set_size;
+  }
+  // The problems must actually exercise the inequalities.
+  EXPECT_GT(total_active, count * 5);
+}
+
+TEST(DenseQp, WbcSizeRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<82, 32, 92>(40, 1); }
+TEST(DenseQp, ReducedWbcSizeRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<56, 18, 60>(60, 2); }
+TEST(DenseQp, SmallRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<8, 2, 6>(300, 3); }
+
+TEST(DenseQp, BoundsOnlyIkSizeSatisfiesKkt) {
+  auto f = std::make_unique<Fixture<34, 0, 0>>();
+  std::mt19937_64 rng(4);
+  for (int n = 0; n < 50; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    expect_kkt(dense_kkt(f->qp, f->sol));
+  }
+}
+
+// With H = I the solution is the projection of −g onto the box: an oracle by hand.
+TEST(DenseQp, BoxProjectionMatchesClosedForm) {
+  auto f = std::make_unique<Fixture<34, 0, 0>>();
+  std::mt19937_64 rng(5);
+  f->qp.H.setIdentity();
+  for (int j = 0; j < 34; ++j) {
+    f->qp.g(j) = 3.0 * gaussian(rng);
+    f->qp.x_lower(j) = -1.0;
+    f->qp.x_upper(j) = 0.5;
+  }
+  ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+  for (int j = 0; j < 34; ++j) EXPECT_NEAR(f->sol.x(j), std::clamp(-f->qp.g(j), -1.0, 0.5), 1e-12);
+}
+
+TEST(DenseQp, RedundantEqualitiesAreSkipped) {
+  auto f = std::make_unique<Fixture<20, 8, 10>>();
+  std::mt19937_64 rng(6);
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    // Row 5 repeats row 1; row 7 is a combination of rows 0 and 2 (consistent right-hand sides).
+    f->qp.A.row(5) = f->qp.A.row(1);
+    f->qp.b(5) = f->qp.b(1);
+    f->qp.A.row(7) = 2.0 * f->qp.A.row(0) - 0.5 * f->qp.A.row(2);
+    f->qp.b(7) = 2.0 * f->qp.b(0) - 0.5 * f->qp.b(2);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    expect_kkt(dense_kkt(f->qp, f->sol));
+    // Inconsistent copy: no x satisfies both.
+    f->qp.b(5) += 1.0;
+    EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible);
+    EXPECT_TRUE(f->sol.x.allFinite());
+  }
+}
+
+TEST(DenseQp, IllConditionedHessian) {
+  auto f = std::make_unique<Fixture<40, 10, 30>>();
+  std::mt19937_64 rng(7);
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    // Eigenvalues spread over 1e-6 … 1e2 (condition number 1e8), random eigenvectors.
+    Eigen::MatrixXd M(40, 40);
+    fill_gaussian(M, rng);
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
+    const Eigen::MatrixXd Q = qr.householderQ();
+    Eigen::VectorXd eig(40);
+    for (int i = 0; i < 40; ++i) eig(i) = std::pow(10.0, -6.0 + 8.0 * i / 39.0);
+    f->qp.H = Q * eig.asDiagonal() * Q.transpose();
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    // Stationarity is limited by cond(H)·ε relative to ‖H x‖; allow it.
+    const KktResiduals k = dense_kkt(f->qp, f->sol);
+    EXPECT_LE(k.equality, 1e-6);
+    EXPECT_LE(k.inequality, 1e-6);
+    EXPECT_LE(k.stationarity, 1e-6);
+    EXPECT_LE(k.dual_sign, 0.0);
+    EXPECT_LE(k.complementarity, 1e-6);
+  }
+}
+
+TEST(DenseQp, InfeasibleInequalitiesAreReported) {
+  auto f = std::make_unique<Fixture<10, 2, 4>>();
+  std::mt19937_64 rng(8);
+  make_random_dense_qp(f->qp, rng);
+  // Row 1 = −row 0 with bounds that demand c·x ≥ 1 and c·x ≤ −1.
+  f->qp.C.row(1) = -f->qp.C.row(0);
+  f->qp.c_lower(0) = 1.0;
+  f->qp.c_upper(0) = kInfinity;
+  f->qp.c_lower(1) = 1.0;
+  f->qp.c_upper(1) = kInfinity;
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible);
+  EXPECT_TRUE(f->sol.x.allFinite());
+  // Equality x0 = 5 against the bound x0 ≤ 1.
+  make_random_dense_qp(f->qp, rng);
+  f->qp.A.row(0).setZero();
+  f->qp.A(0, 0) = 1.0;
+  f->qp.b(0) = 5.0;
+  f->qp.x_upper(0) = 1.0;
+  f->qp.x_lower(0) = -1.0;
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible);
+  // Crossed bounds are rejected up front.
+  make_random_dense_qp(f->qp, rng);
+  f->qp.x_lower(3) = f->qp.x_upper(3) + 1.0;
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible);
+}
+
+TEST(DenseQp, BadInputIsRejected) {
+  auto f = std::make_unique<Fixture<10, 2, 4>>();
+  std::mt19937_64 rng(9);
+  make_random_dense_qp(f->qp, rng);
+  f->qp.H(0, 0) = -1.0;
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kNotConvex);
+  make_random_dense_qp(f->qp, rng);
+  f->qp.g(2) = std::nan("");
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kBadInput);
+  make_random_dense_qp(f->qp, rng);
+  f->qp.c_upper(1) = std::nan("");
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kBadInput);
+}
+
+TEST(DenseQp, IterationCapReturnsWorkingSetMinimizer) {
+  auto f = std::make_unique<Fixture<56, 18, 60>>();
+  std::mt19937_64 rng(10);
+  make_random_dense_qp(f->qp, rng);
+  ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+  ASSERT_GT(f->sol.iterations, 4);
+  DenseQpSettings capped;
+  capped.max_iterations = 3;
+  EXPECT_EQ(solve_dense_qp(f->qp, capped, f->ws, f->sol), QpStatus::kMaxIterations);
+  EXPECT_EQ(f->sol.iterations, 3);
+  EXPECT_TRUE(f->sol.x.allFinite());
+  // Equalities hold and the multipliers are those of the working set (stationarity).
+  const KktResiduals k = dense_kkt(f->qp, f->sol);
+  EXPECT_LE(k.equality, kPrimalTol);
+  EXPECT_LE(k.stationarity, kStationarityTol);
+  EXPECT_LE(k.dual_sign, 0.0);
+}
+
+// The WBC re-solves a slightly changed problem every 2 ms.
+template <int NV, int NE, int NI>
+void warm_start_is_same_and_cheaper(std::uint64_t seed) {
+  auto f = std::make_unique<Fixture<NV, NE, NI>>();
+  auto cold = std::make_unique<DenseQpSolution<NV, NE, NI>>();
+  std::mt19937_64 rng(seed);
+  int cold_iterations = 0, warm_iterations = 0;
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    for (int j = 0; j < NV; ++j) f->qp.g(j) += 1e-3 * gaussian(rng);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, *cold), QpStatus::kSolved);
+    DenseQpSettings warm;
+    warm.warm_start = true;
+    ASSERT_EQ(solve_dense_qp(f->qp, warm, f->ws, f->sol), QpStatus::kSolved);
+    EXPECT_LE((f->sol.x - cold->x).cwiseAbs().maxCoeff(), 1e-8);
+    expect_kkt(dense_kkt(f->qp, f->sol));
+    EXPECT_LE(f->sol.iterations, cold->iterations);
+    cold_iterations += cold->iterations;
+    warm_iterations += f->sol.iterations;
+  }
+  EXPECT_LT(warm_iterations, cold_iterations);
+}
+
+TEST(DenseQp, WarmStartReachesSameSolutionInFewerIterations) {
+  warm_start_is_same_and_cheaper<82, 32, 92>(11);
+  warm_start_is_same_and_cheaper<56, 18, 60>(12);
+}
+
+// A wrong guess (another problem's working set) must still give the right answer.
+TEST(DenseQp, WarmStartFromWrongGuessIsStillCorrect) {
+  auto f = std::make_unique<Fixture<56, 18, 60>>();
+  std::mt19937_64 rng(13);
+  DenseQpSettings warm;
+  warm.warm_start = true;
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    ASSERT_EQ(solve_dense_qp(f->qp, warm, f->ws, f->sol), QpStatus::kSolved);
+    expect_kkt(dense_kkt(f->qp, f->sol));
+  }
+}
+
+TEST(DenseQp, SolvesDoNotAllocate) {
+  auto f = std::make_unique<Fixture<82, 32, 92>>();
+  std::mt19937_64 rng(14);
+  make_random_dense_qp(f->qp, rng);
+  DenseQpSettings warm;
+  warm.warm_start = true;
+  {
+    kuavo::test::AllocTrap trap;
+    solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol);
+    solve_dense_qp(f->qp, warm, f->ws, f->sol);
+    EXPECT_EQ(trap.count(), 0u) << trap.first_size_bytes();
+  }
+  EXPECT_EQ(f->sol.status, QpStatus::kSolved);
+}
+
+}  // namespace
+}  // namespace kuavo::qp::test

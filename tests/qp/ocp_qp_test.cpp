@@ -1,0 +1,199 @@
+// OCP QP (Riccati + interior point): agreement with the dense solver on the transcribed
+// problem, KKT certificates at MPC size, degenerate cases and zero allocation.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <random>
+
+#include "controllers/qp/dense_qp_solver.h"
+#include "controllers/qp/ocp_solver.h"
+#include "tests/qp/ocp_qp_fixtures.h"
+#include "tests/support/alloc_trap.h"
+
+namespace kuavo::qp::test {
+namespace {
+
+template <int NX, int NU, int N, int NC, int NG>
+struct OcpFixture {
+  OcpQp<NX, NU, N, NC, NG> qp;
+  OcpWorkspace<NX, NU, N, NC, NG> ws;
+  OcpSolution<NX, NU, N, NC, NG> sol;
+};
+
+// Solves the transcription of f.qp (horizon T) with the dense solver and compares trajectories.
+template <int NX, int NU, int N, int NC, int NG, int T>
+void expect_matches_dense(const OcpFixture<NX, NU, N, NC, NG>& f, double tol) {
+  constexpr int kNv = T * (NX + NU), kNe = T * (NX + NC), kNi = (T + 1) * NG;
+  auto dense = std::make_unique<DenseQp<kNv, kNe, kNi>>();
+  auto ws = std::make_unique<DenseQpWorkspace<kNv, kNe, kNi>>();
+  auto sol = std::make_unique<DenseQpSolution<kNv, kNe, kNi>>();
+  const DenseTranscription d = transcribe(f.qp);
+  dense->H = d.H;
+  dense->g = d.g;
+  dense->A = d.Aeq;
+  dense->b = d.beq;
+  dense->C = d.G;
+  dense->c_upper = d.h;
+  ASSERT_EQ(solve_dense_qp(*dense, DenseQpSettings{}, *ws, *sol), QpStatus::kSolved);
+  Eigen::VectorXd z, y, lam;
+  pack(f.qp, f.sol, z, y, lam);
+  EXPECT_LE((z - Eigen::VectorXd(sol->x)).cwiseAbs().maxCoeff(), tol * (1.0 + z.cwiseAbs().maxCoeff()));
+  if (lam.size() > 0) {
+    EXPECT_LE((lam - Eigen::VectorXd(sol->z_ineq)).cwiseAbs().maxCoeff(), 1e3 * tol * (1.0 + lam.cwiseAbs().maxCoeff()));
+  }
+}
+
+// Residuals to tol; complementarity is an interior-point's approximate quantity: the solver
+// stops at mean sᵢλᵢ ≤ 1e-10·(data scale), so one row may carry up to (rows)·that.
+template <int NX, int NU, int N, int NC, int NG>
+void expect_kkt(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpKkt& k, double tol) {
+  double scale = 1.0;
+  for (int j = 0; j <= qp.horizon; ++j) {
+    const auto& s = qp.stages[j];
+    scale = std::max({scale, s.q.cwiseAbs().maxCoeff(), s.r.cwiseAbs().maxCoeff(), s.b.cwiseAbs().maxCoeff()});
+    if constexpr (NG > 0) scale = std::max(scale, s.h.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(k.equality, tol);
+  EXPECT_LE(k.inequality, tol);
+  EXPECT_LE(k.stationarity, tol);
+  EXPECT_LE(k.dual_sign, 0.0);
+  EXPECT_LE(k.complementarity, 1e-10 * scale * (qp.horizon + 1) * NG + 1e-12);
+}
+
+TEST(OcpQp, EqualityOnlyMatchesDenseExactly) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+  std::mt19937_64 rng(21);
+  for (int n = 0; n < 30; ++n) {
+    make_random_ocp(f->qp, rng, 5);
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    EXPECT_EQ(f->sol.iterations, 0);
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-10);
+    expect_matches_dense<4, 3, 5, 2, 0, 5>(*f, 1e-10);
+  }
+}
+
+TEST(OcpQp, WithInequalitiesMatchesDense) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(22);
+  int active = 0;
+  for (int n = 0; n < 30; ++n) {
+    make_random_ocp(f->qp, rng, 5);
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
+    expect_matches_dense<4, 3, 5, 2, 3, 5>(*f, 1e-7);
+    for (int k = 0; k <= 5; ++k) active += (f->sol.lambda[k].array() > 1e-6).count();
+  }
+  EXPECT_GT(active, 30 * 3);  // the inequalities matter
+}
+
+TEST(OcpQp, ShorterHorizonThanCapacityMatchesDense) {
+  auto f = std::make_unique<OcpFixture<4, 3, 8, 2, 3>>();
+  std::mt19937_64 rng(23);
+  for (int n = 0; n < 10; ++n) {
+    make_random_ocp(f->qp, rng, 3);
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    expect_matches_dense<4, 3, 8, 2, 3, 3>(*f, 1e-7);
+  }
+}
+
+TEST(OcpQp, MpcSizeRandomProblemsSatisfyKkt) {
+  auto f = std::make_unique<OcpFixture<38, 50, 12, 12, 20>>();
+  std::mt19937_64 rng(24);
+  for (int n = 0; n < 3; ++n) {
+    make_random_ocp(f->qp, rng, 12);
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
+  }
+}
+
+TEST(OcpQp, EmptyHorizonReturnsInitialState) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(25);
+  make_random_ocp(f->qp, rng, 0);
+  ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+  EXPECT_EQ(f->sol.x[0], f->qp.x_initial);
+  // A terminal state constraint the fixed x₀ violates: infeasible, finite output.
+  f->qp.stages[0].h(0) = f->qp.stages[0].Gx.row(0).dot(f->qp.x_initial) - 1.0;
+  const QpStatus s = solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol);
+  EXPECT_TRUE(s == QpStatus::kInfeasible || s == QpStatus::kMaxIterations) << to_string(s);
+  EXPECT_TRUE(f->sol.x[0].allFinite());
+}
+
+TEST(OcpQp, InfeasibleInequalitiesAreReported) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(26);
+  make_random_ocp(f->qp, rng, 5);
+  auto& s = f->qp.stages[2];
+  s.Gx.row(1) = -s.Gx.row(0);
+  s.Gu.row(1) = -s.Gu.row(0);
+  s.h(0) = -1.0;
+  s.h(1) = -1.0;  // g ≤ −1 and −g ≤ −1
+  const QpStatus st = solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol);
+  EXPECT_TRUE(st == QpStatus::kInfeasible || st == QpStatus::kMaxIterations) << to_string(st);
+  for (int k = 0; k <= 5; ++k) EXPECT_TRUE(f->sol.x[k].allFinite() && f->sol.lambda[k].allFinite());
+}
+
+TEST(OcpQp, DependentStageEqualitiesAreReported) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+  std::mt19937_64 rng(27);
+  make_random_ocp(f->qp, rng, 5);
+  auto& s = f->qp.stages[2];
+  s.num_eq = 2;
+  s.D.row(1) = 3.0 * s.D.row(0);
+  s.C.row(1) = 3.0 * s.C.row(0);
+  s.e(1) = 3.0 * s.e(0);
+  EXPECT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kRankDeficient);
+  f->qp.stages[5].num_eq = 1;  // terminal equalities are not supported
+  EXPECT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kBadInput);
+}
+
+TEST(OcpQp, IllConditionedCostMatchesDense) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(28);
+  for (int n = 0; n < 10; ++n) {
+    make_random_ocp(f->qp, rng, 5);
+    // State weights 1e-4, one input weight 1e4 (scaling [Q Sᵀ; S R] by diag(1e-2, 1) keeps it PSD).
+    for (int k = 0; k <= 5; ++k) {
+      f->qp.stages[k].Q *= 1e-4;
+      f->qp.stages[k].S *= 1e-2;
+      f->qp.stages[k].R(0, 0) += 1e4;
+    }
+    // λ/s spans ~20 decades at 1e-10 complementarity here, past what the factorization
+    // resolves; the documented remedy is a looser complementarity tolerance.
+    OcpSettings settings;
+    settings.complementarity_tolerance = 1e-8;
+    ASSERT_EQ(solve_ocp_qp(f->qp, settings, f->ws, f->sol), QpStatus::kSolved) << n << " " << f->sol.iterations;
+    expect_matches_dense<4, 3, 5, 2, 3, 5>(*f, 1e-6);
+  }
+}
+
+TEST(OcpQp, IterationCapIsHonoured) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(29);
+  make_random_ocp(f->qp, rng, 5);
+  OcpSettings capped;
+  capped.max_iterations = 2;
+  EXPECT_EQ(solve_ocp_qp(f->qp, capped, f->ws, f->sol), QpStatus::kMaxIterations);
+  EXPECT_EQ(f->sol.iterations, 2);
+  EXPECT_GT(f->sol.residual + f->sol.complementarity, 0.0);
+  for (int k = 0; k <= 5; ++k) EXPECT_TRUE(f->sol.x[k].allFinite());
+}
+
+TEST(OcpQp, SolveDoesNotAllocateAtMpcSize) {
+  auto f = std::make_unique<OcpFixture<38, 50, 60, 12, 20>>();
+  std::mt19937_64 rng(30);
+  make_random_ocp(f->qp, rng, 60);
+  OcpSettings settings;
+  settings.max_iterations = 3;
+  {
+    kuavo::test::AllocTrap trap;
+    solve_ocp_qp(f->qp, settings, f->ws, f->sol);
+    EXPECT_EQ(trap.count(), 0u) << trap.first_size_bytes();
+  }
+  EXPECT_EQ(f->sol.iterations, 3);
+  for (int k = 0; k <= 60; ++k) EXPECT_TRUE(f->sol.u[k].allFinite());
+}
+
+}  // namespace
+}  // namespace kuavo::qp::test

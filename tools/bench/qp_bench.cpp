@@ -1,0 +1,192 @@
+// QP solver benchmarks (run pinned: taskset -c 1 build/bench/qp_bench).
+//   Dense WBC size: 82 vars, 32 equalities, 92 two-sided inequalities (+ bounds), and the
+//   torque-eliminated 56 vars / 18 equalities / 60 inequalities; warm start = re-solve of the
+//   previous tick's problem with a small change in g, from its working set.
+//   OCP: N = 60, nx = 38, nu = 50 — one Riccati factorization + solve (what one RTI costs
+//   per interior-point iteration), with and without 12 stage equalities, and a full
+//   interior-point solve with 20 inequalities per stage.
+// Every bench links kuavo_sim, whose PUBLIC -UNDEBUG (needed by Simbody's headers) would time
+// Eigen with its range assertions on. The solvers are header-only and this file does not
+// include Simbody, so measure them as the firmware builds them: without Eigen's assertions.
+#ifndef EIGEN_NO_DEBUG
+#define EIGEN_NO_DEBUG
+#endif
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "controllers/qp/dense_qp_solver.h"
+#include "controllers/qp/ocp_solver.h"
+
+namespace {
+
+using namespace kuavo::qp;
+
+double gauss(std::mt19937_64& rng) { return std::normal_distribution<double>(0.0, 1.0)(rng); }
+double unif(std::mt19937_64& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+template <typename M>
+void fill(M& m, std::mt19937_64& rng, double scale = 1.0) {
+  for (int j = 0; j < m.cols(); ++j)
+    for (int i = 0; i < m.rows(); ++i) m(i, j) = scale * gauss(rng);
+}
+
+// WBC-like: well-conditioned weighted-task Hessian, a feasible point inside the constraints,
+// a task pull that activates a moderate number of inequalities (as friction cones and limits do).
+template <int NV, int NE, int NI>
+void make_dense(DenseQp<NV, NE, NI>& qp, std::mt19937_64& rng) {
+  Eigen::Matrix<double, NV + 10, NV> M;
+  fill(M, rng);
+  qp.H.noalias() = M.transpose() * M / double(NV);
+  qp.H.diagonal().array() += 1e-2;
+  fill(qp.g, rng, 3.0);
+  Eigen::Matrix<double, NV, 1> x0;
+  fill(x0, rng);
+  fill(qp.A, rng);
+  if constexpr (NE > 0) qp.b.noalias() = qp.A * x0;
+  fill(qp.C, rng);
+  if constexpr (NI > 0) {
+    for (int i = 0; i < NI; ++i) {
+      const double cx = qp.C.row(i).dot(x0);
+      qp.c_lower(i) = cx - unif(rng, 0.5, 3.0);
+      qp.c_upper(i) = cx + unif(rng, 0.5, 3.0);
+    }
+  }
+  for (int j = 0; j < NV; ++j) {
+    qp.x_lower(j) = x0(j) - unif(rng, 0.5, 3.0);
+    qp.x_upper(j) = x0(j) + unif(rng, 0.5, 3.0);
+  }
+}
+
+template <int NV, int NE, int NI>
+struct DenseBench {
+  DenseQp<NV, NE, NI> qp;
+  DenseQpWorkspace<NV, NE, NI> ws;
+  DenseQpSolution<NV, NE, NI> sol;
+  Eigen::Matrix<double, NV, 1> g0;
+};
+
+template <int NV, int NE, int NI>
+void dense_solve(benchmark::State& state, bool warm) {
+  static auto b = std::make_unique<DenseBench<NV, NE, NI>>();
+  std::mt19937_64 rng(1);
+  make_dense(b->qp, rng);
+  b->g0 = b->qp.g;
+  DenseQpSettings settings;
+  settings.warm_start = warm;
+  solve_dense_qp(b->qp, DenseQpSettings{}, b->ws, b->sol);
+  int tick = 0, iterations = 0, active = 0;
+  for (auto _ : state) {
+    // The next tick's task: a small, deterministic change of the linear term.
+    b->qp.g = b->g0;
+    b->qp.g(tick % NV) += 1e-2 * ((tick & 1) ? 1.0 : -1.0);
+    ++tick;
+    solve_dense_qp(b->qp, settings, b->ws, b->sol);
+    iterations += b->sol.iterations;
+    active += b->sol.working_set_size;
+    benchmark::DoNotOptimize(b->sol.x.data());
+  }
+  if (b->sol.status != QpStatus::kSolved) state.SkipWithError(to_string(b->sol.status));
+  state.counters["iterations"] = double(iterations) / double(tick);
+  state.counters["active_ineq"] = double(active) / double(tick);
+}
+
+void BM_DenseWbc82_Warm(benchmark::State& s) { dense_solve<82, 32, 92>(s, true); }
+void BM_DenseWbc82_Cold(benchmark::State& s) { dense_solve<82, 32, 92>(s, false); }
+void BM_DenseWbc56_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true); }
+void BM_DenseWbc56_Cold(benchmark::State& s) { dense_solve<56, 18, 60>(s, false); }
+void BM_DenseIk34Bounds_Warm(benchmark::State& s) { dense_solve<34, 0, 0>(s, true); }
+BENCHMARK(BM_DenseWbc82_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc82_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc56_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc56_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseIk34Bounds_Warm)->Unit(benchmark::kMicrosecond);
+
+constexpr int kNx = 38, kNu = 50, kN = 60, kNc = 12, kNg = 20;
+using MpcQp = OcpQp<kNx, kNu, kN, kNc, kNg>;
+
+struct OcpBench {
+  MpcQp qp;
+  OcpWorkspace<kNx, kNu, kN, kNc, kNg> ws;
+  OcpSolution<kNx, kNu, kN, kNc, kNg> sol;
+};
+
+void make_ocp(MpcQp& qp, std::mt19937_64& rng, bool equalities, bool inequalities) {
+  Eigen::Matrix<double, kNx, 1> x;
+  fill(x, rng);
+  qp.x_initial = x;
+  Eigen::Matrix<double, kNu, 1> u;
+  for (int k = 0; k <= kN; ++k) {
+    auto& s = qp.stages[k];
+    Eigen::Matrix<double, kNx + kNu + 5, kNx + kNu> M;
+    fill(M, rng);
+    Eigen::Matrix<double, kNx + kNu, kNx + kNu> W;
+    W.noalias() = M.transpose() * M / double(kNx + kNu);
+    W.diagonal().array() += 0.05;
+    s.Q = W.topLeftCorner<kNx, kNx>();
+    s.S = W.bottomLeftCorner<kNu, kNx>();
+    s.R = W.bottomRightCorner<kNu, kNu>();
+    fill(s.q, rng);
+    fill(s.r, rng);
+    fill(s.A, rng, 0.1 / std::sqrt(double(kNx)));  // spectral radius ~1.1: stays bounded over 60 stages
+    s.A.diagonal().array() += 0.9;
+    fill(s.B, rng, 0.2);
+    fill(s.b, rng, 0.1);
+    fill(u, rng);
+    s.num_eq = (equalities && k < kN && k % 2 == 0) ? kNc : 0;  // stance stages: no-slip rows
+    fill(s.C, rng);
+    fill(s.D, rng);
+    s.e.noalias() = s.C * x;
+    s.e.noalias() += s.D * u;
+    s.num_ineq = inequalities ? kNg : 0;
+    fill(s.Gx, rng);
+    fill(s.Gu, rng);
+    s.h.noalias() = s.Gx * x;
+    if (k < kN) s.h.noalias() += s.Gu * u;
+    for (int i = 0; i < kNg; ++i) s.h(i) += unif(rng, 0.1, 1.0);
+    if (k < kN) {
+      const Eigen::Matrix<double, kNx, 1> next = s.A * x + s.B * u + s.b;
+      x = next;
+    }
+  }
+}
+
+void riccati_once(benchmark::State& state, bool equalities) {
+  static auto b = std::make_unique<OcpBench>();
+  std::mt19937_64 rng(2);
+  make_ocp(b->qp, rng, equalities, false);
+  copy_vectors(b->qp, b->ws.vec);
+  for (auto _ : state) {
+    if (riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) state.SkipWithError("factor");
+    riccati_solve(b->qp, b->ws.riccati, b->ws.vec, b->sol);
+    benchmark::DoNotOptimize(b->sol.u[0].data());
+  }
+}
+
+void BM_OcpRiccati_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false); }
+void BM_OcpRiccati_N60_nx38_nu50_eq12(benchmark::State& s) { riccati_once(s, true); }
+BENCHMARK(BM_OcpRiccati_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OcpRiccati_N60_nx38_nu50_eq12)->Unit(benchmark::kMicrosecond);
+
+void BM_OcpInteriorPoint_N60_eq12_ineq20(benchmark::State& state) {
+  static auto b = std::make_unique<OcpBench>();
+  std::mt19937_64 rng(3);
+  make_ocp(b->qp, rng, true, true);
+  int iterations = 0, solves = 0;
+  for (auto _ : state) {
+    solve_ocp_qp(b->qp, OcpSettings{}, b->ws, b->sol);
+    iterations += b->sol.iterations;
+    ++solves;
+  }
+  state.counters["iterations"] = double(iterations) / double(solves);
+  state.counters["residual"] = b->sol.residual;
+  state.counters["mu"] = b->sol.complementarity;
+  state.counters["status"] = double(static_cast<int>(b->sol.status));
+}
+BENCHMARK(BM_OcpInteriorPoint_N60_eq12_ineq20)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,238 @@
+// kuavo retarget: a BVH dance (or the built-in default dance) → robot motion file + report.
+//
+//   kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]
+//                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
+//
+// --contacts FILE: lines "start_s end_s flight|left|right|double" replace the automatic labels
+// over those ranges. --map: "keypoint = joint" lines for skeletons the built-in tables miss.
+// --dance-bvh writes the built-in dance as BVH (to inspect it in a viewer).
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tools/cli/commands.h"
+#include "tools/mocap/contacts.h"
+#include "tools/mocap/default_dance.h"
+#include "tools/mocap/motion_file.h"
+#include "tools/mocap/retarget.h"
+
+namespace kuavo::cli {
+namespace {
+
+constexpr const char* kUsage =
+    "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
+    "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n";
+
+bool read_text(const std::string& path, std::string& out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  out = ss.str();
+  return true;
+}
+
+bool write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  return static_cast<bool>(out);
+}
+
+int run(int argc, char** argv) {
+  std::string input, output, report_path, contacts = "auto", map_path, csv_path, dance_path;
+  model::Variant variant = model::Variant::kS45;
+  for (int i = 1; i < argc; ++i) {
+    const auto value = [&](std::string& dst) {
+      if (i + 1 >= argc) return false;
+      dst = argv[++i];
+      return true;
+    };
+    const char* a = argv[i];
+    bool ok = true;
+    if (!std::strcmp(a, "-o") || !std::strcmp(a, "--out"))
+      ok = value(output);
+    else if (!std::strcmp(a, "--report"))
+      ok = value(report_path);
+    else if (!std::strcmp(a, "--contacts"))
+      ok = value(contacts);
+    else if (!std::strcmp(a, "--map"))
+      ok = value(map_path);
+    else if (!std::strcmp(a, "--csv"))
+      ok = value(csv_path);
+    else if (!std::strcmp(a, "--dance-bvh"))
+      ok = value(dance_path);
+    else if (!std::strcmp(a, "--variant")) {
+      std::string v;
+      ok = value(v);
+      if (ok && !model::parse_variant(v.c_str(), variant)) {
+        std::fprintf(stderr, "kuavo retarget: unknown variant '%s' (expected s45 or s42)\n", v.c_str());
+        return 2;
+      }
+    } else if (a[0] == '-') {
+      std::fprintf(stderr, "kuavo retarget: unknown option '%s'\n%s", a, kUsage);
+      return 2;
+    } else if (input.empty()) {
+      input = a;
+    } else {
+      std::fprintf(stderr, "kuavo retarget: more than one input file ('%s', '%s')\n%s", input.c_str(), a, kUsage);
+      return 2;
+    }
+    if (!ok) {
+      std::fprintf(stderr, "kuavo retarget: option '%s' needs a value\n%s", a, kUsage);
+      return 2;
+    }
+  }
+  if (output.empty() && dance_path.empty()) {
+    std::fprintf(stderr, "kuavo retarget: -o OUT.motion is required\n%s", kUsage);
+    return 2;
+  }
+
+  auto robot = std::make_unique<model::Model>();
+  if (const auto e = model::build_model(variant, model::kDefaultTotalMass_kg, *robot); e != model::ModelError::kOk) {
+    std::fprintf(stderr, "kuavo retarget: %s\n", model::to_string(e));
+    return 1;
+  }
+
+  // 1. The dance.
+  mocap::Bvh bvh;
+  std::string error;
+  if (input.empty()) {
+    bvh = mocap::default_dance_bvh();
+    if (!dance_path.empty() && !write_text(dance_path, mocap::write_bvh(bvh))) {
+      std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", dance_path.c_str());
+      return 1;
+    }
+    if (output.empty()) return 0;
+  } else if (!mocap::load_bvh_file(input, bvh, error)) {
+    std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
+    return 2;
+  }
+
+  // 2. Correspondence and robot-proportioned targets.
+  mocap::SkeletonMap map;
+  if (!map_path.empty()) {
+    std::string text;
+    if (!read_text(map_path, text)) {
+      std::fprintf(stderr, "kuavo retarget: %s: cannot open mapping file\n", map_path.c_str());
+      return 2;
+    }
+    if (!mocap::map_skeleton_with_file(bvh, text, map, error)) {
+      std::fprintf(stderr, "kuavo retarget: %s: %s\n", map_path.c_str(), error.c_str());
+      return 2;
+    }
+  } else if (!mocap::map_skeleton(bvh, map, error)) {
+    std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
+    return 2;
+  }
+  mocap::HumanTargets targets;
+  if (!mocap::make_targets(bvh, map, *robot, {}, targets, error)) {
+    std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
+    return 2;
+  }
+
+  // 3. Contact schedule.
+  mocap::RetargetOptions options;
+  std::vector<mocap::ContactLabel> labels;
+  if (contacts == "none") {
+    labels.assign(targets.frames.size(), mocap::ContactLabel::kFlight);
+    options.pin_stance_feet = false;
+  } else {
+    labels = mocap::detect_contacts(targets, *robot);
+    if (contacts != "auto") {
+      std::string text;
+      if (!read_text(contacts, text)) {
+        std::fprintf(stderr, "kuavo retarget: %s: cannot open contacts file\n", contacts.c_str());
+        return 2;
+      }
+      if (!mocap::apply_contact_overrides(text, targets.rate_hz, labels, error)) {
+        std::fprintf(stderr, "kuavo retarget: %s: %s\n", contacts.c_str(), error.c_str());
+        return 2;
+      }
+    }
+  }
+
+  // 4. Retarget (timed: processing speed is part of the report).
+  mocap::RetargetResult result;
+  const auto t0 = std::chrono::steady_clock::now();
+  mocap::retarget_motion(*robot, targets, labels, options, result);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const mocap::RetargetReport& r = result.report;
+
+  // 5. Outputs.
+  if (!mocap::write_motion_file(output, mocap::encode_motion(*robot, targets.rate_hz, result.q, result.contacts),
+                                error)) {
+    std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
+    return 1;
+  }
+  if (!csv_path.empty() &&
+      !write_text(csv_path, mocap::motion_csv(*robot, targets.rate_hz, result.q, result.contacts))) {
+    std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", csv_path.c_str());
+    return 1;
+  }
+  nlohmann::ordered_json j;
+  j["input"] = input.empty() ? "builtin:default_dance" : input;
+  j["variant"] = model::to_string(variant);
+  j["frames"] = r.frames;
+  j["duration_s"] = r.duration_s;
+  j["rate_hz"] = targets.rate_hz;
+  j["keypoint_pos_err_m"] = {{"mean", r.keypoint_error_mean_m}, {"max", r.keypoint_error_max_m}};
+  j["foot_slide_m_per_s_max"] = r.foot_slide_max_m_s;
+  j["penetration_m_max"] = r.penetration_max_m;
+  j["stance_float_m_max"] = r.float_max_m;
+  j["joint_limit_violations"] = r.joint_limit_violations;
+  j["velocity_limit_violations"] = r.velocity_limit_violations;
+  j["contact_phases"] = r.contact_phases;
+  j["schedule_contact_phases"] = r.schedule_phases;
+  j["frames_per_s"] = seconds > 0.0 ? r.frames / seconds : 0.0;
+  nlohmann::ordered_json limited = nlohmann::ordered_json::object();
+  for (int k = 0; k < model::kNumJoints; ++k) {
+    if (r.position_bound_active_per_joint[k] == 0 && r.velocity_bound_active_per_joint[k] == 0) continue;
+    limited[model::joint_name(*robot, k)] = {{"position_frames", r.position_bound_active_per_joint[k]},
+                                             {"velocity_frames", r.velocity_bound_active_per_joint[k]}};
+  }
+  j["limited"] = {{"position_bound_active_samples", r.position_bound_active_samples},
+                  {"velocity_bound_active_samples", r.velocity_bound_active_samples},
+                  {"stance_yaw_clamped_phases", r.stance_yaw_clamped_phases},
+                  {"feet_below_floor_frames", targets.feet_below_floor_frames},
+                  {"joints", limited}};
+  j["import"] = {{"family", targets.family},
+                 {"unit", targets.unit},
+                 {"human_height_m", targets.human_height_m},
+                 {"up_axis", targets.up_axis},
+                 {"dropped_reference_frames", targets.dropped_frames},
+                 {"source_frames", targets.source_frames},
+                 {"source_rate_hz", targets.source_rate_hz},
+                 {"root_scale", targets.root_scale}};
+  j["contacts"] = contacts;
+  if (!report_path.empty() && !write_text(report_path, j.dump(2) + "\n")) {
+    std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", report_path.c_str());
+    return 1;
+  }
+  std::printf(
+      "kuavo retarget: %s -> %s: %d frames (%.2f s), keypoint error mean %.3f m max %.3f m, "
+      "stance slide max %.4f m/s, penetration max %.4f m, limit violations %d/%d, %d contact phases, "
+      "%.0f frames/s\n",
+      input.empty() ? "default dance" : input.c_str(), output.c_str(), r.frames, r.duration_s, r.keypoint_error_mean_m,
+      r.keypoint_error_max_m, r.foot_slide_max_m_s, r.penetration_max_m, r.joint_limit_violations,
+      r.velocity_limit_violations, r.contact_phases, j["frames_per_s"].get<double>());
+  return 0;
+}
+
+}  // namespace
+
+int run_retarget(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "kuavo retarget: internal error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace kuavo::cli

@@ -1,0 +1,87 @@
+// Robot motion file: the retargeted dance, for the controller and the firmware. This header
+// is the reader (and the format); motion_file.h adds the tool-side writer, loader and CSV.
+//
+// Binary layout, version 1 (all integers little-endian, doubles IEEE-754 little-endian):
+//
+//   offset size  field
+//        0    8  magic "KUAVOMOT"
+//        8    4  u32 format version (1)
+//       12    4  u32 header size in bytes (= 64 + 24 × joint count = 736)
+//       16    1  u8  robot variant (model::Variant: 0 = s45, 1 = s42)
+//       17    1  u8  reserved (0)
+//       18    2  u16 nq, configuration size (35, conventions.h)
+//       20    2  u16 joint count (28)
+//       22    2  u16 frame record size in bytes (288)
+//       24    8  f64 frame rate [Hz] (100)
+//       32    4  u32 frame count
+//       36    4  u32 CRC-32 (IEEE 802.3, as zlib) of all frame records
+//       40    4  u32 CRC-32 of the header bytes with this field set to 0
+//       44   20  reserved (0)
+//       64  24×J joint names in controller order, each NUL-padded to 24 bytes
+//   then frame count records of 288 bytes:
+//        0  280  35 × f64 q: base position [m] (world), base quaternion (x, y, z, w) base→world,
+//                28 joint angles [rad] in controller order (conventions.h)
+//      280    1  u8 contact label (ContactLabel: 0 flight, 1 left, 2 right, 3 double support)
+//      281    7  reserved (0)
+//
+// The reader (read_motion_header / read_motion_frame) works on a byte buffer in place,
+// allocates nothing and throws nothing, so firmware can use it as is.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "controllers/dynamics/data.h"
+#include "controllers/model/model.h"
+#include "tools/mocap/contact_label.h"
+
+namespace kuavo::mocap {
+
+inline constexpr char kMotionMagic[8] = {'K', 'U', 'A', 'V', 'O', 'M', 'O', 'T'};
+inline constexpr std::uint32_t kMotionVersion = 1;
+inline constexpr std::size_t kMotionNameBytes = 24;
+inline constexpr std::size_t kMotionFixedHeaderBytes = 64;
+inline constexpr std::size_t kMotionHeaderBytes = kMotionFixedHeaderBytes + kMotionNameBytes * model::kNumJoints;
+inline constexpr std::size_t kMotionRecordBytes = 288;
+
+// Stable numbers; never reuse one.
+enum class MotionError : std::uint8_t {
+  kOk = 0,
+  kTooShort = 1,    // fewer bytes than a header
+  kBadMagic = 2,    // not a motion file
+  kBadVersion = 3,  // written by a newer or unknown format version
+  kBadHeaderChecksum = 4,
+  kWrongVariant = 5,    // recorded for the other arm variant
+  kLayoutMismatch = 6,  // nq, joint count, record size or joint names differ from this build
+  kTruncated = 7,       // fewer frame bytes than the header promises
+  kBadPayloadChecksum = 8,
+  kBadRate = 9,
+  kBadLabel = 10,  // a contact label outside 0..3
+  kIo = 11,        // the file could not be read or written
+};
+const char* to_string(MotionError e);
+
+struct MotionHeader {
+  model::Variant variant = model::Variant::kS45;
+  double rate_hz = 100.0;
+  std::uint32_t frame_count = 0;
+};
+
+std::uint32_t crc32(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
+// CRC-32 of a motion header (kMotionHeaderBytes at data) with its own CRC field taken as 0.
+std::uint32_t motion_header_crc(const std::uint8_t* data);
+// Little-endian field access used by reader and writer.
+std::uint16_t motion_get_u16(const std::uint8_t* p);
+std::uint32_t motion_get_u32(const std::uint8_t* p);
+double motion_get_f64(const std::uint8_t* p);
+inline constexpr std::size_t kMotionPayloadCrcOffset = 36;
+inline constexpr std::size_t kMotionHeaderCrcOffset = 40;
+
+// Validates the header and every checksum against the expected variant's joint names.
+MotionError read_motion_header(const std::uint8_t* data, std::size_t size, const model::Model& robot,
+                               MotionHeader& header);
+// Frame i of a buffer that passed read_motion_header.
+MotionError read_motion_frame(const std::uint8_t* data, std::size_t size, std::uint32_t index,
+                              dynamics::ConfigVector& q, ContactLabel& label);
+
+}  // namespace kuavo::mocap
