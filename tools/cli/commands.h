@@ -6,6 +6,7 @@ namespace kuavo::cli {
 
 int run_model(int argc, char** argv);  // kuavo model [--variant s45|s42] [--mass KG] --json
 int run_demo(int argc, char** argv);   // kuavo demo: the main job
+int run_simulate(int argc, char** argv);  // kuavo simulate --stand SECONDS ...
 int run_retarget(int argc, char** argv);  // kuavo retarget [IN.bvh] -o OUT.motion ... --report R.json
 
 }  // namespace kuavo::cli

@@ -14,6 +14,8 @@ struct Command {
 
 constexpr Command kCommands[] = {
     {"model", kuavo::cli::run_model, "model [--variant s45|s42] [--mass KG] --json   robot model summary"},
+    {"simulate", kuavo::cli::run_simulate,
+     "simulate --stand SECONDS [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N] --log CSV --summary JSON"},
     {"demo", kuavo::cli::run_demo, "demo [--out DIR]                                 the main job"},
     {"retarget", kuavo::cli::run_retarget, "retarget [IN.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|FILE] --report R.json"},
 };

@@ -1,0 +1,347 @@
+#include "sim/plant.h"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <Simbody.h>
+#include <cstdio>
+#include <cstring>
+
+#include "sim/motor_model.h"
+#include "sim/simbody_model.h"
+
+namespace kuavo::sim {
+namespace {
+
+SimTK::Vec3 to_simtk(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+Vec3 from_simtk(const SimTK::Vec3& v) { return {v[0], v[1], v[2]}; }
+
+// Everything the custom force reads; owned by Plant::Impl, updated between intervals.
+struct ForceInputs {
+  const model::Model* model = nullptr;
+  const SimbodyRobot* robot = nullptr;
+  GroundParams ground = kFloor;
+  bool contact = true;
+  hal::CommandFrame command{};
+  std::array<ContactPointState, model::kNumContactPoints> points{};
+  Push push{};
+  mutable std::uint64_t saturations = 0;
+  // Contact wrench of the last force evaluation: [force; moment about the world origin].
+  mutable Eigen::Matrix<double, 6, 1> contact_wrench = Eigen::Matrix<double, 6, 1>::Zero();
+  mutable bool count_saturations = false;
+};
+
+class RobotForces : public SimTK::Force::Custom::Implementation {
+ public:
+  explicit RobotForces(const ForceInputs* in) : in_(in) {}
+
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>& body_forces,
+                 SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
+    const model::Model& m = *in_->model;
+    const SimbodyRobot& r = *in_->robot;
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const SimTK::MobilizedBody& b = r.body(j + 1);
+      bool saturated = false;
+      const double tau = drive_torque(in_->command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
+                                      m.limits.peak_torque_Nm[j], &saturated);
+      if (saturated && in_->count_saturations) ++in_->saturations;
+      b.applyOneMobilityForce(s, 0, tau, mobility_forces);
+    }
+    in_->contact_wrench.setZero();
+    if (in_->contact) {
+      for (int c = 0; c < model::kNumContactPoints; ++c) {
+        const model::Frame& f = m.frames[c];
+        const SimTK::MobilizedBody& b = r.body(f.body);
+        const SimTK::Vec3 station = to_simtk(f.position_m);
+        const Vec3 p = from_simtk(b.findStationLocationInGround(s, station));
+        const Vec3 v = from_simtk(b.findStationVelocityInGround(s, station));
+        const Vec3 force = contact_force(in_->ground, p, v, in_->points[c]);
+        if (force.z() > 0.0) {
+          b.applyForceToBodyPoint(s, station, to_simtk(force), body_forces);
+          in_->contact_wrench.head<3>() += force;
+          in_->contact_wrench.tail<3>() += p.cross(force);
+        }
+      }
+    }
+    const Push& push = in_->push;
+    const double t = s.getTime();
+    if (push.duration_s > 0.0 && t >= push.start_s && t < push.start_s + push.duration_s) {
+      const SimTK::MobilizedBody& torso = r.body(0);
+      torso.applyForceToBodyPoint(s, torso.getBodyMassCenterStation(s), to_simtk(push.force_N), body_forces);
+    }
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0; }
+
+ private:
+  const ForceInputs* in_;
+};
+
+}  // namespace
+
+bool parse_integrator(const char* text, Integrator& out) {
+  if (text == nullptr) return false;
+  if (!std::strcmp(text, "cvode")) out = Integrator::kCvodeBdf;
+  else if (!std::strcmp(text, "rkm")) out = Integrator::kSimbodyRungeKuttaMerson;
+  else if (!std::strcmp(text, "euler")) out = Integrator::kSemiImplicitEuler;
+  else return false;
+  return true;
+}
+
+const char* to_string(Integrator i) {
+  switch (i) {
+    case Integrator::kCvodeBdf: return "cvode";
+    case Integrator::kSimbodyRungeKuttaMerson: return "rkm";
+    case Integrator::kSemiImplicitEuler: return "euler";
+  }
+  return "unknown";
+}
+
+struct Plant::Impl {
+  const model::Model& model;
+  PlantConfig config;
+  SimbodyRobot robot;
+  ForceInputs inputs;
+  SimTK::State state;
+  PlantTruth truth;
+  std::uint64_t evaluations = 0;
+  Eigen::Matrix<double, 6, 1> contact_impulse = Eigen::Matrix<double, 6, 1>::Zero();
+  char error[200] = "";
+
+  // CVODE over y = Simbody's [q; u].
+  SUNContext sun = nullptr;
+  void* cvode = nullptr;
+  N_Vector y = nullptr;
+  SUNMatrix jac = nullptr;
+  SUNLinearSolver solver = nullptr;
+  bool cvode_ready = false;
+  bool needs_restart = true;
+  std::unique_ptr<SimTK::Integrator> simbody_integrator;
+  std::unique_ptr<SimTK::TimeStepper> stepper;
+
+  Impl(const model::Model& m, const PlantConfig& c) : model(m), config(c), robot(m, c.gravity) {
+    inputs.model = &model;
+    inputs.robot = &robot;
+    inputs.ground = c.ground;
+    inputs.contact = c.contact;
+    SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
+    robot.system().realizeTopology();
+    state = robot.system().getDefaultState();
+  }
+
+  ~Impl() {
+    if (cvode != nullptr) CVodeFree(&cvode);
+    if (solver != nullptr) SUNLinSolFree(solver);
+    if (jac != nullptr) SUNMatDestroy(jac);
+    if (y != nullptr) N_VDestroy(y);
+    if (sun != nullptr) SUNContext_Free(&sun);
+  }
+
+  static int rhs(sunrealtype t, N_Vector yv, N_Vector ydot, void* user) {
+    auto* self = static_cast<Impl*>(user);
+    ++self->evaluations;
+    SimTK::State& s = self->state;
+    s.setTime(t);
+    SimTK::Vector& ys = s.updY();
+    const sunrealtype* in = N_VGetArrayPointer(yv);
+    for (int i = 0; i < ys.size(); ++i) ys[i] = in[i];
+    self->robot.system().realize(s, SimTK::Stage::Acceleration);
+    const SimTK::Vector& d = s.getYDot();
+    sunrealtype* out = N_VGetArrayPointer(ydot);
+    for (int i = 0; i < d.size(); ++i) {
+      if (!std::isfinite(d[i])) return 1;  // recoverable: CVODE retries with a smaller step
+      out[i] = d[i];
+    }
+    // Quadrature states: the contact impulse, integrated to the same tolerance as the motion.
+    for (int i = 0; i < 6; ++i) out[d.size() + i] = self->inputs.contact_wrench[i];
+    return 0;
+  }
+
+  bool start_cvode() {
+    const int n = state.getNY() + 6;  // + contact impulse quadrature
+    if (sun == nullptr && SUNContext_Create(nullptr, &sun) != 0) return fail("SUNContext_Create failed");
+    if (y == nullptr) {
+      y = N_VNew_Serial(n, sun);
+      jac = SUNDenseMatrix(n, n, sun);
+      solver = SUNLinSol_Dense(y, jac, sun);
+      cvode = CVodeCreate(CV_BDF, sun);
+      if (y == nullptr || jac == nullptr || solver == nullptr || cvode == nullptr) return fail("CVODE set-up failed");
+    }
+    sunrealtype* data = N_VGetArrayPointer(y);
+    for (int i = 0; i < state.getNY(); ++i) data[i] = state.getY()[i];
+    for (int i = 0; i < 6; ++i) data[state.getNY() + i] = contact_impulse[i];
+    int rc = cvode_ready ? CVodeReInit(cvode, state.getTime(), y) : CVodeInit(cvode, rhs, state.getTime(), y);
+    if (rc != CV_SUCCESS) return fail("CVodeInit failed");
+    if (!cvode_ready) {
+      CVodeSetUserData(cvode, this);
+      CVodeSStolerances(cvode, config.relative_tolerance, config.absolute_tolerance);
+      CVodeSetLinearSolver(cvode, solver, jac);
+      CVodeSetMaxNumSteps(cvode, 100000);
+      cvode_ready = true;
+    }
+    return true;
+  }
+
+  bool fail(const char* what) {
+    std::snprintf(error, sizeof error, "%s", what);
+    return false;
+  }
+
+  void update_truth() {
+    SimTK::State& s = state;
+    robot.system().realize(s, SimTK::Stage::Acceleration);
+    robot.get_state(s, truth.q, truth.v);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const model::Frame& f = model.frames[c];
+      const SimTK::MobilizedBody& b = robot.body(f.body);
+      const SimTK::Vec3 station = to_simtk(f.position_m);
+      const Vec3 p = from_simtk(b.findStationLocationInGround(s, station));
+      const Vec3 v = from_simtk(b.findStationVelocityInGround(s, station));
+      truth.contact_force_N[c] = inputs.contact ? contact_force(inputs.ground, p, v, inputs.points[c]) : Vec3::Zero();
+    }
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const SimTK::MobilizedBody& b = robot.body(j + 1);
+      truth.joint_torque_Nm[j] =
+          drive_torque(inputs.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
+    }
+    const SimTK::MobilizedBody& base = robot.body(0);
+    const SimTK::Vec3 a = base.getBodyOriginAcceleration(s);
+    const SimTK::Vec3 g(0, 0, config.gravity ? -model::kGravity_m_s2 : 0.0);
+    truth.base_specific_force_m_s2 = from_simtk(~base.getBodyRotation(s) * (a - g));
+    truth.com_m = from_simtk(robot.matter().calcSystemMassCenterLocationInGround(s));
+    const SimTK::SpatialVec h = robot.matter().calcSystemCentralMomentum(s);
+    truth.momentum << h[1][0], h[1][1], h[1][2], h[0][0], h[0][1], h[0][2];
+  }
+
+  void update_contacts() {
+    const SimTK::State& s = state;
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const model::Frame& f = model.frames[c];
+      const SimTK::MobilizedBody& b = robot.body(f.body);
+      const SimTK::Vec3 station = to_simtk(f.position_m);
+      update_contact_point(inputs.ground, from_simtk(b.findStationLocationInGround(s, station)),
+                           from_simtk(b.findStationVelocityInGround(s, station)), inputs.points[c]);
+    }
+  }
+};
+
+Plant::Plant(const model::Model& model, const PlantConfig& config) : impl_(std::make_unique<Impl>(model, config)) {}
+Plant::~Plant() = default;
+
+void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVector& v, double time_s) {
+  Impl& p = *impl_;
+  p.state.setTime(time_s);
+  p.robot.set_state(p.state, q, v);
+  for (auto& c : p.inputs.points) c = ContactPointState{};
+  p.contact_impulse.setZero();
+  p.robot.system().realize(p.state, SimTK::Stage::Velocity);
+  p.update_contacts();
+  if (p.config.integrator == Integrator::kCvodeBdf) {
+    p.needs_restart = true;
+  } else if (p.config.integrator == Integrator::kSemiImplicitEuler) {
+    // nothing to set up
+  } else {
+    p.simbody_integrator = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(p.robot.system());
+    p.simbody_integrator->setAccuracy(p.config.relative_tolerance);
+    p.stepper = std::make_unique<SimTK::TimeStepper>(p.robot.system(), *p.simbody_integrator);
+    p.stepper->initialize(p.state);
+  }
+  p.update_truth();
+}
+
+void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.command = command; }
+void Plant::set_push(const Push& push) { impl_->inputs.push = push; }
+
+PlantError Plant::advance(double dt_s) {
+  Impl& p = *impl_;
+  const double t_end = p.state.getTime() + dt_s;
+  p.inputs.count_saturations = false;
+  if (p.config.integrator == Integrator::kCvodeBdf) {
+    // The command and the contact anchors change between intervals; CVODE's error
+    // control takes those steps in stride, so the multistep history (and its
+    // Jacobian) carries on unless the state was edited from outside.
+    if (p.needs_restart && !p.start_cvode()) return PlantError::kIntegratorFailed;
+    p.needs_restart = false;
+    CVodeSetStopTime(p.cvode, t_end);
+    sunrealtype t = p.state.getTime();
+    const int rc = CVode(p.cvode, t_end, p.y, &t, CV_NORMAL);
+    if (rc < 0) {
+      std::snprintf(p.error, sizeof p.error, "CVODE failed at t = %.6f s (flag %d)", static_cast<double>(t), rc);
+      return PlantError::kIntegratorFailed;
+    }
+    SimTK::Vector& ys = p.state.updY();
+    const sunrealtype* data = N_VGetArrayPointer(p.y);
+    for (int i = 0; i < ys.size(); ++i) ys[i] = data[i];
+    for (int i = 0; i < 6; ++i) p.contact_impulse[i] = data[ys.size() + i];
+    p.state.setTime(t_end);
+  } else if (p.config.integrator == Integrator::kSemiImplicitEuler) {
+    const int n = std::max(1, static_cast<int>(std::lround(dt_s / p.config.euler_substep_s)));
+    const double h = dt_s / n;
+    SimTK::Vector qdot;
+    const double t0 = p.state.getTime();
+    for (int k = 0; k < n; ++k) {
+      p.state.setTime(t0 + k * h);
+      p.robot.system().realize(p.state, SimTK::Stage::Acceleration);
+      ++p.evaluations;
+      p.contact_impulse += h * p.inputs.contact_wrench;
+      const SimTK::Vector udot = p.state.getUDot();
+      p.state.updU() += h * udot;
+      p.robot.matter().multiplyByN(p.state, false, p.state.getU(), qdot);
+      p.state.updQ() += h * qdot;
+    }
+    p.state.setTime(t_end);
+  } else {
+    p.stepper->initialize(p.state);
+    p.stepper->stepTo(t_end);
+    p.state = p.stepper->getState();
+  }
+  // Keep the base quaternion on the unit sphere (CVODE does not know it must be);
+  // it drifts slowly, so project rarely and restart CVODE from the edited state.
+  p.robot.system().realize(p.state, SimTK::Stage::Position);
+  const SimTK::MobilizedBody& base = p.robot.body(0);
+  double quat_norm2 = 0.0;
+  for (int i = 0; i < 4; ++i) quat_norm2 += base.getOneQ(p.state, i) * base.getOneQ(p.state, i);
+  if (std::abs(quat_norm2 - 1.0) > 1e-7 || p.config.integrator == Integrator::kSimbodyRungeKuttaMerson) {
+    p.robot.system().project(p.state, 1e-10);
+    p.needs_restart = true;
+  }
+  for (int i = 0; i < p.state.getNY(); ++i) {
+    if (!std::isfinite(p.state.getY()[i])) {
+      p.fail("non-finite plant state");
+      return PlantError::kNonFiniteState;
+    }
+  }
+  // Count saturation once per interval at its end state (what the drive does now).
+  p.inputs.count_saturations = true;
+  p.robot.system().realize(p.state, SimTK::Stage::Dynamics);
+  p.inputs.count_saturations = false;
+  p.update_contacts();
+  p.update_truth();
+  return PlantError::kOk;
+}
+
+Plant::IntegratorStats Plant::integrator_stats() const {
+  IntegratorStats st;
+  if (impl_->cvode == nullptr) return st;
+  long v = 0;
+  CVodeGetNumSteps(impl_->cvode, &v);
+  st.steps = v;
+  CVodeGetNumJacEvals(impl_->cvode, &v);
+  st.jacobian_evaluations = v;
+  CVodeGetNumLinSolvSetups(impl_->cvode, &v);
+  st.linear_setups = v;
+  CVodeGetNumErrTestFails(impl_->cvode, &v);
+  st.error_test_failures = v;
+  return st;
+}
+
+double Plant::time_s() const { return impl_->state.getTime(); }
+const PlantTruth& Plant::truth() const { return impl_->truth; }
+std::uint64_t Plant::torque_saturations() const { return impl_->inputs.saturations; }
+std::uint64_t Plant::derivative_evaluations() const { return impl_->evaluations; }
+const char* Plant::last_error() const { return impl_->error; }
+Eigen::Matrix<double, 6, 1> Plant::contact_impulse() const { return impl_->contact_impulse; }
+
+}  // namespace kuavo::sim
