@@ -98,6 +98,7 @@ struct DenseQpWorkspace {
   Eigen::Matrix<double, NI, 1> inv_row_norm = Eigen::Matrix<double, NI, 1>::Zero();
   std::array<ConstraintCode, NV> active{};  // equalities as -1 - i, first
   std::array<std::uint8_t, kNumCodes> is_active{};
+  double beta = 0.0;  // R(q, q) of the last added constraint
   int q = 0;
   int num_eq_active = 0;
 };

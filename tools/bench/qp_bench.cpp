@@ -35,13 +35,15 @@ void fill(M& m, std::mt19937_64& rng, double scale = 1.0) {
 
 // WBC-like: well-conditioned weighted-task Hessian, a feasible point inside the constraints,
 // a task pull that activates a moderate number of inequalities (as friction cones and limits do).
+// margin scales the distance from the feasible point to each constraint: 1 gives a heavy
+// case (~half the inequalities active), 4 a typical WBC tick (a handful active).
 template <int NV, int NE, int NI>
-void make_dense(DenseQp<NV, NE, NI>& qp, std::mt19937_64& rng) {
+void make_dense(DenseQp<NV, NE, NI>& qp, std::mt19937_64& rng, double margin) {
   Eigen::Matrix<double, NV + 10, NV> M;
   fill(M, rng);
   qp.H.noalias() = M.transpose() * M / double(NV);
   qp.H.diagonal().array() += 1e-2;
-  fill(qp.g, rng, 3.0);
+  fill(qp.g, rng, 3.0 / (margin * margin));  // the task pull, weaker in the typical case
   Eigen::Matrix<double, NV, 1> x0;
   fill(x0, rng);
   fill(qp.A, rng);
@@ -50,13 +52,13 @@ void make_dense(DenseQp<NV, NE, NI>& qp, std::mt19937_64& rng) {
   if constexpr (NI > 0) {
     for (int i = 0; i < NI; ++i) {
       const double cx = qp.C.row(i).dot(x0);
-      qp.c_lower(i) = cx - unif(rng, 0.5, 3.0);
-      qp.c_upper(i) = cx + unif(rng, 0.5, 3.0);
+      qp.c_lower(i) = cx - margin * unif(rng, 0.5, 3.0);
+      qp.c_upper(i) = cx + margin * unif(rng, 0.5, 3.0);
     }
   }
   for (int j = 0; j < NV; ++j) {
-    qp.x_lower(j) = x0(j) - unif(rng, 0.5, 3.0);
-    qp.x_upper(j) = x0(j) + unif(rng, 0.5, 3.0);
+    qp.x_lower(j) = x0(j) - margin * unif(rng, 0.5, 3.0);
+    qp.x_upper(j) = x0(j) + margin * unif(rng, 0.5, 3.0);
   }
 }
 
@@ -69,10 +71,10 @@ struct DenseBench {
 };
 
 template <int NV, int NE, int NI>
-void dense_solve(benchmark::State& state, bool warm) {
+void dense_solve(benchmark::State& state, bool warm, double margin) {
   static auto b = std::make_unique<DenseBench<NV, NE, NI>>();
   std::mt19937_64 rng(1);
-  make_dense(b->qp, rng);
+  make_dense(b->qp, rng, margin);
   b->g0 = b->qp.g;
   DenseQpSettings settings;
   settings.warm_start = warm;
@@ -93,15 +95,21 @@ void dense_solve(benchmark::State& state, bool warm) {
   state.counters["active_ineq"] = double(active) / double(tick);
 }
 
-void BM_DenseWbc82_Warm(benchmark::State& s) { dense_solve<82, 32, 92>(s, true); }
-void BM_DenseWbc82_Cold(benchmark::State& s) { dense_solve<82, 32, 92>(s, false); }
-void BM_DenseWbc56_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true); }
-void BM_DenseWbc56_Cold(benchmark::State& s) { dense_solve<56, 18, 60>(s, false); }
-void BM_DenseIk34Bounds_Warm(benchmark::State& s) { dense_solve<34, 0, 0>(s, true); }
-BENCHMARK(BM_DenseWbc82_Warm)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_DenseWbc82_Cold)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_DenseWbc56_Warm)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_DenseWbc56_Cold)->Unit(benchmark::kMicrosecond);
+void BM_DenseWbc82_Typical_Warm(benchmark::State& s) { dense_solve<82, 32, 92>(s, true, 4.0); }
+void BM_DenseWbc82_Typical_Cold(benchmark::State& s) { dense_solve<82, 32, 92>(s, false, 4.0); }
+void BM_DenseWbc82_Heavy_Warm(benchmark::State& s) { dense_solve<82, 32, 92>(s, true, 1.0); }
+void BM_DenseWbc82_Heavy_Cold(benchmark::State& s) { dense_solve<82, 32, 92>(s, false, 1.0); }
+void BM_DenseWbc56_Typical_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true, 4.0); }
+void BM_DenseWbc56_Typical_Cold(benchmark::State& s) { dense_solve<56, 18, 60>(s, false, 4.0); }
+void BM_DenseWbc56_Heavy_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true, 1.0); }
+void BM_DenseIk34Bounds_Warm(benchmark::State& s) { dense_solve<34, 0, 0>(s, true, 1.0); }
+BENCHMARK(BM_DenseWbc82_Typical_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc82_Typical_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc82_Heavy_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc82_Heavy_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc56_Typical_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc56_Typical_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc56_Heavy_Warm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseIk34Bounds_Warm)->Unit(benchmark::kMicrosecond);
 
 constexpr int kNx = 38, kNu = 50, kN = 60, kNc = 12, kNg = 20;
