@@ -1,0 +1,227 @@
+// The estimator on a kinematically exact synthetic robot (synthetic_stance.h):
+// convergence to a known base velocity with the feet fixed, the output
+// conventions, bad-input handling and zero heap use in the step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "controllers/estimator/estimator.h"
+#include "tests/estimator/synthetic_stance.h"
+#include "tests/support/alloc_trap.h"
+
+namespace kuavo::test {
+namespace {
+
+using estimator::ContactFlags;
+using estimator::EstimateOutput;
+using estimator::EstimatorStatus;
+
+constexpr double kDt_s = 0.002;
+constexpr ContactFlags kAllContact = {true, true, true, true, true, true, true, true};
+
+// Static storage, as the firmware keeps them.
+model::Model g_robot;
+dynamics::Data g_data;
+estimator::EstimatorState g_state;
+
+const model::Model& robot() {
+  static const bool built = model::build_model(model::Variant::kS45, 55.0, g_robot) == model::ModelError::kOk;
+  EXPECT_TRUE(built);
+  return g_robot;
+}
+
+dynamics::ConfigVector yawed_stance(double yaw_rad) {
+  dynamics::ConfigVector q = flat_stance(robot(), g_data);
+  const Eigen::Quaterniond r(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()));
+  q.segment<4>(3) = r.coeffs();
+  return q;
+}
+
+bool output_finite(const EstimateOutput& out) {
+  return out.q.allFinite() && out.v.allFinite() && out.base_velocity_world_m_s.allFinite() &&
+         std::isfinite(out.innovation_norm) && std::isfinite(out.covariance_trace);
+}
+
+// The base translates at a constant world velocity while all 8 corners stay on
+// the ground: the filter starts at rest and must find the velocity.
+void run_constant_velocity(double yaw_rad, const Eigen::Vector3d& v_true_m_s) {
+  const dynamics::ConfigVector q0 = yawed_stance(yaw_rad);
+  const CornerArray target = corners(robot(), g_data, q0);
+  const Eigen::Matrix3d rotation = Eigen::Quaterniond(q0.segment<4>(3)).toRotationMatrix();
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, frame_from(q0, v, Eigen::Vector3d::Zero(), 0),
+                                       q0.head<2>()),
+            EstimatorStatus::kOk);
+
+  dynamics::ConfigVector q = q0;
+  EstimateOutput out;
+  const int steps = 1000;  // 2 s, 10 filter time constants
+  double error_at_half_s = 0.0;
+  for (int n = 1; n <= steps; ++n) {
+    q.head<3>() = q0.head<3>() + v_true_m_s * (n * kDt_s);
+    ASSERT_LT(solve_legs(robot(), g_data, q, target), 1e-9);
+    v.head<3>() = rotation.transpose() * v_true_m_s;
+    v.segment<12>(6) = leg_rates(robot(), g_data, q, v_true_m_s);
+    const hal::SensorFrame f = frame_from(q, v, Eigen::Vector3d::Zero(), n * 2'000'000);
+    estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
+    ASSERT_EQ(out.status, EstimatorStatus::kOk) << estimator::to_string(out.status);
+    if (n == 250) error_at_half_s = (out.base_velocity_world_m_s - v_true_m_s).norm();
+  }
+  const double v_error = (out.base_velocity_world_m_s - v_true_m_s).norm();
+  const Eigen::Vector3d p_error = out.q.head<3>() - q.head<3>();
+  std::printf("yaw %.2f: |v err| 0.5 s %.2e, 2 s %.2e m/s; position err xy %.2e z %.2e m\n", yaw_rad,
+              error_at_half_s, v_error, p_error.head<2>().norm(), std::abs(p_error.z()));
+  // Measured: 7e-5 m/s after 0.5 s, 1e-7 m/s after 2 s; xy 1.3e-4 m, z 2e-7 m.
+  EXPECT_LT(error_at_half_s, 1e-3);              // 2 % of the true speed after 0.5 s
+  EXPECT_LT(v_error, 1e-5);                      // converged
+  EXPECT_LT(std::abs(p_error.z()), 1e-5);        // height is observed through the stance heights
+  EXPECT_LT(p_error.head<2>().norm(), 1e-3);     // xy only through the integrated velocity
+  // Output conventions: v in base axes, q carries the IMU orientation and the joints.
+  EXPECT_LT((out.v.head<3>() - rotation.transpose() * v_true_m_s).norm(), 1e-3);
+  EXPECT_LT((out.q.segment<4>(3) - q.segment<4>(3)).norm(), 1e-12);
+  EXPECT_LT((out.q.tail<model::kNumJoints>() - q.tail<model::kNumJoints>()).norm(), 1e-12);
+  EXPECT_LT(out.innovation_norm, 0.01);
+  for (int i = 0; i < model::kNumContactPoints; ++i) {
+    EXPECT_LT((g_state.x.segment<3>(estimator::point_index(i, 0)) - target[i]).norm(), 1e-3) << "corner " << i;
+  }
+}
+
+TEST(EstimatorSynthetic, ConvergesToConstantVelocityWithFeetFixed) {
+  run_constant_velocity(0.0, Eigen::Vector3d(0.05, 0.02, -0.02));
+}
+
+TEST(EstimatorSynthetic, YawedBaseReportsVelocityInBaseAxes) {
+  run_constant_velocity(0.6, Eigen::Vector3d(-0.03, 0.04, 0.015));
+}
+
+TEST(EstimatorSynthetic, StandingStillDoesNotDrift) {
+  const dynamics::ConfigVector q0 = yawed_stance(0.0);
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  const hal::SensorFrame f = frame_from(q0, v, Eigen::Vector3d::Zero(), 0);
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, f, q0.head<2>()), EstimatorStatus::kOk);
+  EstimateOutput out;
+  for (int n = 0; n < 5000; ++n) estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kOk);
+  EXPECT_LT((out.q.head<3>() - q0.head<3>()).norm(), 1e-9);
+  EXPECT_LT(out.base_velocity_world_m_s.norm(), 1e-9);
+}
+
+TEST(EstimatorBadInput, GarbageImuIsRejectedAndHeld) {
+  const dynamics::ConfigVector q0 = yawed_stance(0.0);
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  const hal::SensorFrame good = frame_from(q0, v, Eigen::Vector3d::Zero(), 0);
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, good, q0.head<2>()), EstimatorStatus::kOk);
+  EstimateOutput out;
+  for (int n = 0; n < 50; ++n) estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+  const double nan = std::nan("");
+  const double inf = std::numeric_limits<double>::infinity();
+  std::array<hal::SensorFrame, 7> bad;
+  bad.fill(good);
+  bad[0].imu.acceleration_m_s2[2] = nan;
+  bad[1].imu.orientation_xyzw[3] = nan;
+  bad[2].imu.angular_rate_rad_s[0] = inf;
+  bad[3].imu.valid = false;
+  bad[4].imu.orientation_xyzw = {0.0, 0.0, 0.0, 2.0};  // not a rotation
+  bad[5].imu.acceleration_m_s2 = {0.0, 0.0, 1e6};      // beyond the 10 g range
+  bad[6].imu.orientation_xyzw = {nan, nan, nan, nan};
+  for (const hal::SensorFrame& f : bad) {
+    for (int n = 0; n < 100; ++n) {
+      estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
+      ASSERT_EQ(out.status, EstimatorStatus::kImuRejected);
+      ASSERT_TRUE(output_finite(out));
+    }
+    // Held values are the last good ones: the estimate does not move.
+    EXPECT_LT((out.q.head<3>() - q0.head<3>()).norm(), 1e-6);
+    EXPECT_LT(out.base_velocity_world_m_s.norm(), 1e-6);
+  }
+  EXPECT_EQ(g_state.imu_rejects, 700u);
+  estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kOk);
+  EXPECT_STRNE(estimator::to_string(EstimatorStatus::kImuRejected), estimator::to_string(EstimatorStatus::kOk));
+}
+
+TEST(EstimatorBadInput, JointsDtConfigAndStartUp) {
+  const dynamics::ConfigVector q0 = yawed_stance(0.0);
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  const hal::SensorFrame good = frame_from(q0, v, Eigen::Vector3d::Zero(), 0);
+  EstimateOutput out;
+
+  // Before any reset, a garbage IMU leaves the estimator uninitialised, output finite.
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  hal::SensorFrame bad_imu = good;
+  bad_imu.imu.acceleration_m_s2[0] = std::nan("");
+  estimator::estimator_step_rt(robot(), g_state, bad_imu, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kNotInitialized);
+  EXPECT_TRUE(output_finite(out));
+  // The first usable sample resets at the origin with the base over the feet.
+  estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kOk);
+  EXPECT_NEAR(out.q[2], q0[2], 1e-9);
+
+  hal::SensorFrame bad_joint = good;
+  bad_joint.joints[3].position_rad = std::nan("");
+  estimator::estimator_step_rt(robot(), g_state, bad_joint, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kJointsRejected);
+  EXPECT_TRUE(output_finite(out));
+  bad_joint = good;
+  bad_joint.joints[20].valid = false;
+  estimator::estimator_step_rt(robot(), g_state, bad_joint, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kJointsRejected);
+
+  for (double dt_s : {std::nan(""), -1.0, 0.0, 5.0, double{INFINITY}}) {
+    estimator::estimator_step_rt(robot(), g_state, good, kAllContact, dt_s, out);
+    EXPECT_EQ(out.status, EstimatorStatus::kDtClamped) << dt_s;
+    EXPECT_TRUE(output_finite(out));
+  }
+
+  estimator::EstimatorConfig config;
+  config.foot_sensor_noise_velocity = -1.0;
+  EXPECT_FALSE(estimator::estimator_init(config, g_state));
+  EXPECT_EQ(g_state.config.foot_sensor_noise_velocity, estimator::EstimatorConfig{}.foot_sensor_noise_velocity);
+  config = {};
+  config.covariance_trace_limit = 1e-9;  // watchdog trips
+  ASSERT_TRUE(estimator::estimator_init(config, g_state));
+  estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+  EXPECT_EQ(out.status, EstimatorStatus::kDiverged);
+}
+
+TEST(EstimatorRealTime, NoHeapOverTenThousandSteps) {
+  // A precomputed moving stance, varied contact flags and some rejected samples.
+  static std::array<hal::SensorFrame, 32> frames;
+  const dynamics::ConfigVector q0 = yawed_stance(0.2);
+  const CornerArray target = corners(robot(), g_data, q0);
+  const Eigen::Vector3d v_true(0.04, 0.0, 0.01);
+  dynamics::ConfigVector q = q0;
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  for (int n = 0; n < 32; ++n) {
+    q.head<3>() = q0.head<3>() + v_true * (n * kDt_s);
+    solve_legs(robot(), g_data, q, target);
+    v.segment<12>(6) = leg_rates(robot(), g_data, q, v_true);
+    frames[n] = frame_from(q, v, Eigen::Vector3d::Zero(), n);
+  }
+  frames[7].imu.acceleration_m_s2[1] = std::nan("");
+  frames[13].joints[0].valid = false;
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, frames[0], q0.head<2>()), EstimatorStatus::kOk);
+  EstimateOutput out;
+  double checksum = 0.0;
+  {
+    AllocTrap trap;
+    for (int n = 0; n < 10'000; ++n) {
+      ContactFlags contact = kAllContact;
+      if ((n / 250) % 2 == 1) contact = {true, true, true, true, false, false, false, false};
+      estimator::estimator_step_rt(robot(), g_state, frames[n % 32], contact, kDt_s, out);
+      checksum += out.q[0] + out.v[0];
+    }
+    EXPECT_EQ(trap.count(), 0u) << "first allocation: " << trap.first_size_bytes() << " bytes";
+  }
+  EXPECT_TRUE(std::isfinite(checksum));
+}
+
+}  // namespace
+}  // namespace kuavo::test
