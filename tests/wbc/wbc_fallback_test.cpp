@@ -1,0 +1,158 @@
+// The fallback is defined: a failed tick repeats the last good command for hold_ticks, then
+// switches to gravity-compensated PD; bad input never reaches the drives as NaN; a good
+// tick brings the QP back.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "tests/wbc/wbc_fixture.h"
+
+namespace kuavo::test {
+namespace {
+
+struct Rig {
+  wbc::WbcConfig cfg;
+  dynamics::ConfigVector q = bent_standing_configuration();
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  wbc::WbcReference ref;
+  hal::CommandFrame command;
+};
+
+Rig& rig(const model::Model& m = wbc_robot()) {
+  static Rig r;
+  r.cfg = wbc::WbcConfig{};
+  wbc::wbc_init(m, r.cfg, wbc_workspace());
+  wbc::wbc_reference_hold_state(m, wbc_workspace(), r.q, 0, r.ref);
+  return r;
+}
+
+void expect_finite(const hal::CommandFrame& c) {
+  for (const auto& j : c.joints) {
+    EXPECT_TRUE(std::isfinite(j.torque_ff_Nm) && std::isfinite(j.position_ref_rad) &&
+                std::isfinite(j.velocity_ref_rad_s) && std::isfinite(j.kp_Nm_per_rad) && std::isfinite(j.kd_Nm_s_per_rad));
+  }
+}
+
+TEST(WbcFallback, NonFiniteReferenceWithoutHistoryGoesStraightToGravityPd) {
+  Rig& r = rig();
+  r.ref.com_position_m.x() = std::numeric_limits<double>::quiet_NaN();
+  const auto status = wbc::wbc_step_rt(wbc_robot(), r.cfg, wbc_workspace(), r.q, r.v, r.ref, 0, r.command);
+  EXPECT_EQ(status, wbc::WbcStatus::kFallbackPd);
+  EXPECT_EQ(wbc_workspace().diagnostics.failure, wbc::WbcFailure::kReferenceInvalid);
+  expect_finite(r.command);
+  // Holds the measured pose with the standing gains; the feed-forward carries the weight
+  // (knee torque has the gravity sign: positive on this model with the knees bent).
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    EXPECT_EQ(r.command.joints[j].position_ref_rad, r.q[7 + j]);
+    EXPECT_EQ(r.command.joints[j].velocity_ref_rad_s, 0.0);
+  }
+  EXPECT_EQ(r.command.joints[0].kp_Nm_per_rad, r.cfg.fallback_leg_kp[0]);
+  EXPECT_GT(std::abs(r.command.joints[3].torque_ff_Nm), 5.0);
+}
+
+TEST(WbcFallback, StaleReferenceHoldsLastCommandThenFallsBackThenRecovers) {
+  Rig& r = rig();
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  ASSERT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, 0, r.command), wbc::WbcStatus::kOk);
+  const hal::CommandFrame good = r.command;
+  const hal::TimeNs stale_ns = r.cfg.max_reference_age_ns + 1;
+  for (int tick = 1; tick <= r.cfg.hold_ticks; ++tick) {
+    ASSERT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, stale_ns, r.command),
+              wbc::WbcStatus::kHoldingLastCommand) << tick;
+    EXPECT_EQ(ws.diagnostics.failure, wbc::WbcFailure::kReferenceStale);
+    EXPECT_EQ(r.command.joints[3].torque_ff_Nm, good.joints[3].torque_ff_Nm);
+    EXPECT_EQ(r.command.stamp_ns, stale_ns);
+  }
+  EXPECT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, stale_ns, r.command), wbc::WbcStatus::kFallbackPd);
+  expect_finite(r.command);
+  // The fallback holds the last good reference pose.
+  for (int j = 0; j < model::kNumJoints; ++j) EXPECT_EQ(r.command.joints[j].position_ref_rad, good.joints[j].position_ref_rad);
+  r.ref.stamp_ns = stale_ns;  // fresh again
+  EXPECT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, stale_ns, r.command), wbc::WbcStatus::kOk);
+  EXPECT_EQ(ws.diagnostics.failed_ticks, 0);
+}
+
+TEST(WbcFallback, InfeasibleQpIsReportedAndFallsBack) {
+  // Joints that may not accelerate and torque limits far below what gravity needs: no
+  // (q̈, f) satisfies both. (Weak torques alone are feasible: the robot may fall freely.)
+  static model::Model weak;
+  weak = wbc_robot();
+  weak.limits.torque_Nm.setConstant(0.5);
+  Rig& r = rig(weak);
+  r.cfg.max_joint_acceleration_rad_s2 = 1e-9;
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const auto status = wbc::wbc_step_rt(weak, r.cfg, ws, r.q, r.v, r.ref, 0, r.command);
+  EXPECT_EQ(status, wbc::WbcStatus::kFallbackPd);
+  EXPECT_EQ(ws.diagnostics.failure, wbc::WbcFailure::kQpFailed);
+  EXPECT_NE(ws.diagnostics.qp_status, qp::QpStatus::kSolved);
+  std::printf("infeasible QP: status %s after %d iterations\n", qp::to_string(ws.diagnostics.qp_status),
+              ws.diagnostics.qp_iterations);
+  expect_finite(r.command);
+  for (const auto& j : r.command.joints) EXPECT_LE(std::abs(j.torque_ff_Nm), 0.5 + 1e-12);
+}
+
+TEST(WbcFallback, InfeasibleReferenceAfterGoodTicksHoldsThenFallsBack) {
+  // All points "in contact" but the reference asks the torso to be 1.5 rad pitched with a
+  // huge CoM acceleration: the QP is feasible (tasks are soft) so this must stay kOk ...
+  Rig& r = rig();
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  ASSERT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, 0, r.command), wbc::WbcStatus::kOk);
+  r.ref.base_euler_zyx_rad[1] = 1.5;
+  r.ref.momentum_rate[2] = 1e5;
+  const auto soft = wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, 0, r.command);
+  EXPECT_EQ(soft, wbc::WbcStatus::kOk);
+  expect_finite(r.command);
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    EXPECT_LE(std::abs(ws.diagnostics.torque_Nm[j]), m.limits.torque_Nm[j] + 1e-6);
+  }
+  // ... while an infinite one is refused and the last good command is held.
+  r.ref.momentum_rate[2] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(wbc::wbc_step_rt(m, r.cfg, ws, r.q, r.v, r.ref, 0, r.command), wbc::WbcStatus::kHoldingLastCommand);
+  EXPECT_EQ(ws.diagnostics.failure, wbc::WbcFailure::kReferenceInvalid);
+  expect_finite(r.command);
+}
+
+TEST(WbcFallback, IterationCapIsAFailure) {
+  Rig& r = rig();
+  r.cfg.qp_max_iterations = 1;
+  wbc::wbc_init(wbc_robot(), r.cfg, wbc_workspace());
+  // A moving state needs several working-set changes.
+  dynamics::VelocityVector v = r.v;
+  v.setConstant(0.5);
+  for (int c = 0; c < 4; ++c) r.ref.in_contact[c] = false;
+  const auto status = wbc::wbc_step_rt(wbc_robot(), r.cfg, wbc_workspace(), r.q, v, r.ref, 0, r.command);
+  EXPECT_EQ(wbc_workspace().diagnostics.qp_status, qp::QpStatus::kMaxIterations);
+  EXPECT_EQ(status, wbc::WbcStatus::kFallbackPd);
+  expect_finite(r.command);
+}
+
+TEST(WbcFallback, NonFiniteStateCommandsDamping) {
+  Rig& r = rig();
+  dynamics::VelocityVector v = r.v;
+  v[10] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(wbc::wbc_step_rt(wbc_robot(), r.cfg, wbc_workspace(), r.q, v, r.ref, 0, r.command), wbc::WbcStatus::kDamping);
+  for (const auto& j : r.command.joints) {
+    EXPECT_EQ(j.mode, hal::JointMode::kDamping);
+    EXPECT_EQ(j.torque_ff_Nm, 0.0);
+    EXPECT_EQ(j.kd_Nm_s_per_rad, r.cfg.damping_kd);
+  }
+}
+
+TEST(WbcConfig, DefaultsAreValidAndBadValuesAreNamed) {
+  wbc::WbcConfig c;
+  EXPECT_EQ(wbc::wbc_validate_config(c), nullptr);
+  c.weight_contact_force = 0.0;
+  EXPECT_NE(wbc::wbc_validate_config(c), nullptr);
+  c = wbc::WbcConfig{};
+  c.friction_coefficient = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(wbc::wbc_validate_config(c), nullptr);
+  EXPECT_STREQ(wbc::to_string(wbc::WbcStatus::kFallbackPd), "fallback_pd");
+  EXPECT_EQ(static_cast<int>(wbc::WbcStatus::kDamping), 3);  // stable numbers
+  EXPECT_EQ(static_cast<int>(wbc::WbcFailure::kStateInvalid), 5);
+}
+
+}  // namespace
+}  // namespace kuavo::test
