@@ -84,6 +84,34 @@ inline dynamics::ConfigVector flat_stance(const model::Model& robot, dynamics::D
   return q;
 }
 
+// Left leg only: the left corners (0..3) on target, the right leg left as it is.
+inline double solve_left_leg(const model::Model& robot, dynamics::Data& data, dynamics::ConfigVector& q,
+                             const CornerArray& target) {
+  LegJacobian j;
+  Eigen::Matrix<double, 12, 1> r;
+  for (int iter = 0; iter < 30; ++iter) {
+    dynamics::forward_kinematics(robot, data, q);
+    for (int i = 0; i < 4; ++i) r.segment<3>(3 * i) = dynamics::frame_position(robot, data, i) - target[i];
+    if (r.norm() < 1e-13) break;
+    leg_jacobian(robot, data, j);
+    const Eigen::Matrix<double, 12, 6> jl = j.topLeftCorner<12, 6>();
+    q.segment<6>(7) -= (jl.transpose() * jl).ldlt().solve(jl.transpose() * r);
+  }
+  return r.norm();
+}
+
+// Left-leg rates that keep the left corners still while the base translates at v_world.
+inline Eigen::Matrix<double, 6, 1> left_leg_rates(const model::Model& robot, dynamics::Data& data,
+                                                  const dynamics::ConfigVector& q, const Eigen::Vector3d& v_world_m_s) {
+  dynamics::forward_kinematics(robot, data, q);
+  LegJacobian j;
+  leg_jacobian(robot, data, j);
+  const Eigen::Matrix<double, 12, 6> jl = j.topLeftCorner<12, 6>();
+  Eigen::Matrix<double, 12, 1> rhs;
+  for (int i = 0; i < 4; ++i) rhs.segment<3>(3 * i) = -v_world_m_s;
+  return (jl.transpose() * jl).ldlt().solve(jl.transpose() * rhs);
+}
+
 // Sensor frame for a robot with identity orientation and no rotation.
 inline hal::SensorFrame frame_from(const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                                    const Eigen::Vector3d& accel_world_m_s2, hal::TimeNs stamp_ns) {
