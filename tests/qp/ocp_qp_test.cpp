@@ -180,15 +180,44 @@ TEST(OcpQp, IterationCapIsHonoured) {
   for (int k = 0; k <= 5; ++k) EXPECT_TRUE(f->sol.x[k].allFinite());
 }
 
+// The MPC re-solves a slightly changed problem every tick, starting from the last solution.
+TEST(OcpQp, WarmStartReachesSameSolutionInFewerIterations) {
+  auto f = std::make_unique<OcpFixture<38, 50, 12, 12, 20>>();
+  auto cold = std::make_unique<OcpFixture<38, 50, 12, 12, 20>>();
+  std::mt19937_64 rng(31);
+  int cold_iterations = 0, warm_iterations = 0;
+  for (int n = 0; n < 4; ++n) {
+    make_random_ocp(f->qp, rng, 12);
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    for (int k = 0; k <= 12; ++k) f->qp.stages[k].q *= 1.01;
+    cold->qp = f->qp;
+    ASSERT_EQ(solve_ocp_qp(cold->qp, OcpSettings{}, cold->ws, cold->sol), QpStatus::kSolved);
+    OcpSettings warm;
+    warm.warm_start = true;
+    ASSERT_EQ(solve_ocp_qp(f->qp, warm, f->ws, f->sol), QpStatus::kSolved);
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
+    // Both stop at the interior-point tolerance, so they agree to about √(complementarity).
+    for (int k = 0; k < 12; ++k) {
+      EXPECT_LE((f->sol.u[k] - cold->sol.u[k]).cwiseAbs().maxCoeff(), 1e-4 * (1.0 + cold->sol.u[k].cwiseAbs().maxCoeff()));
+    }
+    cold_iterations += cold->sol.iterations;
+    warm_iterations += f->sol.iterations;
+  }
+  EXPECT_LT(warm_iterations, cold_iterations);
+}
+
 TEST(OcpQp, SolveDoesNotAllocateAtMpcSize) {
   auto f = std::make_unique<OcpFixture<38, 50, 60, 12, 20>>();
   std::mt19937_64 rng(30);
   make_random_ocp(f->qp, rng, 60);
   OcpSettings settings;
   settings.max_iterations = 3;
+  OcpSettings warm = settings;
+  warm.warm_start = true;
   {
     kuavo::test::AllocTrap trap;
     solve_ocp_qp(f->qp, settings, f->ws, f->sol);
+    solve_ocp_qp(f->qp, warm, f->ws, f->sol);
     EXPECT_EQ(trap.count(), 0u) << trap.first_size_bytes();
   }
   EXPECT_EQ(f->sol.iterations, 3);
