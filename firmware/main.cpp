@@ -1,0 +1,198 @@
+// kuavo_fw: the image for the Kuavo 4Pro's control computer. Start-up
+// (configuration, real-time setup, buses) happens here, before real time;
+// the cycle itself lives in the kuavo_firmware library so the tests run it.
+//
+// Exit codes: 0 ok; 1 runtime failure (CAN/serial cannot be opened, real time
+// refused under --require-rt); 2 bad usage or configuration (nothing sent).
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "controllers/model/model.h"
+#include "drivers/bus/open_buses.h"
+#include "drivers/config/drivers_config_json.h"
+#include "drivers/imu/serial_port.h"
+#include "firmware/control_cycle.h"
+#include "firmware/robot_io.h"
+#include "rtos_shim/periodic_task.h"
+
+namespace fw = kuavo::firmware;
+namespace d = kuavo::drivers;
+namespace hal = kuavo::hal;
+namespace rtos = kuavo::rtos;
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: kuavo_fw [--config FILE] [--check] [--require-rt] [--stand]\n"
+    "  --config FILE  drivers configuration (JSON overlay on the built-in defaults)\n"
+    "  --check        validate the configuration, print the bus plan and loads, exit\n"
+    "  --require-rt   refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
+    "  --stand        request stand-up once the self-check has passed\n"
+    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage or configuration\n"
+    "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
+
+std::atomic<bool> g_estop{false};
+void on_signal(int) { g_estop.store(true); }
+
+void print_plan(const d::DriversConfig& c, const d::BusLoadReport& r) {
+  std::printf("bus plan: %zu buses, %zu devices\n", c.plan.buses.size(), c.plan.devices.size());
+  for (std::size_t b = 0; b < c.plan.buses.size(); ++b) {
+    const d::BusConfig& bus = c.plan.buses[b];
+    int ruiwo = 0, drives = 0;
+    for (const d::DeviceConfig& dev : c.plan.devices) {
+      if (dev.bus == static_cast<int>(b)) (dev.kind == d::DeviceKind::kRuiwoMotor ? ruiwo : drives)++;
+    }
+    std::printf("  %-6s %5.0f kbit/s %4.0f Hz  %2d Ruiwo  %2d CiA 402  load %5.1f %%  %6.0f frames/s\n",
+                bus.interface.c_str(), bus.bitrate_bps / 1e3, bus.cycle_rate_hz, ruiwo, drives,
+                100.0 * r.load[b], r.frames_per_s[b]);
+  }
+  std::printf("imu: %s at %d baud\n", c.imu_device.c_str(), c.imu_baud);
+}
+
+// The periodic body: drivers receive -> firmware cycle -> drivers send.
+struct FirmwareTask {
+  fw::Firmware* firmware;
+  fw::RobotIo* io;
+  bool stand = false;
+  hal::TimeNs estop_since_ns = -1;
+  std::atomic<bool>* done;
+  hal::CommandFrame command{};
+
+  void operator()(const rtos::CycleInfo& info) noexcept {
+    const hal::TimeNs now = info.wake_ns;
+    // Kernel receive stamps are not enabled until rtos_shim offers the
+    // CLOCK_REALTIME -> CLOCK_MONOTONIC offset; samples carry the cycle time.
+    fw::robot_receive_rt(*io, info.cycle, now, 0);
+    fw::CycleInputs in;
+    in.estop = g_estop.load(std::memory_order_relaxed);
+    in.watch.bus = io->status;
+    if (stand && firmware->mode.mode == fw::Mode::kDamping && firmware->mode.latched == fw::Fault::kNone) {
+      in.request = fw::Request::kStandUp;
+      stand = false;
+    }
+    fw::StandingController controller{firmware};
+    fw::firmware_cycle_rt(*firmware, io->sensors, in, now, controller, command);
+    fw::robot_send_rt(*io, info.cycle, command, now);
+    if (in.estop && estop_since_ns < 0) estop_since_ns = now;
+    // Keep sending damping for 0.5 s after the e-stop, then let main exit.
+    if (estop_since_ns >= 0 && now - estop_since_ns > 500'000'000) done->store(true);
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string config_path;
+  bool check = false, require_rt = false, stand = false;
+  for (int i = 1; i < argc; ++i) {
+    const char* a = argv[i];
+    if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
+    else if (!std::strcmp(a, "--check")) check = true;
+    else if (!std::strcmp(a, "--require-rt")) require_rt = true;
+    else if (!std::strcmp(a, "--stand")) stand = true;
+    else {
+      std::fprintf(stderr, "kuavo_fw: unknown argument '%s'\n%s", a, kUsage);
+      return 2;
+    }
+  }
+
+  // --- Configuration (before real time; nothing is sent on failure) ---
+  static kuavo::model::Model model;
+  if (kuavo::model::build_model(kuavo::model::Variant::kS45, kuavo::model::kDefaultTotalMass_kg, model) !=
+      kuavo::model::ModelError::kOk) {
+    std::fprintf(stderr, "kuavo_fw: model: cannot build\n");
+    return 2;
+  }
+  d::DriversConfig drivers;
+  d::BusLoadReport loads;
+  std::string msg;
+  const d::DriverError derr = config_path.empty()
+                                  ? (drivers = d::default_drivers_config(model), d::validate_drivers_config(drivers, loads, msg))
+                                  : d::load_drivers_config(config_path, model, drivers, loads, msg);
+  if (derr != d::DriverError::kOk) {
+    std::fprintf(stderr, "kuavo_fw: configuration %s: %s (%s)\n", config_path.empty() ? "(defaults)" : config_path.c_str(),
+                 msg.c_str(), d::to_string(derr));
+    return 2;
+  }
+  const fw::FirmwareConfig fw_config{};
+  if (!fw::validate_firmware_config(fw_config, msg)) {
+    std::fprintf(stderr, "kuavo_fw: firmware settings: %s\n", msg.c_str());
+    return 2;
+  }
+  if (check) {
+    print_plan(drivers, loads);
+    std::printf("configuration ok\n");
+    return 0;
+  }
+
+  // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
+  rtos::RtConfig rt;
+  rt.fifo_priority = fw_config.fifo_priority;
+  rt.cpu = fw_config.cpu;
+  rt.lock_memory = true;
+  rt.on_failure = require_rt ? rtos::RtFailurePolicy::kRequire : rtos::RtFailurePolicy::kBestEffort;
+  rtos::RtStatus rt_status;
+  std::thread([&] { rt_status = rtos::apply_realtime_to_this_thread(rt); }).join();
+  if (!rt_status.ok()) {
+    std::fprintf(stderr, "kuavo_fw: real-time setup: %s\n", rt_status.describe().c_str());
+    if (require_rt) {
+      std::fprintf(stderr, "kuavo_fw: --require-rt: refusing to run\n");
+      return 1;
+    }
+    std::fprintf(stderr, "kuavo_fw: continuing without full real time (desktop)\n");
+  }
+
+  // --- Buses and IMU ---
+  static fw::RobotIo io;
+  if (!fw::build_robot_io(drivers, fw_config.ruiwo_divider, io, msg)) {
+    std::fprintf(stderr, "kuavo_fw: configuration: %s\n", msg.c_str());
+    return 2;
+  }
+  std::vector<d::CanPort> ports;
+  if (d::open_buses(drivers.plan, ports, msg) != d::DriverError::kOk) {
+    std::fprintf(stderr, "kuavo_fw: %s\n", msg.c_str());
+    return 1;
+  }
+  if (d::open_serial_port(drivers.imu_device, drivers.imu_baud, io.imu_fd, msg) != d::DriverError::kOk) {
+    std::fprintf(stderr, "kuavo_fw: %s\n", msg.c_str());
+    d::close_buses(ports);
+    return 1;
+  }
+  io.ports = ports;
+
+  // --- Run ---
+  static fw::LogSink log;
+  static fw::Firmware firmware;
+  fw::firmware_init(firmware, model, fw_config, &log);
+  fw::LogWriter writer;
+  writer.start(log, stderr);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::atomic<bool> done{false};
+  static FirmwareTask task{&firmware, &io, stand, -1, &done};
+  fw::start_devices(io, rtos::now_ns());
+  rtos::PeriodicTask periodic;
+  rtos::PeriodicConfig pc;
+  pc.period_ns = fw_config.control_period_ns;
+  pc.rt = rt;
+  const rtos::RtStatus s = periodic.start(pc, task);
+  if (!s.ok() && require_rt) {
+    std::fprintf(stderr, "kuavo_fw: control task: %s\n", s.describe().c_str());
+    d::close_buses(ports);
+    return 1;
+  }
+  while (!done.load() && !periodic.finished()) rtos::sleep_until_ns_rt(rtos::now_ns() + 50'000'000);
+  periodic.request_stop();
+  periodic.join();
+  writer.stop();
+  d::close_buses(ports);
+  return 0;
+}

@@ -1,0 +1,167 @@
+#include "firmware/robot_io.h"
+
+#include "drivers/cycle/canopen_io.h"
+#include "drivers/cycle/imu_io.h"
+#include "drivers/cycle/ruiwo_io.h"
+
+namespace kuavo::firmware {
+
+namespace d = drivers;
+
+namespace {
+
+constexpr int kLegFirst[2] = {model::kLeftLegFirst, model::kRightLegFirst};
+
+bool is_shoulder(int slot) { return slot == model::kLeftArmFirst || slot == model::kRightArmFirst; }
+
+bool ruiwo_cycle(const RobotIo& io, std::uint64_t cycle) {
+  return cycle % static_cast<std::uint64_t>(io.ruiwo_divider) == 0;
+}
+
+}  // namespace
+
+bool build_robot_io(const d::DriversConfig& config, int ruiwo_divider, RobotIo& io, std::string& message) {
+  const std::size_t n = config.plan.buses.size();
+  io.ports.assign(n, d::CanPort{});
+  io.is_ruiwo.assign(n, false);
+  io.ruiwo.assign(n, d::ruiwo::Bus{});
+  io.canopen.assign(n, CanopenBusIo{});
+  io.legs = config.legs;
+  io.ruiwo_divider = ruiwo_divider;
+  for (std::size_t b = 0; b < n; ++b) {
+    const std::vector<d::ruiwo::MotorConfig> motors = d::ruiwo_motors_on_bus(config, static_cast<int>(b));
+    if (!motors.empty()) {
+      io.is_ruiwo[b] = true;
+      if (d::ruiwo::build_bus(motors, io.ruiwo[b], message) != d::DriverError::kOk) return false;
+    }
+  }
+  for (const d::DriveEntry& e : config.drives) {
+    CanopenBusIo& c = io.canopen[static_cast<std::size_t>(e.bus)];
+    c.cfg.push_back(e.config);
+    c.st.emplace_back();
+    c.cmd.emplace_back();
+    c.slot.push_back(e.slot);
+  }
+  return true;
+}
+
+void start_devices(RobotIo& io, hal::TimeNs now_ns) {
+  for (std::size_t b = 0; b < io.ports.size(); ++b) {
+    if (io.is_ruiwo[b]) {
+      const d::ruiwo::Bus& bus = io.ruiwo[b];
+      for (int i = 0; i < bus.count; ++i) {
+        can_frame f{};
+        d::ruiwo::encode_special_rt(bus.motors[i].motor_id, d::ruiwo::SpecialCommand::kEnable, f);
+        (void)d::send_rt(io.ports[b], f);  // a lost enable shows as a silent motor
+      }
+      continue;
+    }
+    CanopenBusIo& c = io.canopen[b];
+    for (std::size_t i = 0; i < c.cfg.size(); ++i) {
+      can_frame f{};
+      d::canopen::start_drive(c.cfg[i], c.st[i], now_ns, f);
+      (void)d::send_rt(io.ports[b], f);  // a lost reset shows as kBootTimeout
+    }
+  }
+}
+
+void robot_receive_rt(RobotIo& io, std::uint64_t cycle, hal::TimeNs now_ns, hal::TimeNs rt_to_mono_ns) noexcept {
+  io.status = BusStatus{};
+  std::array<std::array<d::canopen::MotorSample, d::kLegActuators>, 2> leg_motors{};
+  for (std::size_t b = 0; b < io.ports.size(); ++b) {
+    d::CanPort& port = io.ports[b];
+    if (io.is_ruiwo[b]) {
+      if (ruiwo_cycle(io, cycle)) {
+        const d::RuiwoReceiveReport r = d::ruiwo_receive_rt(port, io.ruiwo[b], now_ns, rt_to_mono_ns, io.sensors);
+        io.status.silent_motors += r.silent;
+        io.status.motor_faults += r.faulted;
+        io.status.io_failures += r.peer_closed ? 1 : 0;
+      }
+    } else {
+      CanopenBusIo& c = io.canopen[b];
+      const d::CanopenReceiveReport r = d::canopen_receive_rt(port, c.cfg, c.st, now_ns, rt_to_mono_ns);
+      io.status.io_failures += r.peer_closed ? 1 : 0;
+      for (std::size_t i = 0; i < c.cfg.size(); ++i) {
+        const d::canopen::DriveState& st = c.st[i];
+        if (st.phase == d::canopen::DrivePhase::kFailed) ++io.status.drive_failures;
+        if (st.phase == d::canopen::DrivePhase::kOperational && st.stale) ++io.status.silent_motors;
+        const d::canopen::MotorSample m = d::canopen::motor_sample(c.cfg[i], st);
+        const int slot = c.slot[i];
+        if (is_shoulder(slot)) {  // 1:1, no transmission
+          hal::JointSample& j = io.sensors.joints[slot];
+          if (m.valid) j = hal::JointSample{m.position_rad, m.velocity_rad_s, m.torque_Nm, m.stamp_ns, true};
+          else j.valid = false;  // keep the old stamp: the watchdog measures its age
+          continue;
+        }
+        for (int side = 0; side < 2; ++side) {
+          const int k = slot - kLegFirst[side];
+          if (k >= 0 && k < d::kLegActuators) leg_motors[side][k] = m;
+        }
+      }
+    }
+    if (port.health.bus_off) ++io.status.bus_off;
+  }
+  for (int side = 0; side < 2; ++side) {
+    std::array<hal::JointSample, d::kLegActuators> joints{};
+    for (int k = 0; k < d::kLegActuators; ++k) joints[k] = io.sensors.joints[kLegFirst[side] + k];
+    (void)d::leg_joints_from_motors_rt(io.legs[side], leg_motors[side], joints);  // unsolved: samples invalid
+    for (int k = 0; k < d::kLegActuators; ++k) {
+      hal::JointSample& out = io.sensors.joints[kLegFirst[side] + k];
+      if (joints[k].valid) out = joints[k];
+      else out.valid = false;  // keep the last good stamp for the staleness watchdog
+    }
+  }
+  if (io.imu_fd >= 0) {
+    const d::ImuReceiveReport r = d::imu_receive_rt(io.imu_fd, io.imu_parser, now_ns, io.sensors.imu);
+    io.status.io_failures += r.device_lost ? 1 : 0;
+  }
+}
+
+void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& command, hal::TimeNs now_ns) noexcept {
+  // Leg joint torques -> motor torques (the ankle through its Jacobian).
+  std::array<std::array<double, d::kLegActuators>, 2> motor_tau{};
+  std::array<bool, 2> leg_ok{};
+  for (int side = 0; side < 2; ++side) {
+    std::array<hal::JointSample, d::kLegActuators> joints{};
+    std::array<double, d::kLegActuators> joint_tau{};
+    bool valid = true;
+    for (int k = 0; k < d::kLegActuators; ++k) {
+      const int j = kLegFirst[side] + k;
+      joints[k] = io.sensors.joints[j];
+      valid = valid && joints[k].valid;
+      joint_tau[k] = d::joint_torque_command_Nm(command.joints[j], joints[k]);
+    }
+    // Without a valid leg state the PD cannot be evaluated: zero torque.
+    leg_ok[side] = valid && d::leg_motor_torques_rt(io.legs[side], joints, joint_tau, motor_tau[side]) ==
+                                d::DriverError::kOk;
+  }
+  for (std::size_t b = 0; b < io.ports.size(); ++b) {
+    d::CanPort& port = io.ports[b];
+    if (io.is_ruiwo[b]) {
+      if (!ruiwo_cycle(io, cycle)) continue;
+      const d::RuiwoSendReport r = d::ruiwo_send_rt(port, io.ruiwo[b], command, now_ns);
+      io.status.io_failures += r.failed > 0 && !port.health.bus_off ? 1 : 0;
+      continue;
+    }
+    CanopenBusIo& c = io.canopen[b];
+    for (std::size_t i = 0; i < c.cfg.size(); ++i) {
+      const int slot = c.slot[i];
+      d::canopen::DriveCommand& dc = c.cmd[i];
+      dc = d::canopen::DriveCommand{};
+      dc.enable = command.joints[slot].mode != hal::JointMode::kDisabled;
+      if (is_shoulder(slot)) {
+        const hal::JointSample& js = io.sensors.joints[slot];
+        dc.torque_Nm = js.valid ? d::joint_torque_command_Nm(command.joints[slot], js) : 0.0;
+        continue;
+      }
+      for (int side = 0; side < 2; ++side) {
+        const int k = slot - kLegFirst[side];
+        if (k >= 0 && k < d::kLegActuators) dc.torque_Nm = leg_ok[side] ? motor_tau[side][k] : 0.0;
+      }
+    }
+    const d::CanopenSendReport r = d::canopen_send_rt(port, c.cfg, c.st, c.cmd, now_ns);
+    io.status.io_failures += r.failed > 0 && !port.health.bus_off ? 1 : 0;
+  }
+}
+
+}  // namespace kuavo::firmware

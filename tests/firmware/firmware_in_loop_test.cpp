@@ -1,0 +1,211 @@
+// Firmware in the loop: the firmware cycle and its drivers binding against
+// the bus emulators bound to the Simbody plant, with faults injected on the
+// buses and in the controller's output. Every test asserts: damping within
+// 20 ms of virtual time, no out-of-limit or non-finite value in any frame the
+// emulators decoded, and bounded loops (each run has a fixed tick budget).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "tests/firmware/firmware_loop.h"
+
+namespace kuavo::firmware {
+namespace {
+
+using test_support::FirmwareLoop;
+using test_support::kDampingBudget_ns;
+namespace emu = drivers::emulator;
+
+// Bus indices of the default plan (drivers/README.md): can1 = L-leg knee+ankle,
+// can5 = Ruiwo L-arm + head.
+constexpr std::size_t kLegBus = 1, kArmBus = 5;
+constexpr hal::TimeNs kWatch_ns = 100'000'000;  // tick budget after an injection
+
+void expect_clean_wire(const FirmwareLoop& loop) {
+  EXPECT_EQ(loop.wire_check().bad_values, 0u) << loop.wire_check().first_bad;
+  EXPECT_EQ(loop.wire_check().nonfinite_clamps, 0u);
+  EXPECT_GT(loop.wire_check().frames_inspected, 1000u);
+  EXPECT_FALSE(loop.plant_failed());
+  EXPECT_EQ(loop.allocations_in_cycle(), 0u) << "heap use in the real-time cycle";
+}
+
+// While the robot stands, the plant's ankles stay inside the linkage's reach.
+void expect_standing_binding(const FirmwareLoop& loop) { EXPECT_EQ(loop.binding_failures(), 0u); }
+
+void report(const char* what, const FirmwareLoop& loop, hal::TimeNs to_damping_ns) {
+  std::printf("[ figures  ] %-24s damping after %5.1f ms, fault %u (%s), frames inspected %llu\n", what,
+              1e-6 * static_cast<double>(to_damping_ns), static_cast<unsigned>(FirmwareLoop::fw().mode.latched),
+              to_string(FirmwareLoop::fw().mode.latched),
+              static_cast<unsigned long long>(loop.wire_check().frames_inspected));
+}
+
+// Runs `inject` on a loop standing in ready, then expects damping in budget.
+template <class Inject>
+hal::TimeNs inject_and_time(FirmwareLoop& loop, Inject inject) {
+  EXPECT_TRUE(loop.bring_up()) << to_string(FirmwareLoop::fw().mode.latched);
+  inject(loop);
+  return loop.ticks_to_damping(kWatch_ns);
+}
+
+TEST(FirmwareInLoop, BringsUpAndStandsThroughTheDrivers) {
+  FirmwareLoop loop;
+  ASSERT_TRUE(loop.ok());
+  ASSERT_TRUE(loop.bring_up(1'000'000'000)) << to_string(FirmwareLoop::fw().mode.latched);
+  EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kNone);
+  EXPECT_LT(loop.tilt_deg(), 5.0);
+  expect_standing_binding(loop);
+  std::printf("[ figures  ] ready at %.3f s; after 1 s released: tilt %.2f deg, base z %.3f m, frames %llu\n",
+              1e-9 * static_cast<double>(loop.ready_at_ns()), loop.tilt_deg(), loop.plant().truth().q[2],
+              static_cast<unsigned long long>(loop.wire_check().frames_inspected));
+  expect_clean_wire(loop);
+}
+
+TEST(FirmwareInLoop, SilentArmMotor) {
+  FirmwareLoop loop;
+  const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) {
+    ASSERT_TRUE(emu::set_silent(*l.ruiwo(kArmBus), l.io().ruiwo[kArmBus].motors[2].motor_id, true));
+  });
+  report("silent Ruiwo motor", loop, t);
+  EXPECT_GE(t, 0);
+  EXPECT_LE(t, kDampingBudget_ns);
+  EXPECT_TRUE(FirmwareLoop::fw().mode.latched == Fault::kMotorSilent ||
+              FirmwareLoop::fw().mode.latched == Fault::kSensorStale);
+  expect_clean_wire(loop);
+}
+
+TEST(FirmwareInLoop, SilentLegDrive) {
+  FirmwareLoop loop;
+  const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) {
+    ASSERT_TRUE(emu::set_drive_silent(*l.drives(kLegBus), l.drives(kLegBus)->drives[0].config.node_id, true));
+  });
+  report("silent leg drive", loop, t);
+  EXPECT_GE(t, 0);
+  EXPECT_LE(t, kDampingBudget_ns);
+  expect_clean_wire(loop);
+}
+
+TEST(FirmwareInLoop, BusOff) {
+  for (std::size_t bus : {kLegBus, kArmBus}) {
+    FirmwareLoop loop;
+    const hal::TimeNs t = inject_and_time(loop, [bus](FirmwareLoop& l) {
+      const emu::FaultInjection& f = l.ruiwo(bus) ? l.ruiwo(bus)->faults : l.drives(bus)->faults;
+      ASSERT_TRUE(emu::inject_bus_fault(f, l.wire(bus).device, emu::BusFault::kBusOff));
+    });
+    report(bus == kLegBus ? "bus-off (leg bus)" : "bus-off (arm bus)", loop, t);
+    EXPECT_GE(t, 0);
+    EXPECT_LE(t, kDampingBudget_ns);
+    EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kBusOff);
+    expect_clean_wire(loop);
+  }
+}
+
+TEST(FirmwareInLoop, NanCommandFromTheController) {
+  FirmwareLoop loop;
+  const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) {
+    l.controller().joint = 3;  // left knee
+    l.controller().field = &hal::JointCommand::torque_ff_Nm;
+    l.controller().value = std::numeric_limits<double>::quiet_NaN();
+  });
+  report("NaN command", loop, t);
+  EXPECT_EQ(t, 0);  // refused in the cycle that produced it
+  EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kCommandNonFinite);
+  expect_clean_wire(loop);
+}
+
+TEST(FirmwareInLoop, OutOfLimitCommandsFromTheController) {
+  const model::Model& m = test_support::test_model();
+  struct Case {
+    const char* what;
+    int joint;
+    double hal::JointCommand::*field;
+    double value;
+    Fault fault;
+  };
+  const Case cases[] = {
+      {"position beyond limit", 14, &hal::JointCommand::position_ref_rad, m.limits.position_max_rad[14] + 0.3,
+       Fault::kCommandPositionLimit},
+      {"torque beyond peak", 2, &hal::JointCommand::torque_ff_Nm, 1.5 * m.limits.peak_torque_Nm[2],
+       Fault::kCommandTorqueLimit},
+      {"kp beyond range", 20, &hal::JointCommand::kp_Nm_per_rad, 5000.0, Fault::kCommandGainRange},
+  };
+  for (const Case& k : cases) {
+    FirmwareLoop loop;
+    const hal::TimeNs t = inject_and_time(loop, [&k](FirmwareLoop& l) {
+      l.controller().joint = k.joint;
+      l.controller().field = k.field;
+      l.controller().value = k.value;
+    });
+    report(k.what, loop, t);
+    EXPECT_EQ(t, 0) << k.what;
+    EXPECT_EQ(FirmwareLoop::fw().mode.latched, k.fault) << k.what;
+    expect_clean_wire(loop);
+  }
+}
+
+TEST(FirmwareInLoop, EstopInReadyAndDance) {
+  for (Mode m : {Mode::kReady, Mode::kDance}) {
+    FirmwareLoop loop;
+    ASSERT_TRUE(loop.bring_up());
+    ASSERT_TRUE(loop.reach(m));
+    CycleInputs in;
+    in.estop = true;
+    const hal::TimeNs t = loop.ticks_to_damping(kWatch_ns, in);
+    report(m == Mode::kReady ? "e-stop in ready" : "e-stop in dance", loop, t);
+    EXPECT_EQ(t, 0);
+    EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kEstop);
+    expect_clean_wire(loop);
+  }
+}
+
+// 1 % of the reply frames lost on every bus: below every watchdog's threshold
+// (3 consecutive misses at 1 % ~ 1e-6), so the robot keeps standing.
+TEST(FirmwareInLoop, OnePercentFrameLossIsTolerated) {
+  FirmwareLoop loop;
+  ASSERT_TRUE(loop.bring_up());
+  for (std::size_t b = 0; b < loop.buses(); ++b) {
+    emu::FaultInjection& f = loop.ruiwo(b) ? loop.ruiwo(b)->faults : loop.drives(b)->faults;
+    ASSERT_TRUE(emu::set_frame_faults(f, 0.01, 0.0));
+  }
+  for (int i = 0; i < 1000; ++i) loop.tick();  // 2 s, bounded
+  std::uint64_t dropped = 0;
+  for (std::size_t b = 0; b < loop.buses(); ++b) dropped += loop.ruiwo(b) ? loop.ruiwo(b)->replies_dropped : 0;
+  std::printf("[ figures  ] 1 %% loss, 2 s: mode %s, fault %s, Ruiwo replies dropped %llu, tilt %.2f deg\n",
+              to_string(FirmwareLoop::fw().mode.mode), to_string(FirmwareLoop::fw().mode.latched),
+              static_cast<unsigned long long>(dropped), loop.tilt_deg());
+  EXPECT_GT(dropped, 0u);
+  EXPECT_EQ(FirmwareLoop::fw().mode.mode, Mode::kReady) << to_string(FirmwareLoop::fw().mode.latched);
+  expect_standing_binding(loop);
+  expect_clean_wire(loop);
+}
+
+// 1 % of the reply frames with a flipped bit: the decoders reject what they
+// can; a corruption they cannot see (a plausible wrong value) may make a
+// watchdog trip. Either way: standing or damping with a latched fault,
+// never a bad value on the wire, never a hang.
+TEST(FirmwareInLoop, OnePercentCorruptedFrames) {
+  FirmwareLoop loop;
+  ASSERT_TRUE(loop.bring_up());
+  for (std::size_t b = 0; b < loop.buses(); ++b) {
+    emu::FaultInjection& f = loop.ruiwo(b) ? loop.ruiwo(b)->faults : loop.drives(b)->faults;
+    ASSERT_TRUE(emu::set_frame_faults(f, 0.0, 0.01));
+  }
+  // 2 s, or until 50 ms after damping (a damped robot sits down; no need to watch it).
+  int after_damping = 0;
+  for (int i = 0; i < 1000 && after_damping < 25; ++i) {
+    loop.tick();
+    if (FirmwareLoop::fw().mode.mode == Mode::kDamping) ++after_damping;
+  }
+  const Mode mode = FirmwareLoop::fw().mode.mode;
+  std::printf("[ figures  ] 1 %% corrupted, 2 s: mode %s, fault %s, tilt %.2f deg\n", to_string(mode),
+              to_string(FirmwareLoop::fw().mode.latched), loop.tilt_deg());
+  EXPECT_TRUE(mode == Mode::kReady || (mode == Mode::kDamping && FirmwareLoop::fw().mode.latched != Fault::kNone));
+  if (mode == Mode::kDamping) {
+    EXPECT_TRUE(test_support::all_damping(loop.command()));
+  }
+  expect_clean_wire(loop);
+}
+
+}  // namespace
+}  // namespace kuavo::firmware
