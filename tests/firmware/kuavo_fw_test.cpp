@@ -1,0 +1,80 @@
+// The image's command line: --help, --check on good and bad configurations,
+// and the normal run, which on a kernel without CAN must fail cleanly
+// (exit 1, one clear message) before anything is sent.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <linux/can.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace {
+
+struct FwRun {
+  int exit_code = -1;
+  std::string output;
+};
+
+FwRun run_fw(const std::string& args) {
+  const std::string cmd = std::string(KUAVO_BINARY_DIR) + "/firmware/kuavo_fw " + args + " 2>&1";
+  FwRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return r;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
+  const int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string write_temp(const char* name, const char* text) {
+  const std::string path = testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(KuavoFw, Help) {
+  const FwRun r = run_fw("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--config FILE"), std::string::npos) << r.output;
+}
+
+TEST(KuavoFw, CheckPrintsThePlanAndLoads) {
+  const FwRun r = run_fw("--check");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("can5"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("54.0 %"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("configuration ok"), std::string::npos);
+}
+
+TEST(KuavoFw, BadConfigurationExits2WithTheReason) {
+  FwRun r = run_fw("--config " + write_temp("fw_bad_type.json", R"({"buses": 3})") + " --check");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("buses"), std::string::npos) << r.output;
+  r = run_fw("--config " + write_temp("fw_unknown_key.json", R"({"bussses": []})"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = run_fw("--config /nonexistent/kuavo.json");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("cannot read"), std::string::npos) << r.output;
+  r = run_fw("--frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(KuavoFw, RunWithoutCanFailsCleanly) {
+  // Never start the real loop from a test on a machine that has CAN.
+  const int probe = socket(AF_CAN, SOCK_RAW, CAN_RAW);
+  if (probe >= 0) {
+    close(probe);
+    GTEST_SKIP() << "this kernel has CAN";
+  }
+  const FwRun r = run_fw("");
+  // This machine's kernel has no CAN: the run stops at opening can0.
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("can0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("CAN"), std::string::npos) << r.output;
+}
+
+}  // namespace
