@@ -159,6 +159,39 @@ TEST(FirmwareInLoop, EstopInReadyAndDance) {
   }
 }
 
+TEST(FirmwareInLoop, ImuStreamStops) {
+  FirmwareLoop loop;
+  const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) { l.stop_imu(); });
+  report("IMU stream stops", loop, t);
+  EXPECT_GE(t, 0);
+  EXPECT_LE(t, kDampingBudget_ns);
+  EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kImuStale);
+  expect_clean_wire(loop);
+}
+
+// The estimator and MPC watchdogs take their inputs from those modules; until
+// they run in the firmware the inputs are driven here.
+TEST(FirmwareInLoop, EstimatorDivergenceAndStalePlan) {
+  for (int which = 0; which < 2; ++which) {
+    FirmwareLoop loop;
+    ASSERT_TRUE(loop.bring_up());
+    CycleInputs in;
+    if (which == 0) {
+      in.watch.estimator_diverged = true;
+    } else {
+      in.watch.planner_running = true;
+      in.watch.plan_stamp_ns = loop.now_ns();  // the last plan arrived now, then none
+    }
+    const hal::TimeNs t = loop.ticks_to_damping(kWatch_ns, in);
+    report(which == 0 ? "estimator diverged" : "MPC result stale", loop, t);
+    EXPECT_GE(t, 0);
+    // Divergence: the cycle that sees it. Plan: 40 ms age threshold (2 MPC periods).
+    EXPECT_LE(t, which == 0 ? 0 : FirmwareConfig{}.plan_max_age_ns + 2'000'000);
+    EXPECT_EQ(FirmwareLoop::fw().mode.latched, which == 0 ? Fault::kEstimatorDiverged : Fault::kPlanStale);
+    expect_clean_wire(loop);
+  }
+}
+
 // 1 % of the reply frames lost on every bus: below every watchdog's threshold
 // (3 consecutive misses at 1 % ~ 1e-6), so the robot keeps standing.
 TEST(FirmwareInLoop, OnePercentFrameLossIsTolerated) {

@@ -138,6 +138,7 @@ class FirmwareLoop {
   bool ok() const { return ok_; }
   std::size_t allocations_in_cycle() const { return allocations_; }
   bool plant_failed() const { return plant_failed_; }
+  void stop_imu() { imu_stopped_ = true; }  // the IMU stream ends (cable, device)
   hal::TimeNs ready_at_ns() const { return ready_at_ns_; }
   std::uint64_t binding_failures() const { return binding_failures_; }
 
@@ -175,7 +176,7 @@ class FirmwareLoop {
     {
       kuavo::test::AllocTrap trap;
       robot_receive_rt(*io_, cycle_, now_, 0);
-      io_->sensors.imu = imu_frame_.imu;  // no MTi emulator: the sensor model's IMU
+      if (!imu_stopped_) io_->sensors.imu = imu_frame_.imu;  // no MTi emulator: the sensor model's IMU
       in.watch.bus = io_->status;
       firmware_cycle_rt(fw(), io_->sensors, in, now_, controller_, out_);
       robot_send_rt(*io_, cycle_, out_, now_);
@@ -348,6 +349,7 @@ class FirmwareLoop {
   std::size_t allocations_ = 0;
   hal::TimeNs ready_at_ns_ = -1;
   std::uint64_t binding_failures_ = 0;
+  bool imu_stopped_ = false;
 };
 
 }  // namespace kuavo::firmware::test_support

@@ -78,3 +78,38 @@ TEST(KuavoFw, RunWithoutCanFailsCleanly) {
 }
 
 }  // namespace
+
+namespace {
+
+// Unprivileged (run as nobody through setpriv when the tests run as root):
+// the real-time setup is refused; --require-rt stops, the desktop run goes on
+// to the buses.
+TEST(KuavoFw, UnprivilegedRealTimeIsReportedAndRequireRtRefuses) {
+  if (getuid() != 0 || access("/usr/bin/setpriv", X_OK) != 0) GTEST_SKIP() << "needs root and setpriv";
+  const int probe = socket(AF_CAN, SOCK_RAW, CAN_RAW);
+  if (probe >= 0) {
+    close(probe);
+    GTEST_SKIP() << "this kernel has CAN";
+  }
+  const std::string fw = std::string(KUAVO_BINARY_DIR) + "/firmware/kuavo_fw";
+  auto run = [&fw](const char* args) {
+    FwRun r;
+    const std::string cmd = "/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups " + fw + args + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    char buf[512];
+    while (p != nullptr && std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
+    const int status = p != nullptr ? pclose(p) : -1;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+  };
+  FwRun r = run(" --require-rt");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("refusing to run"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("can0"), std::string::npos) << "buses must not be opened: " << r.output;
+  r = run("");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("continuing without full real time"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("can0"), std::string::npos) << r.output;
+}
+
+}  // namespace
