@@ -59,6 +59,7 @@ bool cycle_begin_rt(Firmware& fw, const hal::SensorFrame& sensors, const CycleIn
   const Mode before = fw.mode.mode;
   if (before != Mode::kBoot && before != Mode::kSelfCheck) {
     fw.last_watchdog = check_watchdogs_rt(fw.config, sensors, in.watch, now_ns);
+    if (fw.last_watchdog.fault == Fault::kNone) fw.last_watchdog = check_samples_plausible_rt(*fw.model, sensors);
     mi.fault = fw.last_watchdog.fault;
     fw.max_tilt_rad = std::max(fw.max_tilt_rad, tilt_rad(sensors.imu));
   }

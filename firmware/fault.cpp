@@ -17,6 +17,7 @@ const char* to_string(Fault f) noexcept {
     case Fault::kTiltExceeded: return "tilt beyond limit";
     case Fault::kSelfCheckTimeout: return "self-check timed out";
     case Fault::kBusIo: return "bus I/O failed";
+    case Fault::kSensorImplausible: return "joint reading implausible";
     case Fault::kCommandNonFinite: return "command not finite";
     case Fault::kCommandPositionLimit: return "command position outside limits";
     case Fault::kCommandTorqueLimit: return "command torque above peak";

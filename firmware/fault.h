@@ -27,6 +27,7 @@ enum class Fault : std::uint16_t {
   kTiltExceeded = 18,        // torso tilt beyond max_tilt_rad (IMU)
   kSelfCheckTimeout = 19,    // self-check did not pass within self_check_timeout_ns
   kBusIo = 20,               // send/receive failed on a bus (I/O error, peer closed)
+  kSensorImplausible = 21,   // a joint reading non-finite or beyond its stops (broken sample)
 
   // Commands refused by the safety filter (30..49)
   kCommandNonFinite = 30,      // NaN/Inf in any field

@@ -43,6 +43,19 @@ WatchdogResult check_watchdogs_rt(const FirmwareConfig& c, const hal::SensorFram
   return {};
 }
 
+WatchdogResult check_samples_plausible_rt(const model::Model& model, const hal::SensorFrame& sensors) noexcept {
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    const hal::JointSample& s = sensors.joints[j];
+    if (!s.valid) continue;  // invalid samples are the staleness watchdog's business
+    if (!std::isfinite(s.position_rad) || !std::isfinite(s.velocity_rad_s) || !std::isfinite(s.torque_Nm) ||
+        s.position_rad < model.limits.position_min_rad[j] - kImplausibleMargin_rad ||
+        s.position_rad > model.limits.position_max_rad[j] + kImplausibleMargin_rad) {
+      return {Fault::kSensorImplausible, j};
+    }
+  }
+  return {};
+}
+
 bool self_check_passed_rt(const FirmwareConfig& c, const hal::SensorFrame& sensors, const BusStatus& bus,
                           hal::TimeNs now_ns) noexcept {
   if (bus.bus_off + bus.io_failures + bus.drive_failures + bus.motor_faults + bus.silent_motors > 0) return false;

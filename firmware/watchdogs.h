@@ -5,6 +5,7 @@
 #pragma once
 
 #include "controllers/hal/types.h"
+#include "controllers/model/model.h"
 #include "firmware/fault.h"
 #include "firmware/firmware_config.h"
 
@@ -37,6 +38,14 @@ struct WatchdogResult {
 
 [[nodiscard]] WatchdogResult check_watchdogs_rt(const FirmwareConfig& config, const hal::SensorFrame& sensors,
                                                 const WatchdogInputs& in, hal::TimeNs now_ns) noexcept;
+
+// A valid joint reading must be finite and inside the joint's stops widened by
+// kImplausibleMargin_rad (encoder slack and the stops' compliance; a reading
+// further out is a broken sample, e.g. a flipped high bit). Returns the first
+// offending joint's fault. Checked before the controller uses the frame.
+inline constexpr double kImplausibleMargin_rad = 0.2;
+[[nodiscard]] WatchdogResult check_samples_plausible_rt(const model::Model& model,
+                                                        const hal::SensorFrame& sensors) noexcept;
 
 // Self-check: every joint and the IMU valid and fresh, no bus fault.
 [[nodiscard]] bool self_check_passed_rt(const FirmwareConfig& config, const hal::SensorFrame& sensors,

@@ -133,6 +133,7 @@ TEST(ModeMachine, FaultNumbersAreStable) {
   EXPECT_EQ(static_cast<int>(Fault::kMotorSilent), 12);
   EXPECT_EQ(static_cast<int>(Fault::kBusOff), 13);
   EXPECT_EQ(static_cast<int>(Fault::kTiltExceeded), 18);
+  EXPECT_EQ(static_cast<int>(Fault::kSensorImplausible), 21);
   EXPECT_EQ(static_cast<int>(Fault::kCommandNonFinite), 30);
   EXPECT_EQ(static_cast<int>(Fault::kCommandMode), 34);
   EXPECT_EQ(static_cast<int>(Mode::kDamping), 2);

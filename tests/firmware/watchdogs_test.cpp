@@ -89,6 +89,27 @@ TEST(Watchdogs, TiltBeyond45Degrees) {
   EXPECT_EQ(check_watchdogs_rt(cfg, s, WatchdogInputs{}, kNow_ns).fault, Fault::kTiltExceeded);
 }
 
+TEST(Watchdogs, ImplausibleJointReadings) {
+  const model::Model& m = test_support::test_model();
+  hal::SensorFrame s = fresh();
+  for (int j = 0; j < model::kNumJoints; ++j) s.joints[j].position_rad = 0.5 * (m.limits.position_min_rad[j] + m.limits.position_max_rad[j]);
+  EXPECT_EQ(check_samples_plausible_rt(m, s).fault, Fault::kNone);
+  s.joints[5].position_rad = m.limits.position_max_rad[5] + kImplausibleMargin_rad;  // at the margin: still plausible
+  EXPECT_EQ(check_samples_plausible_rt(m, s).fault, Fault::kNone);
+  s.joints[5].position_rad += 1e-6;
+  WatchdogResult r = check_samples_plausible_rt(m, s);
+  EXPECT_EQ(r.fault, Fault::kSensorImplausible);
+  EXPECT_EQ(r.joint, 5);
+  s.joints[5].valid = false;  // an invalid sample is not read
+  EXPECT_EQ(check_samples_plausible_rt(m, s).fault, Fault::kNone);
+  s.joints[5].valid = true;
+  s.joints[5].position_rad = 0.0;
+  s.joints[9].velocity_rad_s = std::nan("");
+  r = check_samples_plausible_rt(m, s);
+  EXPECT_EQ(r.fault, Fault::kSensorImplausible);
+  EXPECT_EQ(r.joint, 9);
+}
+
 TEST(FirmwareConfig, DefaultsValidAndBadValuesNamed) {
   std::string msg;
   FirmwareConfig c;
