@@ -19,7 +19,10 @@ struct WbcConfig {
   double weight_stance_point = 1000.0;  // stance points do not move
   double weight_swing_point = 100.0;
   double weight_base_angular = 10.0;
-  double weight_com = 10.0;
+  // Leju: 10 (= base angular). Above base angular, the QP may pitch the torso to move the CoM
+  // (hip strategy) once the 27 Nm ankles saturate: the 10 N·s forward push on the floor is
+  // survived with 100 and not with 10 (tests/wbc/wbc_standing_sim_test.cpp).
+  double weight_com = 100.0;
   double weight_arm = 9.0;
   double weight_head = 9.0;  // Leju runs the head apart; we keep it in the dynamics with the arm weight
   // Leju weighs force tracking 1 against CoM 10, which works because its MPC forces already
@@ -33,8 +36,12 @@ struct WbcConfig {
   double swing_kp_z = 150.0, swing_kd_z = 50.0, swing_kp_xy = 120.0, swing_kd_xy = 50.0;
   std::array<double, 3> base_angular_kp{120.0, 120.0, 50.0};  // roll, pitch, yaw (yaw frame)
   std::array<double, 3> base_angular_kd{20.0, 20.0, 10.0};
-  std::array<double, 3> com_kp{20.72, 10.0, 44.32};  // x, y, z in the yaw frame
-  std::array<double, 3> com_kd{5.93, 5.48, 10.26};
+  // x, y, z in the yaw frame. Leju: x-y kp (20.72, 10.0), kd (5.93, 5.48), z as here. Its
+  // MPC closes the balance loop at 50 Hz on top; the WBC alone (standing reference, no MPC)
+  // drifts sideways with those gains and light leg PD (measured in tests/wbc: falls after
+  // ~8 s), and holds the CoM within 0.2 mm with these.
+  std::array<double, 3> com_kp{40.0, 40.0, 44.32};
+  std::array<double, 3> com_kd{12.0, 12.0, 10.26};
   double arm_kp = 150.0, arm_kd = 10.2;
   double head_kp = 150.0, head_kd = 10.2;
 

@@ -91,6 +91,27 @@ void BM_DynamicsTerms(benchmark::State& state) {
   }
 }
 
+// The QP alone, on the problem of the last tick: cold, and warm from its own solution.
+void BM_QpSolve(benchmark::State& state) {
+  Fixture& f = fixture();
+  const bool warm = state.range(0) != 0;
+  const int i = static_cast<int>(state.range(1));
+  wbc::wbc_step_rt(f.robot, f.cfg, f.ws, f.q[i], f.v[i], f.ref[i], 0, f.command);
+  static wbc::QpSolution solution;
+  qp::DenseQpSettings settings = f.ws.qp_settings;
+  settings.warm_start = warm;
+  long iterations = 0, solves = 0;
+  for (auto _ : state) {
+    solution = f.ws.solution;
+    benchmark::DoNotOptimize(qp::solve_dense_qp(f.ws.qp, settings, f.ws.qp_workspace, solution));
+    iterations += solution.iterations;
+    ++solves;
+  }
+  state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
+  state.counters["working_set"] = solution.working_set_size;
+}
+BENCHMARK(BM_QpSolve)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"warm", "single_support"})->Unit(benchmark::kMicrosecond);
+
 BENCHMARK(BM_WbcTickMixed)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_WbcTickSingleSupport)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_DynamicsTerms)->Unit(benchmark::kMicrosecond);
