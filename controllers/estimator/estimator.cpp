@@ -21,7 +21,8 @@ bool config_valid(const EstimatorConfig& c) {
                              c.accel_cutoff_hz,              c.gravity_m_s2,
                              c.dt_min_s,                     c.dt_max_s,
                              c.gyro_max_rad_s,               c.accel_max_m_s2,
-                             c.quaternion_norm_tolerance,    c.covariance_trace_limit};
+                             c.quaternion_norm_tolerance,    c.covariance_trace_limit,
+                             c.horizontal_covariance_det_limit_m4};
   for (double v : positive) {
     if (!finite_positive(v)) return false;
   }
@@ -166,7 +167,7 @@ bool estimator_init(const EstimatorConfig& config, EstimatorState& state) {
   state.accel = LowPass3{};
   state.orientation.setIdentity();
   state.initialized = false;
-  state.imu_rejects = state.joint_rejects = state.dt_clamps = state.divergences = 0;
+  state.imu_rejects = state.joint_rejects = state.dt_clamps = state.divergences = state.horizontal_resets = 0;
   return ok;
 }
 
@@ -234,6 +235,7 @@ void estimator_step_rt(const model::Model& model, EstimatorState& s, const hal::
     kf_update_rt(s.x, s.p, s.y, s.measurement_variance, s.innovation);
     out.innovation_norm = contact_innovation_norm(s.innovation, contact);
   }
+  if (kf_bound_horizontal_rt(s.p, c.horizontal_covariance_det_limit_m4)) ++s.horizontal_resets;
 
   if (!s.x.allFinite() || !s.p.allFinite()) {
     // Cannot happen with validated inputs; if it does, re-seed around the last

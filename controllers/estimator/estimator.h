@@ -52,6 +52,9 @@ struct EstimatorConfig {
   double gyro_max_rad_s = 34.9;
   double accel_max_m_s2 = 98.1;
   double quaternion_norm_tolerance = 0.05;
+  // det(P_xy) bound of the horizontal-position guard (kf_bound_horizontal_rt) [m⁴];
+  // Cheetah's and legged_control's value.
+  double horizontal_covariance_det_limit_m4 = 1e-6;
   // Divergence watchdog: trace(P) beyond this is reported as kDiverged.
   double covariance_trace_limit = 10.0;
 };
@@ -96,7 +99,7 @@ struct EstimatorState {
   dynamics::VelocityVector v_relative = dynamics::VelocityVector::Zero();
   dynamics::Data data;
   bool initialized = false;
-  std::uint64_t imu_rejects = 0, joint_rejects = 0, dt_clamps = 0, divergences = 0;
+  std::uint64_t imu_rejects = 0, joint_rejects = 0, dt_clamps = 0, divergences = 0, horizontal_resets = 0;
 };
 
 // Validates the configuration once: returns false (and keeps the defaults) if a

@@ -63,6 +63,15 @@ void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
   }
 }
 
+bool kf_bound_horizontal_rt(KfCovariance& p, double det_limit_m4) {
+  const double det_m4 = p(0, 0) * p(1, 1) - p(0, 1) * p(1, 0);
+  if (!(det_m4 > det_limit_m4)) return false;
+  p.topRightCorner<2, kStateDim - 2>().setZero();
+  p.bottomLeftCorner<kStateDim - 2, 2>().setZero();
+  p.topLeftCorner<2, 2>() /= 10.0;
+  return true;
+}
+
 KfMeasurementVector kf_predicted_measurement(const KfVector& x) {
   KfMeasurementVector y;
   for (int i = 0; i < kPoints; ++i) {

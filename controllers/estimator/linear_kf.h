@@ -40,6 +40,12 @@ void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_
 void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
                   const KfMeasurementVector& measurement_variance, KfMeasurementVector& innovation);
 
+// Cheetah's / legged_control's guard (FACTS.md §6): the horizontal base position
+// is unobservable, so its variance grows without bound; once det(P_xy) exceeds
+// det_limit, decorrelate it from the rest of the state and divide it by 10.
+// Returns true when it acted.
+bool kf_bound_horizontal_rt(KfCovariance& p, double det_limit_m4);
+
 // C x: what the state predicts for the measurements.
 KfMeasurementVector kf_predicted_measurement(const KfVector& x);
 

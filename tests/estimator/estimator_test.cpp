@@ -148,10 +148,21 @@ TEST(EstimatorSynthetic, StandingStillDoesNotDrift) {
   ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
   ASSERT_EQ(estimator::estimator_reset(robot(), g_state, f, q0.head<2>()), EstimatorStatus::kOk);
   EstimateOutput out;
-  for (int n = 0; n < 5000; ++n) estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
+  double trace_at_5_s = 0.0;
+  for (int n = 0; n < 5000; ++n) {
+    estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
+    if (n == 2499) trace_at_5_s = out.covariance_trace;
+  }
   EXPECT_EQ(out.status, EstimatorStatus::kOk);
   EXPECT_LT((out.q.head<3>() - q0.head<3>()).norm(), 1e-9);
   EXPECT_LT(out.base_velocity_world_m_s.norm(), 1e-9);
+  // The horizontal guard keeps P bounded (steady, ~0.5, mostly the corners' xy),
+  // so the divergence watchdog can use trace(P).
+  EXPECT_GT(g_state.horizontal_resets, 0u);
+  EXPECT_LT(out.covariance_trace, 1.0);
+  EXPECT_NEAR(out.covariance_trace, trace_at_5_s, 0.02 * trace_at_5_s);
+  std::printf("standing 10 s: trace(P) %.3e, %llu horizontal resets\n", out.covariance_trace,
+              static_cast<unsigned long long>(g_state.horizontal_resets));
 }
 
 TEST(EstimatorBadInput, GarbageImuIsRejectedAndHeld) {

@@ -85,5 +85,21 @@ TEST(EstimatorLinearKf, PredictionEqualsDenseForm) {
   EXPECT_LT((pr.p - p_ref).norm(), 1e-12);
 }
 
+TEST(EstimatorLinearKf, HorizontalGuardDecorrelatesAndShrinksOnlyPastTheLimit) {
+  Problem pr = random_problem(9);
+  KfCovariance p = pr.p * 1e-4;  // det(P_xy) well below 1e-6
+  const KfCovariance small = p;
+  EXPECT_FALSE(kf_bound_horizontal_rt(p, 1e-6));
+  EXPECT_EQ((p - small).norm(), 0.0);
+  p = pr.p;  // det(P_xy) of order 1e-2
+  const KfCovariance big = p;
+  EXPECT_TRUE(kf_bound_horizontal_rt(p, 1e-6));
+  EXPECT_LT((p.topLeftCorner<2, 2>() - big.topLeftCorner<2, 2>() / 10.0).norm(), 1e-15);
+  EXPECT_EQ((p.topRightCorner<2, kStateDim - 2>().norm()), 0.0);
+  EXPECT_EQ((p.bottomLeftCorner<kStateDim - 2, 2>().norm()), 0.0);
+  const KfCovariance diff = p - big;
+  EXPECT_EQ((diff.bottomRightCorner<kStateDim - 2, kStateDim - 2>().norm()), 0.0);
+}
+
 }  // namespace
 }  // namespace kuavo::estimator

@@ -110,7 +110,9 @@ RunResult run(const sim::GroundParams& ground, const sim::Vec3& push_force_N, do
 
 TEST(EstimatorAgainstSimulator, StandingAndPushOnFloor) {
   // Measured (seed 1): v RMS 0.012 m/s standing, 0.020 m/s over the push (peak
-  // speed 0.25 m/s); drift ≤ 3 mm xy, ≤ 1.3 mm z. The standing error is mostly a
+  // speed 0.25 m/s); drift 14 mm xy after 6 s, ≤ 1.3 mm z. The xy drift is the
+  // price of Leju's horizontal-covariance guard (0.7 mm with it disabled, at the
+  // cost of an unbounded P). The standing velocity error is mostly a
   // bias: the sensor model's 0.2° tilt error leaks g·sin(0.2°) ≈ 0.03 m/s² into
   // the horizontal acceleration, which Leju's noise values correct only slowly.
   const RunResult r = run(sim::kFloor, sim::Vec3(100.0, 0.0, 0.0), 6.0, 1);
@@ -119,7 +121,7 @@ TEST(EstimatorAgainstSimulator, StandingAndPushOnFloor) {
   EXPECT_LT(r.velocity_standing.rms(), 0.02);
   EXPECT_LT(r.velocity_push.rms(), 0.035);
   EXPECT_LT(r.velocity_base_axes.rms(), 0.025);
-  EXPECT_LT(r.max_drift_xy_m, 0.01);
+  EXPECT_LT(r.max_drift_xy_m, 0.025);
   EXPECT_LT(r.max_drift_z_m, 0.005);
 }
 
@@ -131,7 +133,7 @@ TEST(EstimatorAgainstSimulator, StandingAndPushOnCarpet) {
   EXPECT_GT(r.peak_speed_m_s, 0.15);
   EXPECT_LT(r.velocity_standing.rms(), 0.02);
   EXPECT_LT(r.velocity_push.rms(), 0.035);
-  EXPECT_LT(r.max_drift_xy_m, 0.01);
+  EXPECT_LT(r.max_drift_xy_m, 0.025);
   EXPECT_LT(r.max_drift_z_m, 0.03);
 }
 
