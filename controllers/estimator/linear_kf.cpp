@@ -35,24 +35,39 @@ void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_
   p.diagonal() += process_variance;
 }
 
+// One scalar update with the sparse row (a, ca) [+ (b, cb)] of C.
+void scalar_update(KfVector& x, KfCovariance& p, const SparseRow& r, double y, double variance, KfVector& pc) {
+  pc = r.ca * p.col(r.a);
+  double cx = r.ca * x[r.a];
+  if (r.b >= 0) {
+    pc += r.cb * p.col(r.b);
+    cx += r.cb * x[r.b];
+  }
+  const double s = r.ca * pc[r.a] + (r.b >= 0 ? r.cb * pc[r.b] : 0.0) + variance;
+  const double gain_scale = 1.0 / s;
+  x += (gain_scale * (y - cx)) * pc;
+  p.noalias() -= (gain_scale * pc) * pc.transpose();
+}
+
 void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
                   const KfMeasurementVector& measurement_variance, KfMeasurementVector& innovation) {
   innovation = y - kf_predicted_measurement(x);
   KfVector pc;  // P cᵀ for the current row
-  for (int m = 0; m < kMeasurementDim; ++m) {
-    const SparseRow r = row_of(m);
-    pc = r.ca * p.col(r.a);
-    double cx = r.ca * x[r.a];
-    if (r.b >= 0) {
-      pc += r.cb * p.col(r.b);
-      cx += r.cb * x[r.b];
+  for (int m = 0; m < kVelocityRows; ++m) scalar_update(x, p, row_of(m), y[m], measurement_variance[m], pc);
+  // The 8 velocity rows of one axis share their row of C (−v_k): in information
+  // form they are exactly one row with the inverse-variance-weighted mean and
+  // variance 1/Σ(1/r). 24 updates become 3.
+  for (int k = 0; k < 3; ++k) {
+    double information = 0.0, weighted_sum = 0.0;
+    for (int i = 0; i < kPoints; ++i) {
+      const int m = kVelocityRows + 3 * i + k;
+      information += 1.0 / measurement_variance[m];
+      weighted_sum += y[m] / measurement_variance[m];
     }
-    const double s = r.ca * pc[r.a] + (r.b >= 0 ? r.cb * pc[r.b] : 0.0) + measurement_variance[m];
-    const double gain_scale = 1.0 / s;
-    x += (gain_scale * (y[m] - cx)) * pc;
-    p.noalias() -= (gain_scale * pc) * pc.transpose();
+    scalar_update(x, p, row_of(kVelocityRows + k), weighted_sum / information, 1.0 / information, pc);
   }
-  // Rounding in 56 rank-one downdates leaves P slightly asymmetric; Leju symmetrises too.
+  for (int m = kHeightRows; m < kMeasurementDim; ++m) scalar_update(x, p, row_of(m), y[m], measurement_variance[m], pc);
+  // Rounding in the rank-one downdates leaves P slightly asymmetric; Leju symmetrises too.
   // In place, pairwise: no 7 KB temporary on the real-time stack.
   for (int j = 0; j < kStateDim; ++j) {
     for (int i = j + 1; i < kStateDim; ++i) {

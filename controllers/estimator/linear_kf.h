@@ -7,8 +7,10 @@
 //   rows 24..47  y = −v_k               (relative velocity of a fixed point: ċ_i = 0)
 //   rows 48..55  y = c_i,z              (stance height)
 // Every row of C has at most two ±1 entries and R is diagonal, so the update is
-// done as 56 sequential scalar updates: mathematically the batch update (tests
-// check it against the textbook form), but O(56·30²) with no 56×56 solve.
+// done as sequential scalar updates (the 8 velocity rows per axis fused into
+// one, as they share their row of C): mathematically the batch update (tests
+// check it against the textbook form), but 35 rank-one updates of a 30×30 P
+// instead of a 56×56 solve.
 #pragma once
 
 #include <Eigen/Core>
@@ -36,6 +38,7 @@ void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_
                    const KfVector& process_variance, double dt_s);
 
 // Applies all 56 measurements (variance per row, diagonal R), then symmetrises P.
+// Variances must be positive (the estimator's config validation ensures it).
 // innovation receives y − C x before the update (for the watchdog).
 void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
                   const KfMeasurementVector& measurement_variance, KfMeasurementVector& innovation);
