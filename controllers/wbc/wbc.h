@@ -54,7 +54,7 @@ struct WbcDiagnostics {
   dynamics::JointVector torque_Nm = dynamics::JointVector::Zero();
 };
 
-// ~300 KB with the QP: static storage only.
+// ~190 KB with the QP: static storage only.
 struct WbcWorkspace {
   dynamics::Data data;
   dynamics::FrameJacobian frame_jacobian = dynamics::FrameJacobian::Zero();

@@ -93,7 +93,7 @@ TEST(WbcFallback, InfeasibleQpIsReportedAndFallsBack) {
   for (const auto& j : r.command.joints) EXPECT_LE(std::abs(j.torque_ff_Nm), 0.5 + 1e-12);
 }
 
-TEST(WbcFallback, InfeasibleReferenceAfterGoodTicksHoldsThenFallsBack) {
+TEST(WbcFallback, ExtremeReferenceStaysSoftNonFiniteOneIsRefusedAndHeld) {
   // All points "in contact" but the reference asks the torso to be 1.5 rad pitched with a
   // huge CoM acceleration: the QP is feasible (tasks are soft) so this must stay kOk ...
   Rig& r = rig();
