@@ -115,7 +115,6 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
   for (auto& c : in_flight) c = command;
   std::size_t slot = 0;
 
-  auto diagnostics = std::make_unique<dynamics::Data>();  // for the logger's own kinematics
   out.min_base_height_m = plant.truth().q[2];
   const rtos::TimeNs wall_start = rtos::now_ns();
   rtos::SimEvent ev;
@@ -139,10 +138,7 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
       const double tilt = tilt_deg(t);
       out.max_tilt_deg = std::max(out.max_tilt_deg, tilt);
       out.min_base_height_m = std::min(out.min_base_height_m, t.q[2]);
-      dynamics::forward_kinematics(model, *diagnostics, t.q);
-      for (int c = 0; c < model::kNumContactPoints; ++c) {
-        out.max_foot_sink_m = std::max(out.max_foot_sink_m, -dynamics::frame_position(model, *diagnostics, c).z());
-      }
+      for (const Vec3& p : t.contact_point_m) out.max_foot_sink_m = std::max(out.max_foot_sink_m, -p.z());
       if (!out.fell && (t.q[2] < kFallHeight_m || tilt > kFallTilt_deg)) {
         out.fell = true;
         out.fell_at_s = plant.time_s();

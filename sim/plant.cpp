@@ -20,6 +20,16 @@ namespace {
 SimTK::Vec3 to_simtk(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 Vec3 from_simtk(const SimTK::Vec3& v) { return {v[0], v[1], v[2]}; }
 
+// Where a sole corner is and how fast it moves, in the world (state at least at Velocity).
+void contact_point_motion(const model::Model& m, const SimbodyRobot& r, const SimTK::State& s, int c, Vec3& p,
+                          Vec3& v) {
+  const model::Frame& f = m.frames[c];
+  const SimTK::MobilizedBody& b = r.body(f.body);
+  const SimTK::Vec3 station = to_simtk(f.position_m);
+  p = from_simtk(b.findStationLocationInGround(s, station));
+  v = from_simtk(b.findStationVelocityInGround(s, station));
+}
+
 // Everything the custom force reads; owned by Plant::Impl, updated between intervals.
 struct ForceInputs {
   const model::Model* model = nullptr;
@@ -54,14 +64,11 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
     in_->contact_wrench.setZero();
     if (in_->contact) {
       for (int c = 0; c < model::kNumContactPoints; ++c) {
-        const model::Frame& f = m.frames[c];
-        const SimTK::MobilizedBody& b = r.body(f.body);
-        const SimTK::Vec3 station = to_simtk(f.position_m);
-        const Vec3 p = from_simtk(b.findStationLocationInGround(s, station));
-        const Vec3 v = from_simtk(b.findStationVelocityInGround(s, station));
+        Vec3 p, v;
+        contact_point_motion(m, r, s, c, p, v);
         const Vec3 force = contact_force(in_->ground, p, v, in_->points[c]);
         if (force.z() > 0.0) {
-          b.applyForceToBodyPoint(s, station, to_simtk(force), body_forces);
+          r.body(m.frames[c].body).applyForceToBodyPoint(s, to_simtk(m.frames[c].position_m), to_simtk(force), body_forces);
           in_->contact_wrench.head<3>() += force;
           in_->contact_wrench.tail<3>() += p.cross(force);
         }
@@ -245,12 +252,10 @@ struct Plant::Impl {
     robot.system().realize(s, SimTK::Stage::Acceleration);
     robot.get_state(s, truth.q, truth.v);
     for (int c = 0; c < model::kNumContactPoints; ++c) {
-      const model::Frame& f = model.frames[c];
-      const SimTK::MobilizedBody& b = robot.body(f.body);
-      const SimTK::Vec3 station = to_simtk(f.position_m);
-      const Vec3 p = from_simtk(b.findStationLocationInGround(s, station));
-      const Vec3 v = from_simtk(b.findStationVelocityInGround(s, station));
-      truth.contact_force_N[c] = inputs.contact ? contact_force(inputs.ground, p, v, inputs.points[c]) : Vec3::Zero();
+      Vec3 v;
+      contact_point_motion(model, robot, s, c, truth.contact_point_m[c], v);
+      truth.contact_force_N[c] =
+          inputs.contact ? contact_force(inputs.ground, truth.contact_point_m[c], v, inputs.points[c]) : Vec3::Zero();
     }
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = robot.body(j + 1);
@@ -269,11 +274,9 @@ struct Plant::Impl {
   void update_contacts() {
     const SimTK::State& s = state;
     for (int c = 0; c < model::kNumContactPoints; ++c) {
-      const model::Frame& f = model.frames[c];
-      const SimTK::MobilizedBody& b = robot.body(f.body);
-      const SimTK::Vec3 station = to_simtk(f.position_m);
-      update_contact_point(inputs.ground, from_simtk(b.findStationLocationInGround(s, station)),
-                           from_simtk(b.findStationVelocityInGround(s, station)), inputs.points[c]);
+      Vec3 p, v;
+      contact_point_motion(model, robot, s, c, p, v);
+      update_contact_point(inputs.ground, p, v, inputs.points[c]);
     }
   }
 };

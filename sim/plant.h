@@ -57,6 +57,7 @@ enum class PlantError : std::uint8_t {
 struct PlantTruth {
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  std::array<Vec3, model::kNumContactPoints> contact_point_m{};  // sole corners in the world
   std::array<Vec3, model::kNumContactPoints> contact_force_N{};
   Eigen::Matrix<double, model::kNumJoints, 1> joint_torque_Nm = Eigen::Matrix<double, model::kNumJoints, 1>::Zero();
   Vec3 base_specific_force_m_s2 = Vec3::Zero();  // what an IMU at the base origin measures, base axes
