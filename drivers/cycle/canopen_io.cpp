@@ -1,6 +1,6 @@
 #include "drivers/cycle/canopen_io.h"
 
-#include "drivers/cycle/rx_stamp.h"
+#include "drivers/cycle/rx_drain.h"
 
 namespace kuavo::drivers {
 
@@ -8,36 +8,23 @@ CanopenReceiveReport canopen_receive_rt(CanPort& port, std::span<const canopen::
                                         std::span<canopen::DriveState> states, hal::TimeNs now_ns,
                                         hal::TimeNs realtime_to_monotonic_ns) {
   CanopenReceiveReport r;
-  RxFrame rx;
-  can_frame f;
   // Bounded: per drive 2 TPDOs, a heartbeat, an SDO answer, an EMCY, plus slack.
   const int limit = 8 * static_cast<int>(configs.size()) + 16;
-  for (int n = 0; n < limit; ++n) {
-    const DriverError e = receive_rt(port, rx);
-    if (e == DriverError::kRxEmpty) break;
-    if (e == DriverError::kPeerClosed) {
-      r.peer_closed = true;
-      break;
-    }
-    if (e == DriverError::kErrorFrame) {
-      ++r.error_frames;
-      continue;
-    }
-    if (e != DriverError::kOk || !as_classic(rx, f)) {
-      ++r.unclaimed;
-      continue;
-    }
-    const hal::TimeNs stamp = rx_stamp_ns(rx, now_ns, realtime_to_monotonic_ns);
-    bool claimed = false;
-    for (std::size_t i = 0; i < configs.size() && i < states.size(); ++i) {
-      claimed = canopen::handle_frame_rt(configs[i], states[i], f, stamp) == DriverError::kOk || claimed;
-    }
-    if (claimed) {
-      ++r.frames;
-    } else {
-      ++r.unclaimed;
-    }
-  }
+  const DrainCounts counts =
+      drain_classic_frames_rt(port, limit, now_ns, realtime_to_monotonic_ns, [&](const can_frame& f, hal::TimeNs stamp_ns) {
+        bool claimed = false;
+        for (std::size_t i = 0; i < configs.size() && i < states.size(); ++i) {
+          claimed = canopen::handle_frame_rt(configs[i], states[i], f, stamp_ns) == DriverError::kOk || claimed;
+        }
+        if (claimed) {
+          ++r.frames;
+        } else {
+          ++r.unclaimed;
+        }
+      });
+  r.error_frames = counts.error_frames;
+  r.unclaimed += counts.not_classic;
+  r.peer_closed = counts.peer_closed;
   return r;
 }
 

@@ -1,40 +1,29 @@
 #include "drivers/cycle/ruiwo_io.h"
 
-#include "drivers/cycle/rx_stamp.h"
+#include "drivers/cycle/rx_drain.h"
 
 namespace kuavo::drivers {
 
 RuiwoReceiveReport ruiwo_receive_rt(CanPort& port, ruiwo::Bus& bus, hal::TimeNs now_ns,
                                     hal::TimeNs realtime_to_monotonic_ns, hal::SensorFrame& sensors) {
   RuiwoReceiveReport r;
-  RxFrame rx;
-  can_frame f;
   // Bounded: a babbling bus cannot hold the loop longer than this many frames.
-  for (int n = 0; n < 4 * ruiwo::kMaxMotorsPerBus; ++n) {
-    const DriverError e = receive_rt(port, rx);
-    if (e == DriverError::kRxEmpty) break;
-    if (e == DriverError::kPeerClosed) {
-      r.peer_closed = true;
-      break;
-    }
-    if (e == DriverError::kErrorFrame) {
-      ++r.error_frames;
-      continue;
-    }
-    if (e != DriverError::kOk || !as_classic(rx, f)) {
-      ++r.rejected;
-      continue;
-    }
-    const DriverError h = ruiwo::handle_reply_rt(bus, f, rx_stamp_ns(rx, now_ns, realtime_to_monotonic_ns), sensors);
-    if (h == DriverError::kOk) {
-      ++r.replies;
-    } else if (h == DriverError::kMotorFault) {
-      ++r.replies;
-      ++r.faulted;
-    } else {
-      ++r.rejected;
-    }
-  }
+  const DrainCounts counts = drain_classic_frames_rt(
+      port, 4 * ruiwo::kMaxMotorsPerBus, now_ns, realtime_to_monotonic_ns,
+      [&](const can_frame& f, hal::TimeNs stamp_ns) {
+        const DriverError h = ruiwo::handle_reply_rt(bus, f, stamp_ns, sensors);
+        if (h == DriverError::kOk) {
+          ++r.replies;
+        } else if (h == DriverError::kMotorFault) {
+          ++r.replies;
+          ++r.faulted;
+        } else {
+          ++r.rejected;
+        }
+      });
+  r.error_frames = counts.error_frames;
+  r.rejected += counts.not_classic;
+  r.peer_closed = counts.peer_closed;
   r.silent = ruiwo::check_timeouts_rt(bus, now_ns, sensors);
   return r;
 }
