@@ -1,0 +1,117 @@
+#include "controllers/planner/step_in_place.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
+
+namespace kuavo::planner {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kIkTolerance_m = 1e-3;
+constexpr int kIkIterations = 20;
+// Three corners fix a foot's pose: toe-left, toe-right, heel-left of each foot.
+constexpr int kFootCorners[2][3] = {{0, 1, 2}, {4, 5, 6}};
+
+double smooth_step(double s) {
+  s = std::clamp(s, 0.0, 1.0);
+  return s * s * (3.0 - 2.0 * s);
+}
+
+// Moves the 12 leg joints so the corners of both feet reach their targets (base and the
+// other joints as given). Returns the largest remaining corner error.
+double solve_legs(const model::Model& model, dynamics::Data& data, const std::array<Vec3, kNumPoints>& targets,
+                  dynamics::ConfigVector& q) {
+  double worst = 0.0;
+  dynamics::FrameJacobian j;
+  for (int it = 0; it < kIkIterations; ++it) {
+    dynamics::forward_kinematics(model, data, q);
+    worst = 0.0;
+    for (int foot = 0; foot < 2; ++foot) {
+      Eigen::Matrix<double, 9, 6> jac;
+      Eigen::Matrix<double, 9, 1> err;
+      const int first_joint = foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+      for (int r = 0; r < 3; ++r) {
+        const int c = kFootCorners[foot][r];
+        dynamics::frame_jacobian(model, data, c, j);
+        jac.middleRows<3>(3 * r) = j.block<3, 6>(0, 6 + first_joint);
+        err.segment<3>(3 * r) = targets[c] - dynamics::frame_position(model, data, c);
+      }
+      worst = std::max(worst, err.cwiseAbs().maxCoeff());
+      const Eigen::Matrix<double, 6, 6> normal = jac.transpose() * jac + 1e-9 * Eigen::Matrix<double, 6, 6>::Identity();
+      q.segment<6>(7 + first_joint) += normal.ldlt().solve(jac.transpose() * err);
+    }
+    if (worst < 1e-9) break;
+  }
+  dynamics::forward_kinematics(model, data, q);
+  worst = 0.0;
+  for (int c = 0; c < kNumPoints; ++c) worst = std::max(worst, (targets[c] - dynamics::frame_position(model, data, c)).cwiseAbs().maxCoeff());
+  return worst;
+}
+
+}  // namespace
+
+const char* make_step_in_place(const model::Model& model, const dynamics::ConfigVector& q_stand,
+                               const StepInPlaceConfig& config, MotionPlan& plan) {
+  if (config.steps < 0 || !(config.rate_hz > 0.0) || !(config.lead_in_s >= 0.0) || !(config.shift_s > 0.0) ||
+      !(config.swing_s > 0.0) || !(config.lift_m >= 0.0 && config.lift_m < 0.3) || !(config.tail_s >= 0.0) ||
+      !(config.shift_fraction >= 0.0 && config.shift_fraction <= 1.2)) {
+    return "step-in-place configuration out of range";
+  }
+  const double cycle_s = config.shift_s + config.swing_s;
+  const double duration_s = config.lead_in_s + config.steps * cycle_s + config.shift_s + config.tail_s;
+  const int frames = static_cast<int>(std::floor(duration_s * config.rate_hz)) + 1;
+  if (frames > kMaxMotionFrames) return "step-in-place motion longer than kMaxMotionFrames";
+
+  auto data = std::make_unique<dynamics::Data>();
+  dynamics::forward_kinematics(model, *data, q_stand);
+  std::array<Vec3, kNumPoints> home{};
+  for (int c = 0; c < kNumPoints; ++c) home[c] = dynamics::frame_position(model, *data, c);
+  // Lateral offset of each foot's centre from the base.
+  double foot_y[2];
+  for (int foot = 0; foot < 2; ++foot) {
+    double y = 0.0;
+    for (int c = 0; c < kCornersPerFoot; ++c) y += home[foot * kCornersPerFoot + c].y();
+    foot_y[foot] = y / kCornersPerFoot - q_stand[1];
+  }
+
+  plan.rate_hz = config.rate_hz;
+  plan.frame_count = frames;
+  plan.start_ns = 0;
+  dynamics::ConfigVector q = q_stand;
+  for (int i = 0; i < frames; ++i) {
+    const double t = i / config.rate_hz;
+    // Which step and where in it; the stance foot of step k is the right one for even k
+    // (the left foot swings first).
+    double base_y = 0.0;
+    std::array<bool, 2> contact{true, true};
+    std::array<Vec3, kNumPoints> targets = home;
+    const double u = t - config.lead_in_s;
+    auto side = [&](int k) { return config.shift_fraction * foot_y[k % 2 == 0 ? kRightFoot : kLeftFoot]; };
+    if (u > 0.0) {
+      const int k = std::min(static_cast<int>(u / cycle_s), config.steps);
+      const double w = u - k * cycle_s;
+      const double from = k == 0 ? 0.0 : side(k - 1);
+      const double to = k < config.steps ? side(k) : 0.0;
+      base_y = from + (to - from) * smooth_step(w / config.shift_s);
+      if (k < config.steps && w > config.shift_s) {
+        const double s = (w - config.shift_s) / config.swing_s;
+        const int swing = k % 2 == 0 ? kLeftFoot : kRightFoot;
+        if (s < 1.0) {
+          contact[swing] = false;
+          const double lift = config.lift_m * 0.5 * (1.0 - std::cos(2.0 * kPi * s));
+          for (int c = 0; c < kCornersPerFoot; ++c) targets[swing * kCornersPerFoot + c].z() += lift;
+        }
+      }
+    }
+    q[1] = q_stand[1] + base_y;
+    if (solve_legs(model, *data, targets, q) > kIkTolerance_m) return "step-in-place: leg IK missed a foot target by more than 1 mm";
+    plan.q[i] = q;
+    plan.foot_contact[i] = contact;
+  }
+  return motion_plan_finish(plan);
+}
+
+}  // namespace kuavo::planner
