@@ -10,33 +10,12 @@
 #include "rtos_shim/clock.h"
 #include "rtos_shim/lockstep_scheduler.h"
 #include "sim/sensor_model.h"
-#include "sim/sha256.h"
+#include "sim/run_log.h"
 
 namespace kuavo::sim {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-
-// CSV writer that hashes exactly the bytes it writes.
-class Log {
- public:
-  explicit Log(const std::string& path) {
-    if (!path.empty()) file_ = std::fopen(path.c_str(), "w");
-  }
-  ~Log() {
-    if (file_ != nullptr) std::fclose(file_);
-  }
-  bool failed_to_open(const std::string& path) const { return !path.empty() && file_ == nullptr; }
-  void write(const char* text, std::size_t n) {
-    hash_.update(text, n);
-    if (file_ != nullptr) std::fwrite(text, 1, n, file_);
-  }
-  std::string digest() { return hash_.hex_digest(); }
-
- private:
-  std::FILE* file_ = nullptr;
-  Sha256 hash_;
-};
+using Log = RunLog;
 
 void write_header(const model::Model& model, Log& log) {
   std::string h = "time_s,base_x_m,base_y_m,base_z_m,base_qx,base_qy,base_qz,base_qw";
@@ -58,12 +37,6 @@ void write_row(double t, const PlantTruth& truth, Log& log) {
   for (const auto& f : truth.contact_force_N) n += std::snprintf(buf + n, sizeof buf - n, ",%.6g,%.6g,%.6g", f.x(), f.y(), f.z());
   buf[n++] = '\n';
   log.write(buf, static_cast<std::size_t>(n));
-}
-
-double tilt_deg(const PlantTruth& t) {
-  const Eigen::Quaterniond q(t.q[6], t.q[3], t.q[4], t.q[5]);
-  const double cos_tilt = std::clamp((q.toRotationMatrix() * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0);
-  return std::acos(cos_tilt) * kRadToDeg;
 }
 
 }  // namespace
@@ -135,7 +108,7 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
       }
       const PlantTruth& t = plant.truth();
       write_row(static_cast<double>(ev.time_ns + ev.dt_ns) * 1e-9, t, log);
-      const double tilt = tilt_deg(t);
+      const double tilt = tilt_deg(t.q);
       out.max_tilt_deg = std::max(out.max_tilt_deg, tilt);
       out.min_base_height_m = std::min(out.min_base_height_m, t.q[2]);
       for (const Vec3& p : t.contact_point_m) out.max_foot_sink_m = std::max(out.max_foot_sink_m, -p.z());

@@ -15,9 +15,10 @@ constexpr int kIkIterations = 20;
 // Three corners fix a foot's pose: toe-left, toe-right, heel-left of each foot.
 constexpr int kFootCorners[2][3] = {{0, 1, 2}, {4, 5, 6}};
 
+// Minimum-jerk 0 → 1 (zero velocity and acceleration at both ends).
 double smooth_step(double s) {
   s = std::clamp(s, 0.0, 1.0);
-  return s * s * (3.0 - 2.0 * s);
+  return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
 }
 
 // Moves the 12 leg joints so the corners of both feet reach their targets (base and the

@@ -13,10 +13,13 @@ struct StepInPlaceConfig {
   int steps = 20;             // swing phases, alternating, the left foot first
   double rate_hz = 100.0;
   double lead_in_s = 1.0;     // standing still before the first shift
-  double shift_s = 0.5;       // double support: base moves to the next stance side
-  double swing_s = 0.45;      // single support: the other foot lifts and lands
+  // Double support: the base moves to the next stance side on a minimum-jerk profile.
+  // The plan is kinematic, so its CoM acceleration a needs a ZMP offset z/g·a that the
+  // feet can carry: 1 s for the ~0.11 m shift peaks at 0.64 m/s² → 5 cm.
+  double shift_s = 1.0;
+  double swing_s = 0.6;       // single support: the other foot lifts and lands
   double lift_m = 0.05;       // swing-foot apex height
-  double shift_fraction = 0.85;  // base shift as a fraction of the foot's lateral offset
+  double shift_fraction = 0.75;  // base shift as a fraction of the foot's lateral offset
   double tail_s = 1.0;        // standing still after returning to the centre
 };
 

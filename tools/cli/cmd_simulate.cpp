@@ -1,6 +1,10 @@
-// kuavo simulate --stand SECONDS [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]
-//                [--seed N] [--latency-ticks N] [--variant s45|s42] [--mass KG]
-//                --log run.csv --summary run.json
+// kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS
+//                [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]
+//                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
+//                [--planner kinematic|mpc] [--state estimator|truth] [--plan-latency-ms MS|measured]
+//                [--duration SECONDS] --log run.csv --summary run.json
+// --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
+// --step-in-place run the online stack (estimator, planner, WBC) following the motion.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -9,7 +13,9 @@
 #include <memory>
 
 #include "sim/closed_loop.h"
+#include "sim/motion_loop.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/motion_input.h"
 
 namespace kuavo::cli {
 namespace {
@@ -34,9 +40,12 @@ bool parse_push(const char* text, sim::Push& push) {
 
 int usage() {
   std::fprintf(stderr,
-               "usage: kuavo simulate --stand SECONDS [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]\n"
+               "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
+               "                      [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]\n"
                "                      [--seed N] [--latency-ticks N] [--integrator euler|cvode|rkm]\n"
                "                      [--variant s45|s42] [--mass KG]\n"
+               "                      [--planner kinematic|mpc] [--state estimator|truth]\n"
+               "                      [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
                "                      --log run.csv --summary run.json\n");
   return 2;
 }
@@ -44,7 +53,11 @@ int usage() {
 }  // namespace
 
 int run_simulate(int argc, char** argv) {
-  sim::RunConfig cfg;
+  sim::MotionRunConfig motion_cfg;
+  sim::RunConfig& cfg = motion_cfg.run;
+  std::string motion_path;
+  int steps = -1;
+  bool duration_given = false;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path;
@@ -59,6 +72,26 @@ int run_simulate(int argc, char** argv) {
     if (!std::strcmp(a, "--stand") && v) {
       if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--stand needs seconds > 0, got");
       stand = true;
+    } else if (!std::strcmp(a, "--step-in-place") && v) {
+      steps = std::atoi(v);
+      if (steps < 1 || steps > 200) return bad("--step-in-place needs 1..200 steps, got");
+    } else if (!std::strcmp(a, "--duration") && v) {
+      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--duration needs seconds > 0, got");
+      duration_given = true;
+    } else if (!std::strcmp(a, "--planner") && v) {
+      if (!stack::parse_planner(v, motion_cfg.stack.planner)) return bad("--planner must be kinematic or mpc, got");
+    } else if (!std::strcmp(a, "--state") && v) {
+      if (std::strcmp(v, "estimator") != 0 && std::strcmp(v, "truth") != 0) return bad("--state must be estimator or truth, got");
+      motion_cfg.use_truth_state = std::strcmp(v, "truth") == 0;
+    } else if (!std::strcmp(a, "--plan-latency-ms") && v) {
+      double ms = 0.0;
+      if (!std::strcmp(v, "measured")) {
+        motion_cfg.measured_plan_latency = true;
+      } else if (!parse_double(v, ms) || ms < 0.0 || ms > 100.0) {
+        return bad("--plan-latency-ms must be 0..100 or measured, got");
+      } else {
+        motion_cfg.plan_latency_s = ms * 1e-3;
+      }
     } else if (!std::strcmp(a, "--ground") && v) {
       if (!sim::parse_ground(v, cfg.ground)) return bad("--ground must be floor or carpet, got");
     } else if (!std::strcmp(a, "--push") && v) {
@@ -82,22 +115,47 @@ int run_simulate(int argc, char** argv) {
       cfg.log_path = v;
     } else if (!std::strcmp(a, "--summary") && v) {
       summary_path = v;
+    } else if (a[0] != '-' && motion_path.empty()) {
+      motion_path = a;
+      continue;  // a positional argument takes no value
     } else {
       return usage();
     }
     ++i;
   }
-  if (!stand) {
-    std::fprintf(stderr, "kuavo simulate: only --stand is available until the dance controller lands\n");
+  const int modes = (stand ? 1 : 0) + (motion_path.empty() ? 0 : 1) + (steps > 0 ? 1 : 0);
+  if (modes != 1) {
+    std::fprintf(stderr, "kuavo simulate: give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS\n");
     return usage();
   }
+  if (!stand && !duration_given) cfg.duration_s = 0.0;  // the motion's length plus settling
   auto robot = std::make_unique<model::Model>();
   if (const auto err = model::build_model(variant, mass_kg, *robot); err != model::ModelError::kOk) {
     std::fprintf(stderr, "kuavo simulate: %s\n", model::to_string(err));
     return 2;
   }
-  const sim::RunSummary s = sim::run_standing(*robot, cfg);
-  const std::string json = sim::summary_json(s);
+  sim::RunSummary s;
+  std::string json;
+  if (stand) {
+    s = sim::run_standing(*robot, cfg);
+    json = sim::summary_json(s);
+  } else {
+    auto plan = std::make_unique<planner::MotionPlan>();
+    std::string error;
+    const bool loaded = steps > 0 ? make_step_plan(*robot, steps, *plan, error)
+                                  : load_motion_plan(motion_path, *robot, *plan, error);
+    if (!loaded) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
+      return 2;
+    }
+    if (const char* why = stack::stack_validate_config(motion_cfg.stack)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", why);
+      return 2;
+    }
+    const sim::MotionSummary ms = sim::run_motion(*robot, *plan, motion_cfg);
+    s = ms.run;
+    json = sim::motion_summary_json(ms);
+  }
   if (!summary_path.empty()) {
     std::ofstream out(summary_path);
     out << json;

@@ -1,0 +1,73 @@
+#include "controllers/stack/online_stack.h"
+
+#include <cstring>
+
+namespace kuavo::stack {
+
+const char* to_string(PlannerKind k) {
+  switch (k) {
+    case PlannerKind::kKinematic: return "kinematic";
+    case PlannerKind::kMpc: return "mpc";
+  }
+  return "?";
+}
+
+bool parse_planner(const char* text, PlannerKind& out) {
+  if (std::strcmp(text, "kinematic") == 0) return out = PlannerKind::kKinematic, true;
+  if (std::strcmp(text, "mpc") == 0) return out = PlannerKind::kMpc, true;
+  return false;
+}
+
+const char* stack_validate_config(const StackConfig& config) {
+  if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
+  if (config.planner == PlannerKind::kMpc) return "the MPC planner is not in this build yet";
+  return wbc::wbc_validate_config(config.wbc);
+}
+
+bool stack_start(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                 PlannerWorkspace& planner_ws, const planner::MotionPlan& motion, const hal::SensorFrame& sensors,
+                 hal::TimeNs now_ns) {
+  if (stack_validate_config(config) != nullptr) return false;
+  if (!estimator::estimator_init(config.estimator, control.estimator)) return false;
+  const dynamics::ConfigVector& q0 = motion.q[0];
+  if (estimator::estimator_reset(model, control.estimator, sensors, Eigen::Vector2d(q0[0], q0[1])) !=
+      estimator::EstimatorStatus::kOk) {
+    return false;
+  }
+  wbc::wbc_init(model, config.wbc, control.wbc);
+  static planner::ReferencePlan first;  // start-up only
+  stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, first);
+  stack_apply_plan_rt(control, first);
+  control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
+  control.started = true;
+  control.ticks = 0;
+  return true;
+}
+
+wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
+                                     const hal::SensorFrame& sensors, hal::TimeNs now_ns, const StateOverride& state,
+                                     hal::CommandFrame& command) {
+  // The reference first: its contact flags are the estimator's contact schedule.
+  planner::reference_plan_at_rt(ws.active, now_ns, ws.reference);
+  const double dt_s = static_cast<double>(now_ns - ws.last_tick_ns) * 1e-9;
+  ws.last_tick_ns = now_ns;
+  estimator::estimator_step_rt(model, ws.estimator, sensors, ws.reference.in_contact, dt_s, ws.estimate);
+  const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
+  const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
+  ++ws.ticks;
+  return wbc::wbc_step_rt(model, config.wbc, ws.wbc, q, v, ws.reference, now_ns, command);
+}
+
+void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
+                   const planner::MotionPlan& motion, const dynamics::ConfigVector& /*q*/,
+                   const dynamics::VelocityVector& /*v*/, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
+  // Kinematic planner: the state does not enter (the WBC closes the loop).
+  planner::kinematic_reference_plan_rt(model, ws.data, motion, t_state_ns, config.plan_period_s, ws.window, out);
+}
+
+void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan) {
+  ws.active = plan;
+  ++ws.plans_applied;
+}
+
+}  // namespace kuavo::stack

@@ -1,0 +1,85 @@
+// The online stack as two step functions, identical in the firmware and the simulator
+// (only the binding that fills SensorFrame and consumes CommandFrame differs):
+//
+//   control task, 500 Hz:  sensors → estimator → reference at now (from the active plan)
+//                          → WBC → joint commands            stack_control_tick_rt
+//   planning task, 50 Hz:  latest estimate + motion → a ReferencePlan
+//                          (kinematic: the motion itself; MPC: one real-time iteration)
+//                                                             stack_plan_rt
+//   hand-over:             the plan becomes active when it arrives  stack_apply_plan_rt
+//
+// The two tasks own separate workspaces (ControlWorkspace, PlannerWorkspace), so on the
+// robot they can run on two threads with a LatestValue in each direction; in the
+// simulator the lockstep scheduler calls them in virtual time. Both workspaces are large
+// (~0.3 MB and more): static storage or one start-up allocation, never a stack.
+#pragma once
+
+#include <cstdint>
+
+#include "controllers/estimator/estimator.h"
+#include "controllers/planner/reference_plan.h"
+#include "controllers/wbc/wbc.h"
+
+namespace kuavo::stack {
+
+// Stable numbers.
+enum class PlannerKind : std::uint8_t {
+  kKinematic = 0,  // the WBC tracks the motion as is (no dynamics in the plan)
+  kMpc = 1,        // centroidal RTI-MPC
+};
+const char* to_string(PlannerKind k);
+bool parse_planner(const char* text, PlannerKind& out);  // "kinematic" | "mpc"
+
+struct StackConfig {
+  PlannerKind planner = PlannerKind::kKinematic;
+  double plan_period_s = 0.02;  // 50 Hz; also the spacing of the plan's knots
+  wbc::WbcConfig wbc{};
+  estimator::EstimatorConfig estimator{};
+};
+// nullptr if usable, else what is wrong. Load time.
+const char* stack_validate_config(const StackConfig& config);
+
+struct ControlWorkspace {
+  estimator::EstimatorState estimator;
+  estimator::EstimateOutput estimate;
+  wbc::WbcWorkspace wbc;
+  planner::ReferencePlan active;  // the plan the ticks follow
+  wbc::WbcReference reference;    // this tick's, interpolated
+  hal::TimeNs last_tick_ns = 0;
+  bool started = false;
+  std::uint64_t ticks = 0, plans_applied = 0;
+};
+
+struct PlannerWorkspace {
+  planner::PlanWindow window;
+  dynamics::Data data;
+};
+
+// The state the control tick runs on: the estimator's, or (simulation only, for
+// comparisons) the simulator's truth.
+struct StateOverride {
+  const dynamics::ConfigVector* q = nullptr;
+  const dynamics::VelocityVector* v = nullptr;
+};
+
+// Start-up (not real-time): validates, resets the estimator from the standing robot at
+// the motion's first frame, makes the first plan and activates it. false if the sensors
+// are unusable or the config is bad.
+bool stack_start(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                 PlannerWorkspace& planner_ws, const planner::MotionPlan& motion, const hal::SensorFrame& sensors,
+                 hal::TimeNs now_ns);
+
+// 500 Hz. now_ns: this tick's sensor time. Real-time safe.
+wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
+                                     const hal::SensorFrame& sensors, hal::TimeNs now_ns, const StateOverride& state,
+                                     hal::CommandFrame& command);
+
+// 50 Hz. (q, v): the state at t_state_ns (the control task's estimate when the planner
+// released). Real-time safe.
+void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
+                   const planner::MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                   hal::TimeNs t_state_ns, planner::ReferencePlan& out);
+
+void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan);
+
+}  // namespace kuavo::stack

@@ -1,0 +1,309 @@
+#include "sim/motion_loop.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "controllers/standing/standing_controller.h"
+#include "rtos_shim/clock.h"
+#include "rtos_shim/lockstep_scheduler.h"
+#include "sim/run_log.h"
+#include "sim/sensor_model.h"
+#include "sim/support_polygon.h"
+
+namespace kuavo::sim {
+namespace {
+
+// A foot carries load when its corners push this hard together; the centre of pressure
+// is defined once all contacts push this hard (light touches would make it jump).
+constexpr double kFootLoaded_N = 20.0;
+constexpr double kCopDefined_N = 50.0;
+constexpr int kCornersPerFoot = planner::kCornersPerFoot;
+
+std::string log_header(const model::Model& model) {
+  std::string h = "time_s,base_x_m,base_y_m,base_z_m,base_qx,base_qy,base_qz,base_qw";
+  for (int j = 0; j < model::kNumJoints; ++j) h += std::string(",q_") + model::joint_name(model, j);
+  for (int j = 0; j < model::kNumJoints; ++j) h += std::string(",tau_") + model::joint_name(model, j);
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    for (const char* a : {"x", "y", "z"}) h += std::string(",f_") + model::frame_name(model, c) + "_" + a;
+  }
+  for (int j = 0; j < model::kNumJoints; ++j) h += std::string(",qref_") + model::joint_name(model, j);
+  h += ",com_x_m,com_y_m,com_z_m,comref_x_m,comref_y_m,comref_z_m,zmp_x_m,zmp_y_m,zmp_margin_m";
+  h += ",est_x_m,est_y_m,est_z_m,est_vx_m_s,est_vy_m_s,est_vz_m_s,wbc_status\n";
+  return h;
+}
+
+struct Balance {
+  bool defined = false;
+  Eigen::Vector2d cop = Eigen::Vector2d::Zero();
+  double margin_m = 0.0;
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
+};
+
+Balance balance_of(const PlantTruth& t) {
+  Balance b;
+  std::array<Eigen::Vector2d, model::kNumContactPoints> corners{};
+  int n = 0;
+  double fz_total = 0.0;
+  Eigen::Vector2d moment = Eigen::Vector2d::Zero();
+  for (int foot = 0; foot < 2; ++foot) {
+    double fz = 0.0;
+    for (int c = foot * kCornersPerFoot; c < (foot + 1) * kCornersPerFoot; ++c) fz += t.contact_force_N[c].z();
+    if (fz < kFootLoaded_N) continue;
+    for (int c = foot * kCornersPerFoot; c < (foot + 1) * kCornersPerFoot; ++c) {
+      corners[n++] = t.contact_point_m[c].head<2>();
+      fz_total += t.contact_force_N[c].z();
+      moment += t.contact_force_N[c].z() * t.contact_point_m[c].head<2>();
+    }
+  }
+  if (fz_total < kCopDefined_N || n < 3) return b;
+  b.defined = true;
+  b.cop = moment / fz_total;
+  const auto hull = convex_hull<model::kNumContactPoints>(corners, n);
+  b.margin_m = signed_margin(hull, b.cop);
+  b.lo = b.hi = corners[0];
+  for (int i = 1; i < n; ++i) b.lo = b.lo.cwiseMin(corners[i]), b.hi = b.hi.cwiseMax(corners[i]);
+  return b;
+}
+
+}  // namespace
+
+Percentiles percentiles(std::vector<double> samples) {
+  Percentiles p;
+  if (samples.empty()) return p;
+  std::sort(samples.begin(), samples.end());
+  auto at = [&](double f) { return samples[std::min(samples.size() - 1, static_cast<std::size_t>(f * (samples.size() - 1) + 0.5))]; };
+  p.p50 = at(0.5);
+  p.p99 = at(0.99);
+  p.max = samples.back();
+  return p;
+}
+
+MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
+                         MotionTrace* trace) {
+  MotionSummary out;
+  RunSummary& run = out.run;
+  out.planner = stack::to_string(config.stack.planner);
+  out.motion_duration_s = planner::motion_plan_duration_s(motion);
+  if (const char* why = stack::stack_validate_config(config.stack)) {
+    run.ok = false;
+    run.error = why;
+    return out;
+  }
+  // Controller state in blocks allocated before the loop (static storage in the firmware).
+  auto control = std::make_unique<stack::ControlWorkspace>();
+  auto planner_ws = std::make_unique<stack::PlannerWorkspace>();
+  auto pending = std::make_unique<planner::ReferencePlan>();
+  auto metrics_data = std::make_unique<dynamics::Data>();
+
+  PlantConfig plant_cfg;
+  plant_cfg.ground = config.run.ground;
+  plant_cfg.integrator = config.run.integrator;
+  plant_cfg.relative_tolerance = config.run.relative_tolerance;
+  plant_cfg.absolute_tolerance = 0.1 * config.run.relative_tolerance;
+  Plant plant(model, plant_cfg);
+  dynamics::ConfigVector q0 = motion.q[0];
+  control::place_on_ground(model, *metrics_data, q0);
+  plant.reset(q0, dynamics::VelocityVector::Zero());
+  plant.set_push(config.run.push);
+
+  SensorModel sensors(config.run.seed);
+  RunLog log(config.run.log_path);
+  if (log.failed_to_open(config.run.log_path)) {
+    run.ok = false;
+    run.error = "cannot write log '" + config.run.log_path + "'";
+    return out;
+  }
+  log.write(log_header(model));
+
+  hal::SensorFrame frame;
+  sensors.sample(plant.truth(), 0, frame);
+  if (!stack::stack_start(model, config.stack, *control, *planner_ws, motion, frame, 0)) {
+    run.ok = false;
+    run.error = "the online stack did not start (estimator reset or configuration)";
+    return out;
+  }
+
+  const rtos::TimeNs period_ns = static_cast<rtos::TimeNs>(std::llround(config.stack.wbc.dt_s * 1e9));
+  const rtos::TimeNs plan_period_ns = static_cast<rtos::TimeNs>(std::llround(config.stack.plan_period_s * 1e9));
+  const double duration_s = config.run.duration_s > 0.0 ? config.run.duration_s : out.motion_duration_s + config.settle_s;
+  rtos::LockstepConfig sched_cfg;
+  sched_cfg.control_period_ns = period_ns;
+  sched_cfg.plan_period_ns = plan_period_ns;
+  sched_cfg.plan_delay_ns = rtos::round_up_to_multiple_ns(
+      static_cast<rtos::TimeNs>(std::llround(std::max(0.0, config.plan_latency_s) * 1e9)), period_ns);
+  sched_cfg.stop_ns = static_cast<rtos::TimeNs>(std::llround(duration_s * 1e9));
+  rtos::LockstepScheduler sched;
+  if (const auto err = sched.reset(sched_cfg); err != rtos::LockstepError::kOk) {
+    run.ok = false;
+    run.error = rtos::describe(err);
+    return out;
+  }
+
+  const auto ticks = static_cast<std::size_t>(duration_s / config.stack.wbc.dt_s) + 2;
+  std::vector<double> wbc_us, plan_ms;
+  wbc_us.reserve(ticks);
+  plan_ms.reserve(ticks / 5 + 2);
+  std::vector<hal::CommandFrame> in_flight(static_cast<std::size_t>(std::max(0, config.run.command_latency_ticks)) + 1);
+  std::size_t slot = 0;
+  hal::CommandFrame command;
+  planner::PlanKnot motion_now;  // the motion at this tick (metrics)
+  double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0;
+  std::uint64_t tracked = 0;
+  out.zmp_margin_m_min = 1e9;
+  wbc::WbcStatus last_status = wbc::WbcStatus::kOk;
+  run.min_base_height_m = plant.truth().q[2];
+  if (trace != nullptr) {
+    const int stride = trace->stride;
+    *trace = MotionTrace{};
+    trace->stride = stride;
+  }
+  char row[16384];
+
+  const rtos::TimeNs wall_start = rtos::now_ns();
+  rtos::SimEvent ev;
+  while (sched.next(ev)) {
+    if (ev.kind == rtos::SimEventKind::kPlanApply) {
+      stack::stack_apply_plan_rt(*control, *pending);
+    } else if (ev.kind == rtos::SimEventKind::kControlTick) {
+      const PlantTruth& truth = plant.truth();
+      sensors.sample(truth, ev.time_ns, frame);
+      stack::StateOverride state;
+      if (config.use_truth_state) state = {&truth.q, &truth.v};
+      const rtos::TimeNs t0 = rtos::now_ns();
+      last_status = stack::stack_control_tick_rt(model, config.stack, *control, frame, ev.time_ns, state, command);
+      const double us = static_cast<double>(rtos::now_ns() - t0) * 1e-3;
+      wbc_us.push_back(us);
+      if (us * 1e3 > static_cast<double>(period_ns)) ++out.deadline_misses;
+      if (last_status != wbc::WbcStatus::kOk) ++out.wbc_not_ok_ticks;
+      in_flight[slot] = command;
+      slot = (slot + 1) % in_flight.size();
+      plant.set_command(in_flight[slot]);
+      ++run.control_ticks;
+    } else if (ev.kind == rtos::SimEventKind::kPlanRequest) {
+      const bool truth_state = config.use_truth_state;
+      const dynamics::ConfigVector& q = truth_state ? plant.truth().q : control->estimate.q;
+      const dynamics::VelocityVector& v = truth_state ? plant.truth().v : control->estimate.v;
+      const rtos::TimeNs t0 = rtos::now_ns();
+      stack::stack_plan_rt(model, config.stack, *planner_ws, motion, q, v, ev.time_ns, *pending);
+      const rtos::TimeNs spent_ns = rtos::now_ns() - t0;
+      plan_ms.push_back(static_cast<double>(spent_ns) * 1e-6);
+      if (spent_ns > plan_period_ns) ++out.deadline_misses;
+      if (config.measured_plan_latency) sched.set_plan_delay_ns(rtos::round_up_to_multiple_ns(spent_ns, period_ns));
+    } else if (ev.kind == rtos::SimEventKind::kPlantStep) {
+      if (plant.advance(static_cast<double>(ev.dt_ns) * 1e-9) != PlantError::kOk) {
+        run.ok = false;
+        run.error = plant.last_error();
+        break;
+      }
+      const double t_s = static_cast<double>(ev.time_ns + ev.dt_ns) * 1e-9;
+      const PlantTruth& t = plant.truth();
+      planner::motion_plan_sample_rt(model, *metrics_data, motion, ev.time_ns + ev.dt_ns, motion_now);
+      const Balance bal = balance_of(t);
+      const double tilt = tilt_deg(t.q);
+      run.max_tilt_deg = std::max(run.max_tilt_deg, tilt);
+      run.min_base_height_m = std::min(run.min_base_height_m, t.q[2]);
+      for (const Vec3& p : t.contact_point_m) run.max_foot_sink_m = std::max(run.max_foot_sink_m, -p.z());
+      if (!run.fell && (t.q[2] < kFallHeight_m || tilt > kFallTilt_deg)) {
+        run.fell = true;
+        run.fell_at_s = t_s;
+      }
+      const Eigen::Quaterniond base(t.q[6], t.q[3], t.q[4], t.q[5]);
+      const Vec3 v_world = base * t.v.head<3>();
+      const estimator::EstimateOutput& est = control->estimate;
+      if (!run.fell) {
+        const auto e = (t.q.tail<model::kNumJoints>() - motion_now.q.tail<model::kNumJoints>()).eval();
+        sq_legs += e.head<2 * model::kLegJoints>().squaredNorm() / (2 * model::kLegJoints);
+        sq_arms += e.segment<2 * model::kArmJoints>(model::kLeftArmFirst).squaredNorm() / (2 * model::kArmJoints);
+        sq_vel += (est.base_velocity_world_m_s - v_world).squaredNorm();
+        ++tracked;
+        out.com_err_m_max = std::max(out.com_err_m_max, (t.com_m - motion_now.com_position_m).norm());
+        if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
+        const double pos_err = (est.q.head<2>() - t.q.head<2>()).norm();
+        out.estimator_position_err_m_max = std::max(out.estimator_position_err_m_max, pos_err);
+        out.estimator_position_drift_m = pos_err;
+      }
+      int n = std::snprintf(row, sizeof row, "%.3f", t_s);
+      for (int i = 0; i < model::kNq; ++i) n += std::snprintf(row + n, sizeof row - n, ",%.9g", t.q[i]);
+      for (int j = 0; j < model::kNumJoints; ++j) n += std::snprintf(row + n, sizeof row - n, ",%.6g", t.joint_torque_Nm[j]);
+      for (const auto& f : t.contact_force_N) n += std::snprintf(row + n, sizeof row - n, ",%.6g,%.6g,%.6g", f.x(), f.y(), f.z());
+      for (int j = 0; j < model::kNumJoints; ++j) n += std::snprintf(row + n, sizeof row - n, ",%.9g", motion_now.q[7 + j]);
+      n += std::snprintf(row + n, sizeof row - n, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", t.com_m.x(), t.com_m.y(), t.com_m.z(),
+                         motion_now.com_position_m.x(), motion_now.com_position_m.y(), motion_now.com_position_m.z());
+      if (bal.defined) {
+        n += std::snprintf(row + n, sizeof row - n, ",%.6g,%.6g,%.6g", bal.cop.x(), bal.cop.y(), bal.margin_m);
+      } else {
+        n += std::snprintf(row + n, sizeof row - n, ",,,");
+      }
+      n += std::snprintf(row + n, sizeof row - n, ",%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%d\n", est.q[0], est.q[1], est.q[2],
+                         est.base_velocity_world_m_s.x(), est.base_velocity_world_m_s.y(), est.base_velocity_world_m_s.z(),
+                         static_cast<int>(last_status));
+      log.write(row, static_cast<std::size_t>(n));
+
+      if (trace != nullptr && (ev.index % static_cast<std::uint64_t>(std::max(1, trace->stride))) == 0) {
+        trace->time_s.push_back(t_s);
+        trace->com.push_back({t.com_m.x(), t.com_m.y(), t.com_m.z()});
+        trace->com_ref.push_back({motion_now.com_position_m.x(), motion_now.com_position_m.y(), motion_now.com_position_m.z()});
+        const double nan = std::nan("");
+        trace->zmp.push_back(bal.defined ? std::array<double, 2>{bal.cop.x(), bal.cop.y()} : std::array<double, 2>{nan, nan});
+        trace->zmp_margin_m.push_back(bal.defined ? bal.margin_m : nan);
+        trace->support_lo.push_back(bal.defined ? std::array<double, 2>{bal.lo.x(), bal.lo.y()} : std::array<double, 2>{nan, nan});
+        trace->support_hi.push_back(bal.defined ? std::array<double, 2>{bal.hi.x(), bal.hi.y()} : std::array<double, 2>{nan, nan});
+        std::array<double, model::kNumJoints> qa{}, qr{};
+        for (int j = 0; j < model::kNumJoints; ++j) qa[j] = t.q[7 + j], qr[j] = motion_now.q[7 + j];
+        trace->q.push_back(qa);
+        trace->q_ref.push_back(qr);
+        trace->base_velocity.push_back({v_world.x(), v_world.y(), v_world.z()});
+        trace->base_velocity_est.push_back(
+            {est.base_velocity_world_m_s.x(), est.base_velocity_world_m_s.y(), est.base_velocity_world_m_s.z()});
+      }
+      if (run.fell && t_s > run.fell_at_s + 0.5) break;  // nothing left to learn
+    }
+  }
+  const double wall_s = static_cast<double>(rtos::now_ns() - wall_start) * 1e-9;
+  run.sim_time_s = plant.time_s();
+  run.real_time_factor = wall_s > 0.0 ? run.sim_time_s / wall_s : 0.0;
+  run.torque_saturations = plant.torque_saturations();
+  if (run.control_ticks > 0) {
+    run.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / run.control_ticks;
+    run.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / run.control_ticks;
+  }
+  run.log_sha256 = log.digest();
+  if (tracked > 0) {
+    out.tracking_rms_legs_rad = std::sqrt(sq_legs / tracked);
+    out.tracking_rms_arms_rad = std::sqrt(sq_arms / tracked);
+    out.estimator_velocity_rms_m_s = std::sqrt(sq_vel / tracked);
+  }
+  if (out.zmp_margin_m_min > 1e8) out.zmp_margin_m_min = 0.0;
+  out.wbc_us = percentiles(wbc_us);
+  out.mpc_ms = percentiles(plan_ms);
+  out.plans_applied = sched.stats().plans_applied;
+  out.plans_skipped = sched.stats().plans_skipped;
+  return out;
+}
+
+std::string motion_summary_json(const MotionSummary& s) {
+  std::string base = summary_json(s.run);
+  base.resize(base.rfind('}'));  // reopen the object
+  while (!base.empty() && (base.back() == '\n' || base.back() == ' ')) base.pop_back();
+  char buf[2048];
+  std::snprintf(buf, sizeof buf,
+                ",\n  \"planner\": \"%s\",\n  \"motion_duration_s\": %.3f,\n"
+                "  \"tracking_rms_rad\": {\"legs\": %.5f, \"arms\": %.5f},\n"
+                "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n"
+                "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
+                "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
+                "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
+                "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n"
+                "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
+                s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
+                s.zmp_margin_m_min, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
+                static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
+                static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped),
+                s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
+  return base + buf;
+}
+
+}  // namespace kuavo::sim
