@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string_view>
 
@@ -45,7 +46,9 @@ std::string xml_problem(const std::string& xml) {
   std::vector<std::string> open;
   int roots = 0;
   std::size_t i = 0;
-  auto is_name = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == ':' || c == '_' || c == '.'; };
+  auto is_name = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == ':' || c == '_' || c == '.';
+  };
   while (i < xml.size()) {
     const std::size_t lt = xml.find('<', i);
     const std::string_view text(xml.data() + i, (lt == std::string::npos ? xml.size() : lt) - i);
@@ -91,7 +94,8 @@ std::string xml_problem(const std::string& xml) {
       const std::size_t close = xml.find('"', p + 2);
       if (close == std::string::npos) return "unterminated attribute";
       const std::string_view value(xml.data() + p + 2, close - p - 2);
-      if (value.find('<') != std::string_view::npos || !entities_ok(value)) return "unescaped attribute value in <" + name + ">";
+      if (value.find('<') != std::string_view::npos || !entities_ok(value))
+        return "unescaped attribute value in <" + name + ">";
       p = close + 1;
     }
     i = p;
@@ -149,7 +153,8 @@ std::vector<Point> points_of(const XMLElement* e) {
   while (in >> token) {
     const std::size_t comma = token.find(',');
     EXPECT_NE(comma, std::string::npos) << token;
-    pts.push_back({std::strtod(token.substr(0, comma).c_str(), nullptr), std::strtod(token.substr(comma + 1).c_str(), nullptr)});
+    pts.push_back(
+        {std::strtod(token.substr(0, comma).c_str(), nullptr), std::strtod(token.substr(comma + 1).c_str(), nullptr)});
   }
   return pts;
 }
@@ -296,8 +301,10 @@ TEST(report_svg_plot, KnownPointsLandOnTheStatedMapping) {
   ASSERT_EQ(yticks.size(), yvals.size());
   ASSERT_GE(xvals.size(), 3u);
   ASSERT_GE(yvals.size(), 3u);
-  for (std::size_t i = 0; i < xvals.size(); ++i) EXPECT_NEAR(xticks[i]->DoubleAttribute("x1"), m.px(xvals[i]), kPixelTolerance);
-  for (std::size_t i = 0; i < yvals.size(); ++i) EXPECT_NEAR(yticks[i]->DoubleAttribute("y1"), m.py(yvals[i]), kPixelTolerance);
+  for (std::size_t i = 0; i < xvals.size(); ++i)
+    EXPECT_NEAR(xticks[i]->DoubleAttribute("x1"), m.px(xvals[i]), kPixelTolerance);
+  for (std::size_t i = 0; i < yvals.size(); ++i)
+    EXPECT_NEAR(yticks[i]->DoubleAttribute("y1"), m.py(yvals[i]), kPixelTolerance);
 }
 
 // Checks one axis's ticks: evenly spaced by 1, 2 or 5 x 10^k, multiples of the step, inside the
@@ -326,9 +333,9 @@ void expect_nice_ticks(const std::vector<double>& v, double lo, double hi, const
 }
 
 TEST(report_svg_plot, TicksAreOneTwoFiveMultiplesCoveringTheRange) {
-  const std::pair<double, double> ranges[] = {{0, 0.0137}, {-3.2, 47},     {1000, 1003}, {-1e-3, 5e-4},
-                                              {5, 5},      {-2.5e5, 1.2e6}, {1e-7, 3e-7}, {1e6, 1e6 + 3},
-                                              {0, 30}};
+  const std::pair<double, double> ranges[] = {{0, 0.0137}, {-3.2, 47},         {1000, 1003}, {-1e-3, 5e-4},
+                                              {5, 5},      {-2.5e5, 1.2e6},    {1e-7, 3e-7}, {1e6, 1e6 + 3},
+                                              {0, 30},     {1e6, 1e6 + 1e-12}, {0, 0},       {-1e-300, -1e-300}};
   for (const auto& [lo, hi] : ranges) {
     Plot p;
     p.series = {line("s", {lo, hi}, {lo, hi})};
@@ -415,7 +422,7 @@ TEST(report_svg_plot, DecimationKeepsSpikesAndBoundsThePointCount) {
   for (std::size_t i = 0; i < kSamples; ++i) {
     x[i] = 0.0003 * static_cast<double>(i);
     // A slow wave plus a deterministic jitter.
-    y[i] = std::sin(2.0 * M_PI * 0.5 * x[i]) + 0.01 * (static_cast<double>((i * 7919) % 13) - 6.0) / 6.0;
+    y[i] = std::sin(2.0 * std::numbers::pi * 0.5 * x[i]) + 0.01 * (static_cast<double>((i * 7919) % 13) - 6.0) / 6.0;
   }
   y[kUpSpike] = 50.0;
   y[kDownSpike] = -40.0;
@@ -431,7 +438,8 @@ TEST(report_svg_plot, DecimationKeepsSpikesAndBoundsThePointCount) {
   const auto pts = points_of(lines[0]);
   EXPECT_LE(pts.size(), 4 * static_cast<std::size_t>(std::ceil(m.width)) + 4);
   EXPECT_GE(pts.size(), static_cast<std::size_t>(m.width) / 2);  // still one or more per column
-  const auto [top, bottom] = std::minmax_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.y < b.y; });
+  const auto [top, bottom] =
+      std::minmax_element(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.y < b.y; });
   EXPECT_NEAR(top->y, m.py(50.0), kPixelTolerance);
   EXPECT_NEAR(top->x, m.px(x[kUpSpike]), kPixelTolerance);
   EXPECT_NEAR(bottom->y, m.py(-40.0), kPixelTolerance);
@@ -443,7 +451,7 @@ TEST(report_svg_plot, DecimationKeepsSpikesAndBoundsThePointCount) {
   std::vector<double> t(15000), q(15000);
   for (std::size_t i = 0; i < t.size(); ++i) {
     t[i] = static_cast<double>(i) / 500.0;
-    q[i] = 0.3 * std::sin(2.0 * M_PI * 1.3 * t[i]) + 0.002 * static_cast<double>((i * 104729) % 17);
+    q[i] = 0.3 * std::sin(2.0 * std::numbers::pi * 1.3 * t[i]) + 0.002 * static_cast<double>((i * 104729) % 17);
   }
   Plot joint;
   joint.series = {line("q_ref", t, q)};
@@ -467,8 +475,8 @@ TEST(report_svg_plot, EqualAxesGiveEqualPixelsPerUnit) {
   struct Case {
     std::vector<double> px, py;  // polygon
   };
-  const Case cases[] = {{{0, 2, 2, 0}, {0, 0, 1, 1}},        // wide and short: y widened
-                        {{0, 1, 1, 0}, {0, 0, 10, 10}},      // tall: x widened
+  const Case cases[] = {{{0, 2, 2, 0}, {0, 0, 1, 1}},         // wide and short: y widened
+                        {{0, 1, 1, 0}, {0, 0, 10, 10}},       // tall: x widened
                         {{-50, 50, 50, -50}, {0, 0, 1, 1}}};  // very wide
   for (const Case& c : cases) {
     for (const bool equal : {true, false}) {
@@ -506,8 +514,8 @@ TEST(report_svg_plot, EqualAxesGiveEqualPixelsPerUnit) {
 
 TEST(report_svg_plot, LegendListsEveryNameEscaped) {
   Plot p;
-  p.series = {line("a<b", {0, 1}, {0, 1}), line("x & y", {0, 1}, {1, 0}), line("say \"hi\"", {0, 1}, {0.5, 0.5}),
-              line("it's", {0, 1}, {0.2, 0.2}), line("", {0, 1}, {0.3, 0.3}), line("plain", {0, 1}, {0.7, 0.7})};
+  p.series = {line("a<b", {0, 1}, {0, 1}),      line("x & y", {0, 1}, {1, 0}), line("say \"hi\"", {0, 1}, {0.5, 0.5}),
+              line("it's", {0, 1}, {0.2, 0.2}), line("", {0, 1}, {0.3, 0.3}),  line("plain", {0, 1}, {0.7, 0.7})};
   p.polygons.push_back({"support <polygon>", {0, 1, 1}, {0, 0, 1}, ""});
   const std::string text = render_svg(p);
   Svg svg(text);

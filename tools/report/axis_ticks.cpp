@@ -52,8 +52,8 @@ std::string format_tick(double value, double step) {
   std::to_chars_result r{};
   if (std::abs(value) >= kMaxFixedMagnitude || step < kMinFixedStep) {
     // Enough significant digits to tell neighbouring ticks apart (1000000.5 vs 1000001).
-    const int digits = static_cast<int>(std::floor(std::log10(std::max(std::abs(value), step))) -
-                                        std::floor(std::log10(step))) + 1;
+    const int digits =
+        static_cast<int>(std::floor(std::log10(std::max(std::abs(value), step))) - std::floor(std::log10(step))) + 1;
     r = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, std::clamp(digits, 1, 17));
   } else {
     const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));

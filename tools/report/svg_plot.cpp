@@ -32,6 +32,7 @@ constexpr double kLegendCharWidth_px = 6.5;
 constexpr double kLegendRowHeight_px = 16.0;
 // Data margin on each side of the range, as a fraction of its span, so lines clear the frame.
 constexpr double kRangePadFraction = 0.03;
+constexpr double kMinRelativePad = 1e-9;
 // Tick density: about one x tick per 100 px and one y tick per 45 px.
 constexpr double kXTickSpacing_px = 100.0;
 constexpr double kYTickSpacing_px = 45.0;
@@ -130,6 +131,14 @@ void put_attr(std::string& out, std::string_view name, std::string_view text) {
   put_escaped(out, text);
   out += '"';
 }
+// The shown data range, exactly (shortest round-trip form): it defines the mapping.
+void put_range_attr(std::string& out, std::string_view name, const Range& r) {
+  char buf[64];
+  char* p = std::to_chars(buf, buf + sizeof buf, r.lo).ptr;
+  *p++ = ' ';
+  p = std::to_chars(p, buf + sizeof buf, r.hi).ptr;
+  put_attr(out, name, std::string_view(buf, static_cast<std::size_t>(p - buf)));
+}
 void put_point(std::string& out, double x, double y) {
   put_number(out, x);
   out += ',';
@@ -160,15 +169,16 @@ std::size_t utf8_length(std::string_view s) {
 double legend_width_px(const Plot& plot, double plot_width_px) {
   std::size_t longest = 0;
   bool any = false;
-  for (const Series& s : plot.series) {
-    if (!s.name.empty()) longest = std::max(longest, utf8_length(s.name)), any = true;
-  }
-  for (const Polygon& p : plot.polygons) {
-    if (!p.name.empty()) longest = std::max(longest, utf8_length(p.name)), any = true;
-  }
+  auto consider = [&](const std::string& name) {
+    if (name.empty()) return;
+    longest = std::max(longest, utf8_length(name));
+    any = true;
+  };
+  for (const Series& s : plot.series) consider(s.name);
+  for (const Polygon& p : plot.polygons) consider(p.name);
   if (!any) return 0.0;
-  const double wanted = kLegendPad_px + kLegendSwatch_px + kLegendGap_px +
-                        kLegendCharWidth_px * static_cast<double>(longest);
+  const double wanted =
+      kLegendPad_px + kLegendSwatch_px + kLegendGap_px + kLegendCharWidth_px * static_cast<double>(longest);
   return std::min(wanted, plot_width_px / 3.0);
 }
 
@@ -176,7 +186,10 @@ double legend_width_px(const Plot& plot, double plot_width_px) {
 Range padded(const Range& r) {
   if (r.empty()) return {0.0, 1.0};
   double pad = r.span() * kRangePadFraction;
-  if (!(pad > 0.0)) pad = (r.lo != 0.0) ? std::abs(r.lo) * 0.1 : 1.0;
+  if (!(pad > 0.0)) pad = std::abs(r.lo) * 0.1;  // a constant: +-10 % of its value
+  if (!(pad > 0.0)) pad = 1.0;                   // zero (or too small to pad)
+  // Ticks need a span that doubles can still divide: at least 1e-9 of the magnitude.
+  pad = std::max(pad, kMinRelativePad * std::max(std::abs(r.lo), std::abs(r.hi)));
   // Keep the span finite (and thus the mapping) even for values near DBL_MAX.
   constexpr double kLimit = std::numeric_limits<double>::max() / 4.0;
   return {std::max(r.lo - pad, -kLimit), std::min(r.hi + pad, kLimit)};
@@ -191,7 +204,9 @@ Frame make_frame(const Plot& plot, double width_px, double height_px) {
   Range x, y;
   auto add = [&](const auto& line) {
     for (std::size_t i = 0, n = sample_count(line); i < n; ++i) {
-      if (finite_sample(line, i)) x.add(line.x[i]), y.add(line.y[i]);
+      if (!finite_sample(line, i)) continue;
+      x.add(line.x[i]);
+      y.add(line.y[i]);
     }
   };
   for (const Polygon& p : plot.polygons) add(p);
@@ -235,7 +250,8 @@ void draw_ticks(const Frame& f, std::string& out) {
     out += "/>\n";
   }
   out += "</g>\n<g fill=\"#333\">\n";
-  for (const double v : xt.values) put_text(out, "xtick-label", f.px(v), bottom + 16.0, "middle", format_tick(v, xt.step));
+  for (const double v : xt.values)
+    put_text(out, "xtick-label", f.px(v), bottom + 16.0, "middle", format_tick(v, xt.step));
   for (const double v : yt.values) {
     put_text(out, "ytick-label", f.left_px - kTickLength_px - 3.0, f.py(v) + 4.0, "end", format_tick(v, yt.step));
   }
@@ -345,13 +361,9 @@ void draw_legend(const Plot& plot, const Frame& f, std::string& out) {
 void draw_plot(const Plot& plot, double offset_y, std::string& out) {
   const double width = std::max(plot.width_px, kMinWidth_px), height = std::max(plot.height_px, kMinHeight_px);
   const Frame f = make_frame(plot, width, height);
-  // The ranges are written with full precision: they are the mapping's definition.
-  char range[128];
   out += "<g class=\"plot\"";
-  std::snprintf(range, sizeof range, "%.17g %.17g", f.x.lo, f.x.hi);
-  put_attr(out, "data-x-range", range);
-  std::snprintf(range, sizeof range, "%.17g %.17g", f.y.lo, f.y.hi);
-  put_attr(out, "data-y-range", range);
+  put_range_attr(out, "data-x-range", f.x);
+  put_range_attr(out, "data-y-range", f.y);
   if (offset_y != 0.0) {
     out += " transform=\"translate(0,";
     put_number(out, offset_y);
@@ -369,7 +381,8 @@ void draw_plot(const Plot& plot, double offset_y, std::string& out) {
   out += " fill=\"none\" stroke=\"#444\"/>\n";
   const double mid_x = f.left_px + 0.5 * f.width_px, mid_y = f.top_px + 0.5 * f.height_px;
   if (!f.has_data) put_text(out, "no-data", mid_x, mid_y, "middle", "no data", " fill=\"#888\" font-size=\"14\"");
-  if (!plot.title.empty()) put_text(out, "title", mid_x, 19.0, "middle", plot.title, " font-size=\"13\" font-weight=\"bold\"");
+  if (!plot.title.empty())
+    put_text(out, "title", mid_x, 19.0, "middle", plot.title, " font-size=\"13\" font-weight=\"bold\"");
   if (!plot.x_label.empty()) put_text(out, "x-label", mid_x, f.top_px + f.height_px + 36.0, "middle", plot.x_label);
   if (!plot.y_label.empty()) {
     std::string rotate = " transform=\"rotate(-90 16 ";
