@@ -11,7 +11,7 @@
 #include "rtos_shim/lockstep_scheduler.h"
 #include "sim/run_log.h"
 #include "sim/sensor_model.h"
-#include "sim/support_polygon.h"
+#include "controllers/planner/support_polygon.h"
 
 namespace kuavo::sim {
 namespace {
@@ -21,6 +21,7 @@ namespace {
 constexpr double kFootLoaded_N = 20.0;
 constexpr double kCopDefined_N = 50.0;
 constexpr int kCornersPerFoot = planner::kCornersPerFoot;
+constexpr double kAtEdge_m = 1e-3;
 
 std::string log_header(const model::Model& model) {
   std::string h = "time_s,base_x_m,base_y_m,base_z_m,base_qx,base_qy,base_qz,base_qw";
@@ -61,8 +62,8 @@ Balance balance_of(const PlantTruth& t) {
   if (fz_total < kCopDefined_N || n < 3) return b;
   b.defined = true;
   b.cop = moment / fz_total;
-  const auto hull = convex_hull<model::kNumContactPoints>(corners, n);
-  b.margin_m = signed_margin(hull, b.cop);
+  const auto hull = planner::convex_hull<model::kNumContactPoints>(corners, n);
+  b.margin_m = planner::signed_margin(hull, b.cop);
   b.lo = b.hi = corners[0];
   for (int i = 1; i < n; ++i) b.lo = b.lo.cwiseMin(corners[i]), b.hi = b.hi.cwiseMax(corners[i]);
   return b;
@@ -221,6 +222,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
         ++tracked;
         out.com_err_m_max = std::max(out.com_err_m_max, (t.com_m - motion_now.com_position_m).norm());
         if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
+        if (bal.defined && bal.margin_m < kAtEdge_m) out.zmp_at_edge_s += static_cast<double>(ev.dt_ns) * 1e-9;
         const double pos_err = (est.q.head<2>() - t.q.head<2>()).norm();
         out.estimator_position_err_m_max = std::max(out.estimator_position_err_m_max, pos_err);
         out.estimator_position_drift_m = pos_err;
@@ -256,6 +258,9 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
         trace->q.push_back(qa);
         trace->q_ref.push_back(qr);
         trace->base_velocity.push_back({v_world.x(), v_world.y(), v_world.z()});
+        std::array<double, 2> load{};
+        for (int c = 0; c < model::kNumContactPoints; ++c) load[c < kCornersPerFoot ? 0 : 1] += t.contact_force_N[c].z();
+        trace->foot_force_z_N.push_back(load);
         trace->base_velocity_est.push_back(
             {est.base_velocity_world_m_s.x(), est.base_velocity_world_m_s.y(), est.base_velocity_world_m_s.z()});
       }
@@ -292,14 +297,14 @@ std::string motion_summary_json(const MotionSummary& s) {
   std::snprintf(buf, sizeof buf,
                 ",\n  \"planner\": \"%s\",\n  \"motion_duration_s\": %.3f,\n"
                 "  \"tracking_rms_rad\": {\"legs\": %.5f, \"arms\": %.5f},\n"
-                "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n"
+                "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n  \"zmp_at_edge_s\": %.3f,\n"
                 "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
                 "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
                 "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
-                s.zmp_margin_m_min, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
+                s.zmp_margin_m_min, s.zmp_at_edge_s, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped),
                 s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);

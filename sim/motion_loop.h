@@ -15,6 +15,7 @@
 namespace kuavo::sim {
 
 struct MotionRunConfig {
+  MotionRunConfig() { run.duration_s = 0.0; }
   RunConfig run;                   // ground, push, seed, log, command latency, integrator;
                                    // run.duration_s ≤ 0: the motion's length plus settle_s
   stack::StackConfig stack;
@@ -40,6 +41,7 @@ struct MotionSummary {
   double tracking_rms_arms_rad = 0.0;
   double com_err_m_max = 0.0;          // ‖CoM − planned CoM‖
   double zmp_margin_m_min = 0.0;       // centre of pressure to the support polygon's edge
+  double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
   Percentiles mpc_ms;                  // planner iteration compute time
   Percentiles wbc_us;                  // control tick (estimator + reference + WBC) compute time
   std::uint64_t deadline_misses = 0;   // ticks over 2 ms plus planner iterations over their period
@@ -60,6 +62,7 @@ struct MotionTrace {
   std::vector<std::array<double, model::kNumJoints>> q, q_ref;
   std::vector<std::array<double, 2>> support_lo, support_hi;  // support polygon's bounding box
   std::vector<std::array<double, 3>> base_velocity, base_velocity_est;
+  std::vector<std::array<double, 2>> foot_force_z_N;  // [left, right] normal load from the ground
 };
 
 MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,

@@ -5,51 +5,18 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/planner/leg_ik.h"
 
 namespace kuavo::planner {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kIkTolerance_m = 1e-3;
-constexpr int kIkIterations = 20;
-// Three corners fix a foot's pose: toe-left, toe-right, heel-left of each foot.
-constexpr int kFootCorners[2][3] = {{0, 1, 2}, {4, 5, 6}};
 
 // Minimum-jerk 0 → 1 (zero velocity and acceleration at both ends).
 double smooth_step(double s) {
   s = std::clamp(s, 0.0, 1.0);
   return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
-}
-
-// Moves the 12 leg joints so the corners of both feet reach their targets (base and the
-// other joints as given). Returns the largest remaining corner error.
-double solve_legs(const model::Model& model, dynamics::Data& data, const std::array<Vec3, kNumPoints>& targets,
-                  dynamics::ConfigVector& q) {
-  double worst = 0.0;
-  dynamics::FrameJacobian j;
-  for (int it = 0; it < kIkIterations; ++it) {
-    dynamics::forward_kinematics(model, data, q);
-    worst = 0.0;
-    for (int foot = 0; foot < 2; ++foot) {
-      Eigen::Matrix<double, 9, 6> jac;
-      Eigen::Matrix<double, 9, 1> err;
-      const int first_joint = foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
-      for (int r = 0; r < 3; ++r) {
-        const int c = kFootCorners[foot][r];
-        dynamics::frame_jacobian(model, data, c, j);
-        jac.middleRows<3>(3 * r) = j.block<3, 6>(0, 6 + first_joint);
-        err.segment<3>(3 * r) = targets[c] - dynamics::frame_position(model, data, c);
-      }
-      worst = std::max(worst, err.cwiseAbs().maxCoeff());
-      const Eigen::Matrix<double, 6, 6> normal = jac.transpose() * jac + 1e-9 * Eigen::Matrix<double, 6, 6>::Identity();
-      q.segment<6>(7 + first_joint) += normal.ldlt().solve(jac.transpose() * err);
-    }
-    if (worst < 1e-9) break;
-  }
-  dynamics::forward_kinematics(model, data, q);
-  worst = 0.0;
-  for (int c = 0; c < kNumPoints; ++c) worst = std::max(worst, (targets[c] - dynamics::frame_position(model, data, c)).cwiseAbs().maxCoeff());
-  return worst;
 }
 
 }  // namespace
@@ -108,7 +75,7 @@ const char* make_step_in_place(const model::Model& model, const dynamics::Config
       }
     }
     q[1] = q_stand[1] + base_y;
-    if (solve_legs(model, *data, targets, q) > kIkTolerance_m) return "step-in-place: leg IK missed a foot target by more than 1 mm";
+    if (solve_leg_ik(model, *data, targets, q) > kIkTolerance_m) return "step-in-place: leg IK missed a foot target by more than 1 mm";
     plan.q[i] = q;
     plan.foot_contact[i] = contact;
   }

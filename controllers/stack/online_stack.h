@@ -33,6 +33,11 @@ bool parse_planner(const char* text, PlannerKind& out);  // "kinematic" | "mpc"
 struct StackConfig {
   PlannerKind planner = PlannerKind::kKinematic;
   double plan_period_s = 0.02;  // 50 Hz; also the spacing of the plan's knots
+  // The plan is in world coordinates; the estimated position drifts (leg odometry cannot
+  // see a slipping foot). Each tick the reference's CoM and sole corners are shifted
+  // horizontally by the offset between the estimated and the planned stance corners,
+  // low-passed with this time constant, so balance is judged against the real support.
+  double anchor_time_constant_s = 0.05;
   wbc::WbcConfig wbc{};
   estimator::EstimatorConfig estimator{};
 };
@@ -44,7 +49,8 @@ struct ControlWorkspace {
   estimator::EstimateOutput estimate;
   wbc::WbcWorkspace wbc;
   planner::ReferencePlan active;  // the plan the ticks follow
-  wbc::WbcReference reference;    // this tick's, interpolated
+  wbc::WbcReference reference;    // this tick's, interpolated and anchored
+  Eigen::Vector2d anchor_offset_m = Eigen::Vector2d::Zero();  // estimated − planned stance corners
   hal::TimeNs last_tick_ns = 0;
   bool started = false;
   std::uint64_t ticks = 0, plans_applied = 0;

@@ -2,7 +2,7 @@
 //                [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--plan-latency-ms MS|measured]
-//                [--duration SECONDS] --log run.csv --summary run.json
+//                [--duration SECONDS] [--balance-filter on|off] --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
 #include <cmath>
@@ -46,6 +46,7 @@ int usage() {
                "                      [--variant s45|s42] [--mass KG]\n"
                "                      [--planner kinematic|mpc] [--state estimator|truth]\n"
                "                      [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
+               "                      [--balance-filter on|off]\n"
                "                      --log run.csv --summary run.json\n");
   return 2;
 }
@@ -58,6 +59,7 @@ int run_simulate(int argc, char** argv) {
   std::string motion_path;
   int steps = -1;
   bool duration_given = false;
+  bool balance_filter = true;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path;
@@ -78,6 +80,9 @@ int run_simulate(int argc, char** argv) {
     } else if (!std::strcmp(a, "--duration") && v) {
       if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--duration needs seconds > 0, got");
       duration_given = true;
+    } else if (!std::strcmp(a, "--balance-filter") && v) {
+      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got");
+      balance_filter = std::strcmp(v, "on") == 0;
     } else if (!std::strcmp(a, "--planner") && v) {
       if (!stack::parse_planner(v, motion_cfg.stack.planner)) return bad("--planner must be kinematic or mpc, got");
     } else if (!std::strcmp(a, "--state") && v) {
@@ -147,6 +152,16 @@ int run_simulate(int argc, char** argv) {
     if (!loaded) {
       std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
       return 2;
+    }
+    planner::BalanceFilterReport filter_report;
+    if (balance_filter && !filter_motion_plan(*robot, *plan, filter_report, error)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
+      return 2;
+    }
+    if (balance_filter) {
+      std::fprintf(stderr, "balance filter: CoM corrected by up to %.3f m; cart-table ZMP outside the support up to %.3f m before, %.3f m after; %d frames in flight\n",
+                   filter_report.max_correction_m, filter_report.zmp_outside_before_m, filter_report.zmp_outside_after_m,
+                   filter_report.frames_in_flight);
     }
     if (const char* why = stack::stack_validate_config(motion_cfg.stack)) {
       std::fprintf(stderr, "kuavo simulate: %s\n", why);

@@ -33,6 +33,16 @@ bool load_motion_plan(const std::string& path, const model::Model& robot, planne
   return true;
 }
 
+bool filter_motion_plan(const model::Model& robot, planner::MotionPlan& plan, planner::BalanceFilterReport& report,
+                        std::string& error) {
+  auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
+  if (const char* why = planner::balance_filter(robot, planner::BalanceFilterConfig{}, plan, *ws, report)) {
+    error = why;
+    return false;
+  }
+  return true;
+}
+
 bool make_step_plan(const model::Model& robot, int steps, planner::MotionPlan& plan, std::string& error) {
   auto data = std::make_unique<dynamics::Data>();
   dynamics::ConfigVector q0 = dynamics::neutral_configuration(robot);

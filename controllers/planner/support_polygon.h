@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-namespace kuavo::sim {
+namespace kuavo::planner {
 
 template <int N>
 struct Polygon2 {
@@ -69,4 +69,33 @@ double signed_margin(const Polygon2<N>& poly, const Eigen::Vector2d& p) {
   return is_inside ? inside : -outside;
 }
 
-}  // namespace kuavo::sim
+}  // namespace kuavo::planner
+
+namespace kuavo::planner {
+
+// The point of the polygon nearest to p, then pulled margin_m towards the vertex
+// centroid (a cheap inward offset; exact for margins small against the polygon).
+template <int N>
+Eigen::Vector2d project_into(const Polygon2<N>& poly, const Eigen::Vector2d& p, double margin_m) {
+  if (poly.count == 0) return p;
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (int i = 0; i < poly.count; ++i) centroid += poly.vertex[i];
+  centroid /= poly.count;
+  Eigen::Vector2d nearest = p;
+  if (signed_margin(poly, p) < margin_m) {
+    double best = 1e18;
+    for (int i = 0; i < poly.count; ++i) {
+      const Eigen::Vector2d a = poly.vertex[i], b = poly.vertex[(i + 1) % poly.count];
+      const Eigen::Vector2d d = b - a;
+      const double s = d.squaredNorm() > 0.0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      const Eigen::Vector2d c = a + s * d;
+      if ((c - p).squaredNorm() < best) best = (c - p).squaredNorm(), nearest = c;
+    }
+    const Eigen::Vector2d in = centroid - nearest;
+    const double len = in.norm();
+    nearest += len > margin_m ? (margin_m / len) * in : in;
+  }
+  return nearest;
+}
+
+}  // namespace kuavo::planner
