@@ -1,0 +1,133 @@
+// The online stack's two step functions over 10⁵ control ticks (200 s of stepping in
+// place at 500 Hz, the planner every 10th tick): no heap allocation, every command
+// finite and in PD-torque mode, the WBC solving every tick, and the estimator following
+// the motion the synthetic sensors describe (the motion itself is the oracle).
+#include "controllers/stack/online_stack.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "controllers/planner/step_in_place.h"
+#include "controllers/standing/standing_controller.h"
+#include "tests/support/alloc_trap.h"
+
+namespace kuavo::stack {
+namespace {
+
+const model::Model& robot() {
+  static model::Model m;
+  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
+  EXPECT_TRUE(built);
+  return m;
+}
+
+// What ideal sensors report while the robot follows the plan exactly; accel_world: the
+// base origin's acceleration.
+void sense(const planner::PlanKnot& knot, const Eigen::Vector3d& accel_world, hal::TimeNs stamp_ns,
+           hal::SensorFrame& frame) {
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    frame.joints[j].position_rad = knot.q[7 + j];
+    frame.joints[j].velocity_rad_s = knot.v[6 + j];
+    frame.joints[j].torque_Nm = 0.0;
+    frame.joints[j].stamp_ns = stamp_ns;
+    frame.joints[j].valid = true;
+  }
+  const Eigen::Quaterniond o(knot.q[6], knot.q[3], knot.q[4], knot.q[5]);
+  const Eigen::Vector3d f = o.conjugate() * (accel_world + Eigen::Vector3d(0.0, 0.0, model::kGravity_m_s2));
+  frame.imu.orientation_xyzw = {o.x(), o.y(), o.z(), o.w()};
+  frame.imu.angular_rate_rad_s = {knot.v[3], knot.v[4], knot.v[5]};
+  frame.imu.acceleration_m_s2 = {f.x(), f.y(), f.z()};
+  frame.imu.stamp_ns = stamp_ns;
+  frame.imu.valid = true;
+}
+
+TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
+  const model::Model& m = robot();
+  static auto plan = std::make_unique<planner::MotionPlan>();
+  static auto control = std::make_unique<ControlWorkspace>();
+  static auto planner_ws = std::make_unique<PlannerWorkspace>();
+  static auto pending = std::make_unique<planner::ReferencePlan>();
+  static auto data = std::make_unique<dynamics::Data>();
+  dynamics::ConfigVector q0 = dynamics::neutral_configuration(m);
+  q0.tail<model::kNumJoints>() = control::centred_standing_pose(m, *data, 0.78);
+  control::place_on_ground(m, *data, q0);
+  planner::StepInPlaceConfig gait;
+  gait.steps = 124;
+  gait.rate_hz = 50.0;  // 200 s within the plan's frame capacity
+  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
+
+  const StackConfig cfg;
+  static hal::SensorFrame frame;
+  static hal::CommandFrame command;
+  static planner::PlanKnot truth;
+  static planner::PlanKnot before, after;
+  // Base acceleration by central difference of the plan's base velocity (world axes).
+  auto base_acceleration = [&](hal::TimeNs t) {
+    constexpr hal::TimeNs h = 1'000'000;
+    planner::motion_plan_sample_rt(m, *data, *plan, t - h, before);
+    planner::motion_plan_sample_rt(m, *data, *plan, t + h, after);
+    auto world_velocity = [](const planner::PlanKnot& k) {
+      return Eigen::Quaterniond(k.q[6], k.q[3], k.q[4], k.q[5]) * k.v.head<3>();
+    };
+    return Eigen::Vector3d((world_velocity(after) - world_velocity(before)) / (2e-9 * h));
+  };
+  planner::motion_plan_sample_rt(m, *data, *plan, 0, truth);
+  sense(truth, Eigen::Vector3d::Zero(), 0, frame);
+  ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
+
+  constexpr int kTicks = 100'000;
+  constexpr hal::TimeNs kPeriod_ns = 2'000'000;
+  int not_ok = 0, bad_commands = 0;
+  double worst_position_error = 0.0;
+  std::size_t allocations = 0;
+  {
+    kuavo::test::AllocTrap trap;
+    for (int tick = 0; tick < kTicks; ++tick) {
+      const hal::TimeNs now = tick * kPeriod_ns;
+      const Eigen::Vector3d accel = base_acceleration(now);
+      planner::motion_plan_sample_rt(m, *data, *plan, now, truth);  // the test's oracle
+      sense(truth, accel, now, frame);
+      if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++not_ok;
+      for (const auto& c : command.joints) {
+        const bool finite = std::isfinite(c.torque_ff_Nm) && std::isfinite(c.position_ref_rad) &&
+                            std::isfinite(c.velocity_ref_rad_s) && std::isfinite(c.kp_Nm_per_rad) &&
+                            std::isfinite(c.kd_Nm_s_per_rad);
+        if (!finite || c.mode != hal::JointMode::kPdTorque) ++bad_commands;
+      }
+      worst_position_error = std::max(worst_position_error, (control->estimate.q.head<3>() - truth.q.head<3>()).norm());
+      if (tick % 10 == 0) {  // the 50 Hz planner, its result applied at once
+        stack_plan_rt(m, cfg, *planner_ws, *plan, control->estimate.q, control->estimate.v, now, *pending);
+        stack_apply_plan_rt(*control, *pending);
+      }
+    }
+    allocations = trap.count();
+  }
+  std::printf("100000 ticks: %zu allocations, %d not-ok WBC ticks, %d bad commands, estimator position error <= %.4f m\n",
+              allocations, not_ok, bad_commands, worst_position_error);
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(not_ok, 0);
+  EXPECT_EQ(bad_commands, 0);
+  EXPECT_LT(worst_position_error, 0.01);
+  EXPECT_EQ(control->ticks, static_cast<std::uint64_t>(kTicks));
+}
+
+TEST(OnlineStack, RefusesABadConfiguration) {
+  StackConfig cfg;
+  cfg.plan_period_s = 0.0;
+  EXPECT_NE(stack_validate_config(cfg), nullptr);
+  cfg = StackConfig{};
+  cfg.anchor_time_constant_s = -1.0;
+  EXPECT_NE(stack_validate_config(cfg), nullptr);
+  cfg = StackConfig{};
+  EXPECT_EQ(stack_validate_config(cfg), nullptr);
+  PlannerKind k;
+  EXPECT_TRUE(parse_planner("kinematic", k));
+  EXPECT_EQ(k, PlannerKind::kKinematic);
+  EXPECT_FALSE(parse_planner("magic", k));
+}
+
+}  // namespace
+}  // namespace kuavo::stack
