@@ -110,7 +110,9 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   plant.reset(q0, dynamics::VelocityVector::Zero());
   plant.set_push(config.run.push);
 
-  SensorModel sensors(config.run.seed);
+  SensorNoise noise;
+  if (config.ideal_sensors) noise = SensorNoise{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  SensorModel sensors(config.run.seed, noise);
   RunLog log(config.run.log_path);
   if (log.failed_to_open(config.run.log_path)) {
     run.ok = false;

@@ -11,6 +11,7 @@
 #include "controllers/planner/motion_plan.h"
 #include "controllers/stack/online_stack.h"
 #include "sim/closed_loop.h"
+#include "sim/sensor_model.h"
 
 namespace kuavo::sim {
 
@@ -26,6 +27,7 @@ struct MotionRunConfig {
   double plan_latency_s = 0.004;
   bool measured_plan_latency = false;
   bool use_truth_state = false;    // comparison runs: the WBC on the simulator's truth
+  bool ideal_sensors = false;      // diagnostics: no noise, bias or quantization (SensorNoise zeroed)
 };
 
 struct Percentiles {

@@ -1,6 +1,5 @@
 #include "controllers/stack/online_stack.h"
 
-#include <algorithm>
 #include <cstring>
 
 namespace kuavo::stack {
@@ -21,7 +20,6 @@ bool parse_planner(const char* text, PlannerKind& out) {
 
 const char* stack_validate_config(const StackConfig& config) {
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
-  if (!(config.anchor_time_constant_s > 0.0)) return "anchor time constant must be positive";
   if (config.planner == PlannerKind::kMpc) return "the MPC planner is not in this build yet";
   return wbc::wbc_validate_config(config.wbc);
 }
@@ -41,33 +39,10 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
   stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, first);
   stack_apply_plan_rt(control, first);
   control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
-  control.anchor_offset_m.setZero();
   control.started = true;
   control.ticks = 0;
   return true;
 }
-
-namespace {
-
-// Shifts ws.reference onto the estimated support (see StackConfig::anchor_time_constant_s).
-void anchor_reference_rt(const StackConfig& config, ControlWorkspace& ws, double dt_s) {
-  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
-  int stance = 0;
-  for (int c = 0; c < model::kNumContactPoints; ++c) {
-    if (!ws.reference.in_contact[c]) continue;
-    const Eigen::Vector2d estimated(ws.estimator.x[estimator::point_index(c, 0)], ws.estimator.x[estimator::point_index(c, 1)]);
-    offset += estimated - ws.reference.point_position_m.segment<2>(3 * c);
-    ++stance;
-  }
-  if (stance > 0 && offset.allFinite()) {
-    const double alpha = std::clamp(dt_s / std::max(config.anchor_time_constant_s, 1e-6), 0.0, 1.0);
-    ws.anchor_offset_m += alpha * (offset / stance - ws.anchor_offset_m);
-  }
-  ws.reference.com_position_m.head<2>() += ws.anchor_offset_m;
-  for (int c = 0; c < model::kNumContactPoints; ++c) ws.reference.point_position_m.segment<2>(3 * c) += ws.anchor_offset_m;
-}
-
-}  // namespace
 
 wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
                                      const hal::SensorFrame& sensors, hal::TimeNs now_ns, const StateOverride& state,
@@ -77,7 +52,6 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   const double dt_s = static_cast<double>(now_ns - ws.last_tick_ns) * 1e-9;
   ws.last_tick_ns = now_ns;
   estimator::estimator_step_rt(model, ws.estimator, sensors, ws.reference.in_contact, dt_s, ws.estimate);
-  anchor_reference_rt(config, ws, dt_s);
   const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
   const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
   ++ws.ticks;

@@ -119,9 +119,6 @@ TEST(OnlineStack, RefusesABadConfiguration) {
   cfg.plan_period_s = 0.0;
   EXPECT_NE(stack_validate_config(cfg), nullptr);
   cfg = StackConfig{};
-  cfg.anchor_time_constant_s = -1.0;
-  EXPECT_NE(stack_validate_config(cfg), nullptr);
-  cfg = StackConfig{};
   EXPECT_EQ(stack_validate_config(cfg), nullptr);
   PlannerKind k;
   EXPECT_TRUE(parse_planner("kinematic", k));
