@@ -345,9 +345,16 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
     shift = warm ? static_cast<int>(std::lround(stages)) : 0;
   }
   if (warm) {
+    // The new tail repeats the last state; its inputs come from the reference, whose forces
+    // respect the new stages' contacts (a repeated input would put force on a foot that has
+    // just entered the horizon as lifted).
     for (int k = 0; k <= T; ++k) {
       ws.x[k] = ws.x[std::min(k + shift, T)];
-      ws.u[k] = ws.u[std::min(k + shift, T - 1)];
+      if (k + shift <= T - 1) {
+        ws.u[k] = ws.u[k + shift];
+      } else {
+        ws.u[k] = ws.u_ref[k];
+      }
     }
     // Keep the warm yaw on the reference's branch (the reference's yaw may have wrapped).
     const double offset = ws.x[0][kXEuler] - x0[kXEuler];
