@@ -1,0 +1,489 @@
+#include "controllers/mpc/mpc.h"
+
+#include <algorithm>
+#include <Eigen/Cholesky>
+#include <cmath>
+
+namespace kuavo::mpc {
+namespace {
+
+constexpr double kTwoPi = 6.28318530717958647692;
+// The plan window's dt must be the MPC's; stamps are integers, so this is only roundoff.
+constexpr double kDtTolerance_s = 1e-9;
+
+// Tikhonov term on the force-distribution Gram matrix [m², relative to O(0.01–1) entries].
+constexpr double kReferenceForceRegularization = 1e-6;
+
+Mat3 skew_of(const Vec3& a) { return dynamics::skew(a); }
+
+double wrap_angle(double a) { return std::remainder(a, kTwoPi); }
+
+StateVector state_error(const StateVector& x, const StateVector& x_ref) {
+  StateVector d = x - x_ref;
+  d[kXEuler] = wrap_angle(d[kXEuler]);  // yaw
+  return d;
+}
+
+// OCS2's relaxed log barrier B(h) = −μ ln h for h > δ, else the quadratic that matches value,
+// slope and curvature at δ. Returns B'(h) and B''(h).
+void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
+  if (h > delta) {
+    d1 = -mu / h;
+    d2 = mu / (h * h);
+  } else {
+    d1 = mu * (h - 2.0 * delta) / (delta * delta);
+    d2 = mu / (delta * delta);
+  }
+}
+
+bool knot_finite(const planner::PlanKnot& k) {
+  return k.q.allFinite() && k.v.allFinite() && k.point_position_m.allFinite() && k.point_velocity_m_s.allFinite();
+}
+
+int contacts_of_foot(const planner::ContactFlags& flags, int foot) {
+  int n = 0;
+  for (int c = kPointsPerFoot * foot; c < kPointsPerFoot * (foot + 1); ++c) n += flags[c] ? 1 : 0;
+  return n;
+}
+
+// u_ref forces: the least-norm stance forces that carry the weight with no moment about the
+// CoM, f = Aᵀ(AAᵀ)⁻¹[m g; 0] with Aᵢ = [I; [cᵢ − r]×]. With the CoM over the support that
+// is the static solution itself (an equal split would put a moment on the robot and bias the
+// optimum toward leaning). Zero in flight.
+void reference_forces(const planner::PlanKnot& knot, double mg, InputVector& u_ref) {
+  u_ref.segment<3 * kNumPoints>(kUForces).setZero();
+  dynamics::Mat6 gram = dynamics::Mat6::Zero();
+  int stance = 0;
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (!knot.in_contact[c]) continue;
+    ++stance;
+    const Mat3 s = skew_of(knot.point_position_m.segment<3>(3 * c) - knot.com_position_m);
+    gram.topLeftCorner<3, 3>() += Mat3::Identity();
+    gram.topRightCorner<3, 3>() += s.transpose();
+    gram.bottomLeftCorner<3, 3>() += s;
+    gram.bottomRightCorner<3, 3>() += s * s.transpose();
+  }
+  if (stance == 0) return;
+  // Regularized: a line or point support leaves a moment direction without authority.
+  gram.diagonal().array() += kReferenceForceRegularization;
+  Vec6 w = Vec6::Zero();
+  w[2] = mg;
+  const Vec6 y = gram.ldlt().solve(w);
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (!knot.in_contact[c]) continue;
+    const Mat3 s = skew_of(knot.point_position_m.segment<3>(3 * c) - knot.com_position_m);
+    u_ref.segment<3>(kUForces + 3 * c) = y.head<3>() + s.transpose() * y.tail<3>();
+  }
+}
+
+void fill_weights(const model::Model& model, const MpcConfig& c, MpcWorkspace& ws) {
+  const double m = model.total_mass_kg;
+  StateVector& w = ws.weight_state;
+  for (int i = 0; i < 3; ++i) {
+    w[kXComVelocity + i] = c.weight_com_velocity[i];
+    w[kXMomentum + i] = c.weight_angular_momentum_normalized[i] / (m * m);
+    w[kXBasePosition + i] = c.weight_base_position[i];
+    w[kXEuler + i] = c.weight_base_euler[i];
+  }
+  for (int j = 0; j < 2 * model::kLegJoints; ++j) w[kXJoints + j] = c.weight_leg_joint[j % model::kLegJoints];
+  for (int j = 2 * model::kLegJoints; j < kNumMpcJoints; ++j) w[kXJoints + j] = c.weight_arm_joint;
+  InputVector& r = ws.weight_input;
+  r.segment<3 * kNumPoints>(kUForces).setConstant(c.weight_force);
+  r.segment<2 * model::kLegJoints>(kUJointVelocity).setConstant(c.weight_leg_joint_velocity);
+  r.segment<kNumMpcJoints - 2 * model::kLegJoints>(kUJointVelocity + 2 * model::kLegJoints)
+      .setConstant(c.weight_arm_joint_velocity);
+}
+
+// Relaxed-barrier terms of the joint position limits on the joint block of (Q, q).
+template <class StageT>
+void add_joint_limit_barrier(const MpcConfig& c, const MpcWorkspace& ws, const StateVector& x, double scale,
+                             StageT& st) {
+  for (int j = 0; j < kNumMpcJoints; ++j) {
+    const double qj = x[kXJoints + j];
+    double d1, d2;
+    relaxed_barrier(qj - ws.joint_min_rad[j], c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad, d1, d2);
+    st.Q(kXJoints + j, kXJoints + j) += scale * d2;
+    st.q[kXJoints + j] += scale * d1;
+    relaxed_barrier(ws.joint_max_rad[j] - qj, c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad, d1, d2);
+    st.Q(kXJoints + j, kXJoints + j) += scale * d2;
+    st.q[kXJoints + j] -= scale * d1;
+  }
+}
+
+// Friction pyramid μ f_z ± f_x ≥ 0, μ f_z ± f_y ≥ 0 of one stance corner, on (R, r).
+template <class StageT>
+void add_friction_barrier(const MpcConfig& c, const Vec3& f, int corner, StageT& st) {
+  const double mu = c.friction_coefficient;
+  for (int axis = 0; axis < 2; ++axis) {
+    for (const double sign : {1.0, -1.0}) {
+      Vec3 a = Vec3::Zero();
+      a[2] = mu;
+      a[axis] = -sign;
+      double d1, d2;
+      relaxed_barrier(a.dot(f), c.friction_barrier_mu, c.friction_barrier_delta_N, d1, d2);
+      st.R.template block<3, 3>(kUForces + 3 * corner, kUForces + 3 * corner).noalias() += (c.dt_s * d2) * a * a.transpose();
+      st.r.template segment<3>(kUForces + 3 * corner) += (c.dt_s * d1) * a;
+    }
+  }
+}
+
+// Equality rows of stage k (see mpc.h); returns the max |residual|.
+double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                        const planner::PlanKnot& knot, int k) {
+  auto& st = ws.qp.stages[k];
+  const CentroidalPoint& p = ws.point;
+  const InputVector& u = ws.u[k];
+  int rows = 0;
+  double violation = 0.0;
+  Vec6 motion;
+  MotionRowsX mdx;
+  MotionRowsU mdu;
+  Eigen::Matrix<double, 3, kNumMpcJoints> jp;
+  std::array<Vec3, kNumPoints> corner;
+  for (int c = 0; c < kNumPoints; ++c) corner[c] = dynamics::frame_position(model, p.data, c);
+  for (int foot = 0; foot < 2; ++foot) {
+    const int first = kPointsPerFoot * foot;
+    const int body = model.frames[first].body;
+    const int n = contacts_of_foot(knot.in_contact, foot);
+    for (int c = first; c < first + kPointsPerFoot; ++c) {
+      if (knot.in_contact[c]) continue;
+      for (int i = 0; i < 3; ++i) {
+        st.C.row(rows).setZero();
+        st.D.row(rows).setZero();
+        st.D(rows, kUForces + 3 * c + i) = 1.0;
+        st.e[rows] = -u[kUForces + 3 * c + i];
+        violation = std::max(violation, std::abs(st.e[rows]));
+        ++rows;
+      }
+    }
+    if (n > 0) {
+      Vec3 centre = Vec3::Zero();
+      for (int c = first; c < first + kPointsPerFoot; ++c) {
+        if (n >= 3 || knot.in_contact[c]) centre += corner[c];
+      }
+      centre /= (n >= 3 ? kPointsPerFoot : n);
+      point_motion(model, p, body, centre, motion, mdx, mdu);
+      const int m = n >= 3 ? 6 : 3;  // foot twist, or the contact centroid's velocity
+      st.C.middleRows(rows, m) = mdx.topRows(m);
+      st.D.middleRows(rows, m) = mdu.topRows(m);
+      st.e.segment(rows, m) = -motion.head(m);
+      violation = std::max(violation, motion.head(m).cwiseAbs().maxCoeff());
+      rows += m;
+    } else {
+      // Swing: v_z + k z − (v_z,ref + k z_ref) = 0 on 3 corners, world z.
+      const double gain = cfg.swing_position_gain_1_s;
+      const Vec3 base = ws.x[k].segment<3>(kXBasePosition);
+      const Eigen::RowVector3d rz = p.rotation.row(2);
+      for (int c = first; c < first + 3; ++c) {
+        point_motion(model, p, body, corner[c], motion, mdx, mdu);
+        point_position_jacobian(model, p, body, corner[c], jp);
+        const Vec3 vp = motion.head<3>();
+        const double value = rz.dot(vp) + gain * (base.z() + rz.dot(corner[c])) -
+                             knot.point_velocity_m_s[3 * c + 2] - gain * knot.point_position_m[3 * c + 2];
+        st.C.row(rows).noalias() = rz * mdx.topRows<3>();
+        st.C(rows, kXBasePosition + 2) += gain;
+        for (int e = 0; e < 3; ++e) {
+          st.C(rows, kXEuler + e) += p.rotation_derivative[e].row(2).dot(vp + gain * corner[c]);
+        }
+        st.C.block<1, kNumMpcJoints>(rows, kXJoints).noalias() += gain * (rz * jp);
+        st.D.row(rows).noalias() = rz * mdu.topRows<3>();
+        st.e[rows] = -value;
+        violation = std::max(violation, std::abs(value));
+        ++rows;
+      }
+    }
+  }
+  st.num_eq = rows;
+  const int rest = kMaxEqualities - rows;
+  if (rest > 0) {  // the solver multiplies full matrices in its residual check: keep the padding finite
+    st.C.bottomRows(rest).setZero();
+    st.D.bottomRows(rest).setZero();
+    st.e.tail(rest).setZero();
+  }
+  return violation;
+}
+
+void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::PlanKnot& knot, int k, bool terminal) {
+  auto& st = ws.qp.stages[k];
+  const double scale = terminal ? cfg.dt_s * cfg.terminal_weight_scale : cfg.dt_s;
+  st.Q.setZero();
+  st.Q.diagonal() = scale * ws.weight_state;
+  st.q = (scale * ws.weight_state).cwiseProduct(state_error(ws.x[k], ws.x_ref[k]));
+  add_joint_limit_barrier(cfg, ws, ws.x[k], scale, st);  // same scale: same equilibrium as the stages
+  if (terminal) return;
+  st.R.setZero();
+  st.R.diagonal() = cfg.dt_s * ws.weight_input;
+  st.r = (cfg.dt_s * ws.weight_input).cwiseProduct(ws.u[k] - ws.u_ref[k]);
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (knot.in_contact[c]) add_friction_barrier(cfg, ws.u[k].segment<3>(kUForces + 3 * c), c, st);
+  }
+}
+
+double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
+  double cost = 0.0;
+  const int T = ws.horizon;
+  for (int k = 0; k <= T; ++k) {
+    const StateVector e = state_error(ws.x[k], ws.x_ref[k]);
+    const double scale = k == T ? cfg.dt_s * cfg.terminal_weight_scale : cfg.dt_s;
+    cost += 0.5 * scale * e.dot(ws.weight_state.cwiseProduct(e));
+    if (k < T) {
+      const InputVector du = ws.u[k] - ws.u_ref[k];
+      cost += 0.5 * cfg.dt_s * du.dot(ws.weight_input.cwiseProduct(du));
+    }
+  }
+  return cost;
+}
+
+}  // namespace
+
+int mpc_num_stages(const MpcConfig& c) { return static_cast<int>(std::lround(c.horizon_s / c.dt_s)); }
+
+const char* mpc_validate_config(const MpcConfig& c) {
+  if (!(c.dt_s >= 0.005 && c.dt_s <= 0.05)) return "dt_s must be in [0.005, 0.05] s";
+  if (!(c.horizon_s >= 0.6 - 1e-9 && c.horizon_s <= 1.4 + 1e-9)) return "horizon_s must be in [0.6, 1.4] s";
+  const int n = mpc_num_stages(c);
+  if (n > kMaxStages || n + 1 > planner::kMaxWindowKnots) return "horizon_s / dt_s exceeds kMaxStages (70)";
+  if (n < kMpcPlanKnots + 1) return "horizon shorter than the plan handed to the WBC";
+  if (!(c.friction_coefficient > 0.0 && c.friction_coefficient <= 2.0)) return "friction_coefficient must be in (0, 2]";
+  auto bad = [](double w) { return !(std::isfinite(w) && w >= 0.0); };
+  for (int i = 0; i < 3; ++i) {
+    if (bad(c.weight_com_velocity[i]) || bad(c.weight_angular_momentum_normalized[i]) ||
+        bad(c.weight_base_position[i]) || bad(c.weight_base_euler[i])) {
+      return "state weights must be finite and >= 0";
+    }
+  }
+  for (double w : c.weight_leg_joint) {
+    if (bad(w)) return "state weights must be finite and >= 0";
+  }
+  if (bad(c.weight_arm_joint) || bad(c.terminal_weight_scale)) return "state weights must be finite and >= 0";
+  if (!(c.weight_force > 0.0 && c.weight_leg_joint_velocity > 0.0 && c.weight_arm_joint_velocity > 0.0) ||
+      !std::isfinite(c.weight_force + c.weight_leg_joint_velocity + c.weight_arm_joint_velocity)) {
+    return "input weights must be finite and > 0 (R positive definite)";
+  }
+  if (!(c.friction_barrier_mu > 0.0 && c.friction_barrier_delta_N > 0.0 && c.joint_limit_barrier_mu > 0.0 &&
+        c.joint_limit_barrier_delta_rad > 0.0) ||
+      !std::isfinite(c.friction_barrier_mu + c.friction_barrier_delta_N + c.joint_limit_barrier_mu +
+                     c.joint_limit_barrier_delta_rad)) {
+    return "barrier mu and delta must be finite and > 0";
+  }
+  if (!(c.swing_position_gain_1_s >= 0.0 && std::isfinite(c.swing_position_gain_1_s))) {
+    return "swing_position_gain_1_s must be finite and >= 0";
+  }
+  return nullptr;
+}
+
+const char* to_string(MpcStatus s) {
+  switch (s) {
+    case MpcStatus::kOk: return "ok";
+    case MpcStatus::kNotInitialized: return "not_initialized";
+    case MpcStatus::kBadInput: return "bad_input";
+    case MpcStatus::kBadReference: return "bad_reference";
+    case MpcStatus::kQpFailed: return "qp_failed";
+  }
+  return "unknown";
+}
+
+void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws) {
+  ws.initialized = false;
+  ws.warm = false;
+  if (mpc_validate_config(config) != nullptr) return;
+  ws.horizon = mpc_num_stages(config);
+  fill_weights(model, config, ws);
+  ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
+  ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
+  for (auto& st : ws.qp.stages) {
+    st.S.setZero();
+    st.num_eq = 0;
+    st.num_ineq = 0;
+  }
+  ws.qp.horizon = ws.horizon;
+  ws.qp.x_initial.setZero();
+  ws.qp_settings = qp::OcpSettings{};
+  ws.initialized = true;
+}
+
+void mpc_reset(MpcWorkspace& ws) { ws.warm = false; }
+
+MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                          const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                          const planner::PlanWindow& reference) {
+  if (!ws.initialized) return MpcStatus::kNotInitialized;
+  if (!q.allFinite() || !v.allFinite()) return MpcStatus::kBadInput;
+  const int T = ws.horizon;
+  if (reference.count < T + 1 || reference.count > planner::kMaxWindowKnots ||
+      !(std::abs(reference.dt_s - cfg.dt_s) <= kDtTolerance_s)) {
+    return MpcStatus::kBadReference;
+  }
+  for (int k = 0; k <= T; ++k) {
+    if (!knot_finite(reference.knots[k])) return MpcStatus::kBadReference;
+  }
+
+  // Reference trajectory in MPC coordinates (yaw kept continuous along the horizon).
+  const double mg = model.total_mass_kg * model::kGravity_m_s2;
+  for (int k = 0; k <= T; ++k) {
+    const planner::PlanKnot& knot = reference.knots[k];
+    state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.x_ref[k]);
+    if (k > 0) {
+      ws.x_ref[k][kXEuler] = ws.x_ref[k - 1][kXEuler] + wrap_angle(ws.x_ref[k][kXEuler] - ws.x_ref[k - 1][kXEuler]);
+    }
+    ws.head_rad[k] = knot.q.segment<2>(7 + kNumMpcJoints);
+    reference_forces(knot, mg, ws.u_ref[k]);
+    ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
+  }
+
+  StateVector x0;
+  state_from_configuration(model, ws.world_data, q, v, x0);
+  x0[kXEuler] = ws.x_ref[0][kXEuler] + wrap_angle(x0[kXEuler] - ws.x_ref[0][kXEuler]);
+
+  // Warm start: the previous solution shifted by the stages elapsed since its knot 0.
+  bool warm = ws.warm;
+  int shift = 0;
+  if (warm) {
+    const double elapsed = static_cast<double>(reference.knots[0].stamp_ns - ws.last_stamp_ns) * 1e-9;
+    const double stages = elapsed / cfg.dt_s;
+    warm = stages > -0.5 && stages < T;
+    shift = warm ? static_cast<int>(std::lround(stages)) : 0;
+  }
+  if (warm) {
+    // The new tail repeats the last state; its inputs come from the reference, whose forces
+    // respect the new stages' contacts (a repeated input would put force on a foot that has
+    // just entered the horizon as lifted).
+    for (int k = 0; k <= T; ++k) {
+      ws.x[k] = ws.x[std::min(k + shift, T)];
+      if (k + shift <= T - 1) {
+        ws.u[k] = ws.u[k + shift];
+      } else {
+        ws.u[k] = ws.u_ref[k];
+      }
+    }
+    // Keep the warm yaw on the reference's branch (the reference's yaw may have wrapped).
+    const double offset = ws.x[0][kXEuler] - x0[kXEuler];
+    const double turns = std::round(offset / kTwoPi);
+    if (turns != 0.0) {
+      for (int k = 0; k <= T; ++k) ws.x[k][kXEuler] -= turns * kTwoPi;
+    }
+  } else {
+    for (int k = 0; k <= T; ++k) {
+      ws.x[k] = ws.x_ref[k];
+      ws.u[k] = ws.u_ref[k];
+    }
+  }
+  ws.x[0] = x0;  // linearize stage 0 at the measurement: δx₀ = 0
+  ws.last_stamp_ns = reference.knots[0].stamp_ns;
+
+  double violation = 0.0;
+  for (int k = 0; k < T; ++k) {
+    const planner::PlanKnot& knot = reference.knots[k];
+    auto& st = ws.qp.stages[k];
+    centroidal_evaluate(model, ws.x[k], ws.u[k], ws.head_rad[k], ws.point);
+    const CentroidalPoint& p = ws.point;
+    st.A.noalias() = cfg.dt_s * p.fx;
+    st.A.diagonal().array() += 1.0;
+    st.B.noalias() = cfg.dt_s * p.fu;
+    st.b = ws.x[k] + cfg.dt_s * p.f - ws.x[k + 1];
+    violation = std::max(violation, st.b.cwiseAbs().maxCoeff());
+    if (k <= kMpcPlanKnots) {
+      ws.twist[k] = p.base_twist;
+      ws.twist_dx[k] = p.base_twist_dx;
+      ws.twist_du[k] = p.base_twist_du;
+    }
+    build_stage_cost(cfg, ws, knot, k, false);
+    violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
+  }
+  build_stage_cost(cfg, ws, reference.knots[T], T, true);
+  ws.qp.stages[T].num_eq = 0;
+  ws.qp.horizon = T;
+  ws.qp.x_initial.setZero();
+  ws.constraint_violation = violation;
+  if (!std::isfinite(violation)) return MpcStatus::kBadInput;
+  return MpcStatus::kOk;
+}
+
+MpcStatus mpc_solve_qp_rt(MpcWorkspace& ws) {
+  const int T = ws.horizon;
+  ws.qp_status = qp::solve_ocp_qp(ws.qp, ws.qp_settings, ws.qp_workspace, ws.solution);
+  bool finite = true;
+  for (int k = 0; k <= T && finite; ++k) finite = ws.solution.x[k].allFinite() && ws.solution.u[k].allFinite();
+  if (ws.qp_status != qp::QpStatus::kSolved || !finite) {
+    ws.warm = false;
+    return MpcStatus::kQpFailed;
+  }
+  for (int k = 0; k <= T; ++k) {
+    ws.x[k] += ws.solution.x[k];
+    if (k < T) ws.u[k] += ws.solution.u[k];
+  }
+  ws.u[T] = ws.u[T - 1];
+  ws.warm = true;
+  return MpcStatus::kOk;
+}
+
+void mpc_write_plan_rt(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                       const planner::PlanWindow& reference, MpcStatus status, MpcPlan& out) {
+  out.stamp_ns = reference.count > 0 ? reference.knots[0].stamp_ns : 0;
+  out.dt_s = cfg.dt_s;
+  out.status = status;
+  out.count = 0;
+  out.qp_iterations = 0;
+  out.constraint_violation = ws.constraint_violation;
+  if (status != MpcStatus::kOk) return;
+  out.qp_iterations = 1;
+  out.cost = tracking_cost(cfg, ws);
+
+  const double m = model.total_mass_kg;
+  // Knots 0 … kMpcPlanKnots (the last only for the finite-difference accelerations).
+  for (int i = 0; i <= kMpcPlanKnots; ++i) {
+    wbc::WbcReference& r = i < kMpcPlanKnots ? out.knots[i] : ws.scratch_reference;
+    const planner::PlanKnot& knot = reference.knots[i];
+    const StateVector& x = ws.x[i];
+    const InputVector& u = ws.u[i];
+    // Base twist at the updated point, to first order from the linearization.
+    Vec6 twist = ws.twist[i];
+    twist.noalias() += ws.twist_dx[i] * ws.solution.x[i];
+    twist.noalias() += ws.twist_du[i] * ws.solution.u[i];
+    const dynamics::ConfigVector qc = configuration_from_state(x, ws.head_rad[i]);
+    dynamics::VelocityVector vc;
+    vc.head<6>() = twist;
+    vc.segment<kNumMpcJoints>(6) = u.segment<kNumMpcJoints>(kUJointVelocity);
+    vc.tail<2>() = knot.v.tail<2>();
+    planner::plan_knot_from_state(model, ws.world_data, qc, vc, knot.in_contact, knot.stamp_ns, ws.scratch_knot);
+
+    r.stamp_ns = reference.knots[0].stamp_ns + static_cast<hal::TimeNs>(std::llround(i * cfg.dt_s * 1e9));
+    r.base_euler_zyx_rad = x.segment<3>(kXEuler);
+    r.base_angular_velocity_rad_s = ws.world_data.rotation[0] * twist.tail<3>();
+    r.com_position_m = ws.scratch_knot.com_position_m;
+    r.com_velocity_m_s = x.segment<3>(kXComVelocity);
+    Vec3 force_sum = Vec3::Zero(), moment = Vec3::Zero();
+    for (int c = 0; c < kNumPoints; ++c) {
+      const Vec3 f = u.segment<3>(kUForces + 3 * c);
+      force_sum += f;
+      moment += (ws.scratch_knot.point_position_m.segment<3>(3 * c) - r.com_position_m).cross(f);
+    }
+    r.momentum_rate.head<3>() = force_sum - m * model::kGravity_m_s2 * Vec3::UnitZ();
+    r.momentum_rate.tail<3>() = moment;
+    r.joint_position_rad = qc.tail<model::kNumJoints>();
+    r.joint_velocity_rad_s = vc.tail<model::kNumJoints>();
+    r.point_position_m = ws.scratch_knot.point_position_m;
+    r.point_velocity_m_s = ws.scratch_knot.point_velocity_m_s;
+    r.contact_force_N = u.segment<3 * kNumPoints>(kUForces);
+    r.in_contact = knot.in_contact;
+  }
+  for (int i = 0; i < kMpcPlanKnots; ++i) {
+    wbc::WbcReference& r = out.knots[i];
+    const wbc::WbcReference& next = i + 1 < kMpcPlanKnots ? out.knots[i + 1] : ws.scratch_reference;
+    r.base_angular_acceleration_rad_s2 = (next.base_angular_velocity_rad_s - r.base_angular_velocity_rad_s) / cfg.dt_s;
+    r.joint_acceleration_rad_s2 = (next.joint_velocity_rad_s - r.joint_velocity_rad_s) / cfg.dt_s;
+    r.point_acceleration_m_s2 = (next.point_velocity_m_s - r.point_velocity_m_s) / cfg.dt_s;
+  }
+  out.count = kMpcPlanKnots;
+}
+
+MpcStatus mpc_step_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
+                      const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                      const planner::PlanWindow& reference, MpcPlan& out) {
+  MpcStatus status = mpc_build_qp_rt(model, config, ws, q, v, reference);
+  if (status == MpcStatus::kOk) status = mpc_solve_qp_rt(ws);
+  mpc_write_plan_rt(model, config, ws, reference, status, out);
+  return status;
+}
+
+}  // namespace kuavo::mpc

@@ -1,0 +1,188 @@
+// Centroidal real-time-iteration MPC (issue 6; the paper's MPC; Leju's OCS2 setup, FACTS.md §4.2).
+//
+// Model: centroidal_model.h (x = [ṙ, h, base position, ZYX Euler, 26 joints], u = [8 sole-corner
+// forces (world), 26 joint velocities]).
+//
+// Discretization: explicit Euler, x_{k+1} = x_k + dt·f(x_k, u_k), dt = cfg.dt_s (0.02 s). At
+// 20 ms the centroidal dynamics are slow (the fastest mode, the ~0.3 s pendulum, is 15 steps);
+// Leju's RK2 at 15 ms buys little here and would double the linearization cost.
+//
+// One SQP iteration per call (real-time iteration, as Leju: 1 SQP iteration per MPC call):
+// linearize about the previous solution shifted by the elapsed stages (or about the reference
+// on a cold start), build the OCP QP in the increments (δx, δu), one solve, full step.
+//
+// Constraints (stage k, contact flags from reference knot k):
+//   equalities (hard, in the QP):
+//     - a foot with ≥ 3 corners in contact: foot twist = 0 (6 rows: point velocity of the sole
+//       centre + angular velocity). Four 3-row corner constraints would be 12 rows of rank 6
+//       and the OCP solver needs D full row rank (ocp_qp.h); 3 non-collinear fixed corners are
+//       exactly "the foot does not move".
+//     - 1 or 2 corners in contact (heel/toe phases): the velocity of their centroid = 0 (3 rows).
+//     - each corner not in contact: force = 0 (3 rows).
+//     - a foot with no corner in contact: normal-velocity rows (OCS2) on 3 of its 4 corners,
+//       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity; x-y is left free:
+//       the touchdown spot is softly tracked only through the leg joint cost, so the optimizer
+//       may move it.
+//   inequalities, as relaxed log-barrier penalties (OCS2; μ, δ from Leju) in the stage cost's
+//   gradient and Gauss-Newton Hessian: friction pyramid |f_x|, |f_y| ≤ μ f_z (4 rows per stance
+//   corner, the same pyramid as the WBC), joint position limits (model.limits).
+// Why barriers and NG = 0: with only equalities each RTI is exactly one Riccati factorization
+// and one solve (solve_ocp_qp's pure-LQ path): the cost per call is fixed and known. A hard
+// inequality QP would need an interior point (~12 iterations here, ~70 ms) or an unbounded
+// active set; one IPM step with warm start would be the same barrier step with less control.
+//
+// Cost (Leju's Q and R, FACTS.md §4.2, integrated: every stage term is multiplied by dt):
+//   ½‖x − x_ref‖²_Q + ½‖u − u_ref‖²_R per stage, terminal ½‖x_T − x_ref‖²_{Q·dt}.
+//   u_ref: joint velocities of the plan; forces m·g shared equally by the stance corners.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "controllers/hal/types.h"
+#include "controllers/mpc/centroidal_model.h"
+#include "controllers/planner/plan_knot.h"
+#include "controllers/qp/ocp_solver.h"
+#include "controllers/wbc/wbc_reference.h"
+
+namespace kuavo::mpc {
+
+inline constexpr int kMaxStages = 70;        // 1.4 s at 0.02 s
+inline constexpr int kMaxEqualities = 30;    // both feet in swing: 2 × (4 × 3 zero force + 3 normal velocity)
+inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s at dt 0.02)
+
+struct MpcConfig {
+  double horizon_s = 1.2;  // 0.6 … 1.4 s (the issue); Leju: 1.0 s
+  double dt_s = 0.02;      // stage length; the plan window must use the same dt
+  double friction_coefficient = 0.5;  // Leju frictionConeSoftConstraint μ
+
+  // State weights Q (diagonal). Leju's task.info Q, with its normalized momentum (v_com, L/m)
+  // converted to ours: weight on h = weight on L/m divided by m².
+  std::array<double, 3> weight_com_velocity{80.0, 80.0, 13.0};       // (m/s)⁻²
+  std::array<double, 3> weight_angular_momentum_normalized{50.0, 50.0, 13.0};  // on h/m, (m²/s)⁻²
+  std::array<double, 3> weight_base_position{500.0, 500.0, 2000.0};  // m⁻²
+  std::array<double, 3> weight_base_euler{100.0, 2000.0, 800.0};     // yaw, pitch, roll, rad⁻²
+  std::array<double, 6> weight_leg_joint{300.0, 300.0, 10.0, 10.0, 10.0, 10.0};  // per leg, rad⁻²
+  // Leju weighs shoulder ×3 and elbow 200 and leaves the wrists out of its model; we keep them
+  // in (their momentum matters in a dance) at the same weight.
+  double weight_arm_joint = 200.0;  // rad⁻²
+  // Q_T = scale · Q · dt: the terminal state weighs like 0.2 s of stages (Leju: terminal cost
+  // off; its unused terminal P is 2–10× its Q on the base).
+  double terminal_weight_scale = 10.0;
+
+  // Input weights R (diagonal). Leju: R scaling 1e-3 × (forces 1, arm joint velocity 2000,
+  // foot task-space velocity 5000 (m/s)⁻² mapped to the legs by JᵀRJ at the nominal stance).
+  // The leg value is that mapping's diagonal rounded (lever arms ~0.4–0.8 m: 5·0.5² ≈ 1).
+  // Forces: 1e-4, not Leju's 1e-3: with 1e-3 a 0.2 m/s sideways CoM disturbance is still at
+  // 0.03 m/s and 19 of its 21 mm excursion at the end of the 1.2 s horizon (force deviations
+  // cost more than the tracking error); with 1e-4 it is out by then (tests/mpc/mpc_test.cpp).
+  double weight_force = 1e-4;               // N⁻²
+  double weight_leg_joint_velocity = 1.0;   // (rad/s)⁻²
+  double weight_arm_joint_velocity = 2.0;   // (rad/s)⁻²
+
+  // Relaxed log barrier B(h) = −μ ln h (h > δ), quadratic extension below δ (OCS2).
+  // Friction: Leju has μ = 0.1, δ = 5 N against its force weight 1e-3. We keep the ratio
+  // μ / weight_force (the barrier's push on f_z, which otherwise lifts the robot at the end of
+  // the horizon where nothing opposes it) and take δ = 1 N, so the relaxed penalty's curvature
+  // μ/δ² is 100× the force weight: with δ = 5 N the 0.2 m/s push test left corners 13.7 N
+  // outside the pyramid, with 1 N they stay inside (tests/mpc/mpc_test.cpp).
+  double friction_barrier_mu = 0.01;
+  double friction_barrier_delta_N = 1.0;
+  // Joint limits are not in Leju's MPC. Ours: small enough that a reference 0.1 rad inside a
+  // limit (the standing elbow) moves < 1 mrad against the arm weight, δ ≈ 1°.
+  double joint_limit_barrier_mu = 0.01;
+  double joint_limit_barrier_delta_rad = 0.02;
+
+  // Swing normal-velocity row gain: v_z = v_z,ref + k (z_ref − z). Leju positionErrorGain 20.
+  double swing_position_gain_1_s = 20.0;
+};
+
+// nullptr if usable, else what is wrong. Load time.
+const char* mpc_validate_config(const MpcConfig& config);
+// Stages of the horizon for a valid config: round(horizon_s / dt_s).
+int mpc_num_stages(const MpcConfig& config);
+
+// Stable numbers (logs, fault records): never renumber or reuse.
+enum class MpcStatus : std::uint8_t {
+  kOk = 0,
+  kNotInitialized = 1,  // mpc_init not called (or with an invalid config)
+  kBadInput = 2,        // non-finite measured state
+  kBadReference = 3,    // reference too short, wrong dt, or non-finite
+  kQpFailed = 4,        // the QP solve failed (factorization); trajectory and warm start dropped
+};
+const char* to_string(MpcStatus s);
+
+struct MpcPlan {  // a value type: copied through a triple buffer to the 500 Hz loop
+  hal::TimeNs stamp_ns = 0;  // time of knot 0 (= the measured state's time)
+  double dt_s = 0.02;
+  int count = 0;
+  std::array<wbc::WbcReference, kMpcPlanKnots> knots{};
+  MpcStatus status = MpcStatus::kNotInitialized;
+  int qp_iterations = 0;              // Riccati factorizations this call (1 when solved)
+  double cost = 0.0;                  // ½Σ tracking cost (no barriers) of the updated trajectory
+  double constraint_violation = 0.0;  // max |defect|, |equality| at the linearization point
+};
+
+using Ocp = qp::OcpQp<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
+using OcpWorkspace = qp::OcpWorkspace<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
+using OcpSolution = qp::OcpSolution<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
+
+// Everything, ~15 MB: static storage only.
+struct MpcWorkspace {
+  bool initialized = false;
+  int horizon = 0;  // T (stages)
+  StateVector weight_state = StateVector::Zero();   // diag Q (not yet × dt)
+  InputVector weight_input = InputVector::Zero();   // diag R
+  Eigen::Matrix<double, kNumMpcJoints, 1> joint_min_rad, joint_max_rad;
+
+  // Trajectory (linearization point / solution) and reference.
+  std::array<StateVector, kMaxStages + 1> x{};
+  std::array<InputVector, kMaxStages + 1> u{};
+  std::array<StateVector, kMaxStages + 1> x_ref{};
+  std::array<InputVector, kMaxStages + 1> u_ref{};
+  std::array<HeadVector, kMaxStages + 1> head_rad{};
+  bool warm = false;
+  hal::TimeNs last_stamp_ns = 0;
+
+  // Base twist and its derivatives at the first knots (to map the QP step into the plan).
+  std::array<Vec6, kMpcPlanKnots + 1> twist{};
+  std::array<MotionRowsX, kMpcPlanKnots + 1> twist_dx{};
+  std::array<MotionRowsU, kMpcPlanKnots + 1> twist_du{};
+
+  CentroidalPoint point;
+  dynamics::Data world_data;
+  planner::PlanKnot scratch_knot;
+  wbc::WbcReference scratch_reference;
+  Ocp qp;
+  OcpWorkspace qp_workspace;
+  OcpSolution solution;
+  qp::OcpSettings qp_settings;
+  double constraint_violation = 0.0;  // of the last linearization
+  qp::QpStatus qp_status = qp::QpStatus::kBadInput;
+};
+
+// Start-up, may be slow: weights, limits, an empty warm start. An invalid config leaves the
+// workspace uninitialized (mpc_step_rt then returns kNotInitialized).
+void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws);
+// Forget the warm start: the next step linearizes about the reference.
+void mpc_reset(MpcWorkspace& ws);
+
+// One real-time iteration. q, v: measured/estimated state (conventions.h), at
+// reference.knots[0].stamp_ns. reference: the plan at the stage times (dt = cfg.dt_s,
+// count ≥ N + 1). No allocation, no exceptions, no printing, bounded time.
+MpcStatus mpc_step_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
+                      const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                      const planner::PlanWindow& reference, MpcPlan& out);
+
+// mpc_step_rt's three phases, exposed for the benchmark's timing split and the QP tests:
+// (1) check the inputs, shift the warm start, linearize, fill ws.qp;
+MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
+                          const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                          const planner::PlanWindow& reference);
+// (2) solve ws.qp into ws.solution and apply the step to ws.x, ws.u;
+MpcStatus mpc_solve_qp_rt(MpcWorkspace& ws);
+// (3) fill the plan from the updated trajectory (count 0 unless status is kOk).
+void mpc_write_plan_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
+                       const planner::PlanWindow& reference, MpcStatus status, MpcPlan& out);
+
+}  // namespace kuavo::mpc

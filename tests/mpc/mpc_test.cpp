@@ -1,0 +1,227 @@
+// The real-time iteration: configuration checks, the QP against its KKT conditions (computed
+// here from the stage data), standing with the exact state, recovery from a CoM velocity
+// disturbance, convergence of repeated iterations, no allocation.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <iostream>
+#include <cstdlib>
+
+#include "tests/mpc/mpc_fixture.h"
+#include "tests/support/alloc_trap.h"
+
+namespace kuavo::test {
+namespace {
+
+using mpc::kNx;
+using mpc::MpcStatus;
+
+double total_fz(const mpc::InputVector& u) {
+  double s = 0.0;
+  for (int c = 0; c < mpc::kNumPoints; ++c) s += u[3 * c + 2];
+  return s;
+}
+
+TEST(MpcConfig, DefaultsAreValidAndBadValuesAreRefused) {
+  mpc::MpcConfig c;
+  EXPECT_EQ(mpc::mpc_validate_config(c), nullptr);
+  EXPECT_EQ(mpc::mpc_num_stages(c), 60);
+  c.horizon_s = 1.5;
+  EXPECT_NE(mpc::mpc_validate_config(c), nullptr);
+  c = {};
+  c.weight_force = 0.0;
+  EXPECT_NE(mpc::mpc_validate_config(c), nullptr);
+  c = {};
+  c.friction_barrier_delta_N = std::nan("");
+  EXPECT_NE(mpc::mpc_validate_config(c), nullptr);
+  for (double h : {0.6, 0.8, 1.0, 1.4}) {
+    c = {};
+    c.horizon_s = h;
+    EXPECT_EQ(mpc::mpc_validate_config(c), nullptr) << h;
+  }
+}
+
+TEST(MpcStep, BadInputsGiveErrorValues) {
+  MpcFixture& f = mpc_fixture();
+  standing_window(f, 0);
+  const dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
+  dynamics::ConfigVector q = f.q0;
+  q[9] = std::nan("");
+  EXPECT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, q, v0, f.window, f.plan), MpcStatus::kBadInput);
+  EXPECT_EQ(f.plan.count, 0);
+  standing_window(f, 0, 60);  // needs N + 1 = 61
+  EXPECT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan), MpcStatus::kBadReference);
+  standing_window(f, 0);
+  f.window.dt_s = 0.01;
+  EXPECT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan), MpcStatus::kBadReference);
+  standing_window(f, 0);
+  f.window.knots[30].q[10] = INFINITY;
+  EXPECT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan), MpcStatus::kBadReference);
+  mpc::MpcConfig bad;
+  bad.horizon_s = 3.0;
+  mpc::mpc_init(f.model, bad, f.ws);
+  standing_window(f, 0);
+  EXPECT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan), MpcStatus::kNotInitialized);
+}
+
+// KKT conditions of the OCP QP (ocp_qp.h sign conventions), from the stage data.
+double kkt_residual(const mpc::Ocp& qp, const mpc::OcpSolution& s, double& primal) {
+  const int T = qp.horizon;
+  double stat = (s.x[0] - qp.x_initial).cwiseAbs().maxCoeff();
+  primal = stat;
+  for (int k = 0; k <= T; ++k) {
+    const auto& st = qp.stages[k];
+    Eigen::Matrix<double, kNx, 1> gx = st.Q * s.x[k] + st.q - s.costate[k];
+    if (k < T) {
+      const int ne = st.num_eq;
+      gx += st.S.transpose() * s.u[k] + st.A.transpose() * s.costate[k + 1];
+      Eigen::Matrix<double, mpc::kNu, 1> gu = st.R * s.u[k] + st.S * s.x[k] + st.r + st.B.transpose() * s.costate[k + 1];
+      if (ne > 0) {
+        gx += st.C.topRows(ne).transpose() * s.nu[k].head(ne);
+        gu += st.D.topRows(ne).transpose() * s.nu[k].head(ne);
+        primal = std::max(primal, (st.C.topRows(ne) * s.x[k] + st.D.topRows(ne) * s.u[k] - st.e.head(ne))
+                                      .cwiseAbs()
+                                      .maxCoeff());
+      }
+      primal = std::max(primal, (st.A * s.x[k] + st.B * s.u[k] + st.b - s.x[k + 1]).cwiseAbs().maxCoeff());
+      stat = std::max(stat, gu.cwiseAbs().maxCoeff());
+    }
+    if (k > 0) stat = std::max(stat, gx.cwiseAbs().maxCoeff());
+  }
+  return stat;
+}
+
+TEST(MpcStep, OneIterationSolvesItsQpAndSatisfiesTheLinearizedConstraints) {
+  MpcFixture& f = mpc_fixture();
+  standing_window(f, 0);
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.2;  // sideways push: the QP has work to do
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
+  ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
+  double primal = 0.0;
+  const double stat = kkt_residual(f.ws.qp, f.ws.solution, primal);
+  std::printf("KKT: stationarity %.2e, primal %.2e\n", stat, primal);
+  EXPECT_LT(stat, 1e-8);
+  EXPECT_LT(primal, 1e-9);
+  // Every stance stage carried its 12 foot-twist rows.
+  EXPECT_EQ(f.ws.qp.stages[0].num_eq, 12);
+  EXPECT_EQ(f.ws.qp.stages[59].num_eq, 12);
+}
+
+TEST(MpcStep, StandingWithTheExactStateHoldsStill) {
+  MpcFixture& f = mpc_fixture();
+  standing_window(f, 1'000'000'000);
+  const dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
+  ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan), MpcStatus::kOk);
+  const double mg = f.model.total_mass_kg * model::kGravity_m_s2;
+  // The last stages are left out: there the friction barrier's push on f_z is opposed only by
+  // the terminal cost (an end effect, ~3 % of m g on the last input; the WBC reads knots 0–9).
+  constexpr int kEndStages = 5;
+  const double m = f.model.total_mass_kg;
+  for (int k = 0; k < f.ws.horizon - kEndStages; ++k) {
+    EXPECT_NEAR(total_fz(f.ws.u[k]), mg, 0.01 * mg) << k;
+    EXPECT_LT(f.ws.x[k].segment<3>(mpc::kXComVelocity).cwiseAbs().maxCoeff(), 1e-3) << k;  // m/s
+    EXPECT_LT(f.ws.x[k].segment<3>(mpc::kXMomentum).cwiseAbs().maxCoeff() / m, 1e-4) << k;  // m²/s
+    // Not exactly 0: the joint-limit barrier moves the elbows (reference 0.116 rad inside
+    // their limit) ~0.4 mrad away from it; that settles at a few mrad/s over the first stages.
+    EXPECT_LT(f.ws.u[k].tail<mpc::kNumMpcJoints>().cwiseAbs().maxCoeff(), 5e-3) << k;
+  }
+  ASSERT_EQ(f.plan.count, mpc::kMpcPlanKnots);
+  EXPECT_EQ(f.plan.stamp_ns, 1'000'000'000);
+  EXPECT_EQ(f.plan.knots[3].stamp_ns, 1'060'000'000);
+  for (int i = 0; i < f.plan.count; ++i) {
+    const auto& r = f.plan.knots[i];
+    EXPECT_LT(r.momentum_rate.cwiseAbs().maxCoeff(), 0.01 * mg);
+    EXPECT_LT((r.com_position_m - f.window.knots[0].com_position_m).norm(), 1e-4);
+    EXPECT_LT((r.point_position_m - f.window.knots[0].point_position_m).cwiseAbs().maxCoeff(), 1e-4);
+    EXPECT_LT(r.joint_velocity_rad_s.cwiseAbs().maxCoeff(), 5e-3);
+  }
+  std::printf("standing: cost %.3e, violation %.2e\n", f.plan.cost, f.plan.constraint_violation);
+}
+
+TEST(MpcStep, RepeatedIterationsOnAFixedStateConverge) {
+  // Same state, same stamps: each call is one more SQP iteration on the same problem. The
+  // full-step SQP converges quadratically once close: violation ~1e-1 → 1e-3 → 1e-5 → 1e-7 …
+  MpcFixture& f = mpc_fixture();
+  standing_window(f, 0);
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.2;
+  constexpr int kIterations = 12;
+  std::array<double, kIterations> violation{}, cost{};
+  for (int it = 0; it < kIterations; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk) << it;
+    violation[it] = f.plan.constraint_violation;  // at this call's linearization point
+    cost[it] = f.plan.cost;
+    std::printf("iteration %2d: cost %.9e, violation %.2e\n", it, cost[it], violation[it]);
+  }
+  for (int it = 1; it < kIterations && violation[it - 1] > 1e-12; ++it) EXPECT_LT(violation[it], violation[it - 1]) << it;
+  EXPECT_LT(violation[10], 1e-6);
+  EXPECT_LT(std::abs(cost[kIterations - 1] - cost[kIterations - 2]), 1e-9 * cost[kIterations - 1]);
+  EXPECT_GT(std::abs(cost[1] - cost[0]), 1e-6 * cost[0]);  // it did have to move
+}
+
+TEST(MpcStep, SidewaysVelocityDisturbanceIsBroughtBackWithinTheHorizon) {
+  mpc::MpcConfig cfg;
+  if (const char* e = std::getenv("KUAVO_MPC_WF")) cfg.weight_force = std::atof(e);
+  if (const char* e = std::getenv("KUAVO_MPC_TS")) cfg.terminal_weight_scale = std::atof(e);
+  if (const char* e = std::getenv("KUAVO_MPC_WP")) cfg.weight_base_position[1] = std::atof(e);
+  if (const char* e = std::getenv("KUAVO_MPC_WL")) cfg.weight_leg_joint[0] = std::atof(e);
+  MpcFixture& f = mpc_fixture(cfg);
+  standing_window(f, 0);
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.2;  // base axes = world here (identity orientation): 0.2 m/s to the left
+  for (int it = 0; it < 5; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk);
+  }
+  const int T = f.ws.horizon;
+  const double y0 = f.window.knots[0].q[1];
+  double max_dev = 0.0;
+  int k_max = 0;
+  for (int k = 0; k <= T; ++k) {
+    const double dev = std::abs(f.ws.x[k][mpc::kXBasePosition + 1] - y0);
+    if (dev > max_dev) {
+      max_dev = dev;
+      k_max = k;
+    }
+  }
+  const double end_dev = std::abs(f.ws.x[T][mpc::kXBasePosition + 1] - y0);
+  std::printf("push 0.2 m/s: CoM vy(0) %.3f, vy(T) %.4f, base y dev max %.1f mm at k=%d, at T %.1f mm\n",
+              f.ws.x[0][1], f.ws.x[T][1], 1e3 * max_dev, k_max, 1e3 * end_dev);
+  EXPECT_NEAR(f.ws.x[0][1], 0.2, 0.02);                // the disturbance is in the initial state
+  EXPECT_LT(std::abs(f.ws.x[T][mpc::kXComVelocity + 1]), 0.05);  // velocity taken out
+  EXPECT_LT(end_dev, 0.5 * max_dev);                   // and the excursion coming back
+  EXPECT_LT(k_max, T / 2);
+  // Friction cones within the barrier's relaxation (δ = 5 N), unilateral forces.
+  double worst = 1e9;
+  for (int k = 0; k < T; ++k) {
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      const mpc::Vec3 fc = f.ws.u[k].segment<3>(3 * c);
+      worst = std::min({worst, f.config.friction_coefficient * fc.z() - std::abs(fc.x()),
+                        f.config.friction_coefficient * fc.z() - std::abs(fc.y())});
+    }
+  }
+  std::printf("friction: min (mu fz - |ft|) %.2f N\n", worst);
+  EXPECT_GT(worst, -f.config.friction_barrier_delta_N);
+}
+
+TEST(MpcStep, NoAllocationOverAHundredCalls) {
+  MpcFixture& f = mpc_fixture();
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.1;
+  standing_window(f, 0);
+  ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk);
+  std::size_t allocations = 0;
+  int ok = 0;
+  for (int call = 1; call <= 100; ++call) {
+    standing_window(f, static_cast<hal::TimeNs>(call) * 20'000'000);  // the planner's part, outside the trap
+    AllocTrap trap;
+    ok += mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan) == MpcStatus::kOk ? 1 : 0;
+    allocations += trap.count();
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(ok, 100);
+}
+
+}  // namespace
+}  // namespace kuavo::test

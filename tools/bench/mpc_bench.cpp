@@ -1,0 +1,105 @@
+// One centroidal-MPC real-time iteration (mpc_step_rt) per horizon, on one core.
+// Run pinned: taskset -c 1 build-mpc/bench/mpc_bench
+// Counters: p50 / p99 / max of the whole call, timed one by one with the monotonic clock, and
+// the p50 of its three phases: linearization + QP build, the Riccati solve (+ step), the plan
+// written for the WBC. The state alternates between standing still and a 0.1 m/s sideways
+// CoM disturbance; the stamps advance one stage per call (warm start shifted by one, as at 50 Hz).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <vector>
+
+#include "controllers/mpc/mpc.h"
+#include "controllers/standing/standing_controller.h"
+
+namespace {
+
+using namespace kuavo;
+using Clock = std::chrono::steady_clock;
+
+struct Fixture {
+  model::Model robot;
+  dynamics::Data data;
+  mpc::MpcConfig cfg;
+  mpc::MpcWorkspace ws;
+  planner::PlanWindow window;
+  mpc::MpcPlan plan;
+  dynamics::ConfigVector q0;
+  Fixture() {
+    model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, robot);
+    q0 = dynamics::neutral_configuration(robot);
+    q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot, data, 0.78);
+    control::place_on_ground(robot, data, q0);
+  }
+  void set_window(hal::TimeNs t0_ns) {
+    window.count = planner::kMaxWindowKnots;
+    window.dt_s = cfg.dt_s;
+    planner::ContactFlags all{};
+    all.fill(true);
+    planner::plan_knot_from_state(robot, data, q0, dynamics::VelocityVector::Zero(), all, t0_ns, window.knots[0]);
+    for (int k = 1; k < window.count; ++k) {
+      window.knots[k] = window.knots[0];
+      window.knots[k].stamp_ns = t0_ns + static_cast<hal::TimeNs>(k) * 20'000'000;
+    }
+  }
+};
+
+Fixture& fixture() {
+  static auto f = std::make_unique<Fixture>();  // ~15 MB: static storage, as in the firmware
+  return *f;
+}
+
+double percentile(std::vector<double>& v, int p) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, v.size() * static_cast<std::size_t>(p) / 100)];
+}
+
+void BM_MpcStep(benchmark::State& state) {
+  Fixture& f = fixture();
+  f.cfg = {};
+  f.cfg.horizon_s = static_cast<double>(state.range(0)) / 1000.0;
+  mpc::mpc_init(f.robot, f.cfg, f.ws);
+  dynamics::VelocityVector v[2] = {dynamics::VelocityVector::Zero(), dynamics::VelocityVector::Zero()};
+  v[1][1] = 0.1;
+  std::vector<double> total, build, solve, write;
+  for (auto* vec : {&total, &build, &solve, &write}) vec->reserve(1 << 16);
+  hal::TimeNs t = 0;
+  int i = 0, failures = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    f.set_window(t);  // the planner's part
+    state.ResumeTiming();
+    const auto t0 = Clock::now();
+    mpc::MpcStatus s = mpc::mpc_build_qp_rt(f.robot, f.cfg, f.ws, f.q0, v[i], f.window);
+    const auto t1 = Clock::now();
+    if (s == mpc::MpcStatus::kOk) s = mpc::mpc_solve_qp_rt(f.ws);
+    const auto t2 = Clock::now();
+    mpc::mpc_write_plan_rt(f.robot, f.cfg, f.ws, f.window, s, f.plan);
+    const auto t3 = Clock::now();
+    failures += s == mpc::MpcStatus::kOk ? 0 : 1;
+    benchmark::DoNotOptimize(f.plan.cost);
+    auto us = [](auto a, auto b) { return std::chrono::duration<double, std::micro>(b - a).count(); };
+    total.push_back(us(t0, t3));
+    build.push_back(us(t0, t1));
+    solve.push_back(us(t1, t2));
+    write.push_back(us(t2, t3));
+    t += 20'000'000;
+    i ^= 1;
+  }
+  state.counters["stages"] = f.ws.horizon;
+  state.counters["p50_us"] = percentile(total, 50);
+  state.counters["p99_us"] = percentile(total, 99);
+  state.counters["max_us"] = percentile(total, 100);
+  state.counters["linearize_p50_us"] = percentile(build, 50);
+  state.counters["solve_p50_us"] = percentile(solve, 50);
+  state.counters["plan_p50_us"] = percentile(write, 50);
+  state.counters["failures"] = failures;
+}
+BENCHMARK(BM_MpcStep)->Arg(600)->Arg(800)->Arg(1000)->Arg(1200)->Arg(1400)->ArgName("horizon_ms")
+    ->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+}  // namespace
+
+BENCHMARK_MAIN();
