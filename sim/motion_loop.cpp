@@ -288,6 +288,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   out.mpc_ms = percentiles(plan_ms);
   out.plans_applied = sched.stats().plans_applied;
   out.plans_skipped = sched.stats().plans_skipped;
+  out.mpc_failures = planner_ws->mpc_failures;
   return out;
 }
 
@@ -303,12 +304,12 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
                 "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
                 "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
-                "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n"
+                "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.zmp_margin_m_min, s.zmp_at_edge_s, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
-                static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped),
+                static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
                 s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
   return base + buf;
 }

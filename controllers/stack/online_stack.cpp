@@ -1,5 +1,6 @@
 #include "controllers/stack/online_stack.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace kuavo::stack {
@@ -20,7 +21,10 @@ bool parse_planner(const char* text, PlannerKind& out) {
 
 const char* stack_validate_config(const StackConfig& config) {
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
-  if (config.planner == PlannerKind::kMpc) return "the MPC planner is not in this build yet";
+  if (config.planner == PlannerKind::kMpc) {
+    if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
+    if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
+  }
   return wbc::wbc_validate_config(config.wbc);
 }
 
@@ -35,6 +39,10 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
     return false;
   }
   wbc::wbc_init(model, config.wbc, control.wbc);
+  if (config.planner == PlannerKind::kMpc) {
+    mpc::mpc_init(model, config.mpc, planner_ws.mpc);
+    planner_ws.mpc_failures = 0;
+  }
   static planner::ReferencePlan first;  // start-up only
   stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, first);
   stack_apply_plan_rt(control, first);
@@ -59,8 +67,22 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
 }
 
 void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
-                   const planner::MotionPlan& motion, const dynamics::ConfigVector& /*q*/,
-                   const dynamics::VelocityVector& /*v*/, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
+                   const planner::MotionPlan& motion, const dynamics::ConfigVector& q,
+                   const dynamics::VelocityVector& v, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
+  if (config.planner == PlannerKind::kMpc) {
+    const int stages = mpc::mpc_num_stages(config.mpc);
+    planner::motion_plan_window_rt(model, ws.data, motion, t_state_ns, config.mpc.dt_s, stages + 1, ws.window);
+    ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
+    if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
+      out.stamp_ns = ws.mpc_plan.stamp_ns;
+      out.dt_s = ws.mpc_plan.dt_s;
+      out.count = std::min(ws.mpc_plan.count, planner::kReferencePlanKnots);
+      for (int k = 0; k < out.count; ++k) out.knots[k] = ws.mpc_plan.knots[k];
+      return;
+    }
+    ++ws.mpc_failures;
+    mpc::mpc_reset(ws.mpc);
+  }
   // Kinematic planner: the state does not enter (the WBC closes the loop).
   planner::kinematic_reference_plan_rt(model, ws.data, motion, t_state_ns, config.plan_period_s, ws.window, out);
 }

@@ -17,6 +17,7 @@
 #include <cstdint>
 
 #include "controllers/estimator/estimator.h"
+#include "controllers/mpc/mpc.h"
 #include "controllers/planner/reference_plan.h"
 #include "controllers/wbc/wbc.h"
 
@@ -34,6 +35,7 @@ struct StackConfig {
   PlannerKind planner = PlannerKind::kKinematic;
   double plan_period_s = 0.02;  // 50 Hz; also the spacing of the plan's knots
   wbc::WbcConfig wbc{};
+  mpc::MpcConfig mpc{};
   estimator::EstimatorConfig estimator = dance_estimator_config();
 
   // Leju's IMU low-pass corners (gyro 20 Hz, accelerometer 12 Hz) lag a dancing robot:
@@ -64,6 +66,12 @@ struct ControlWorkspace {
 struct PlannerWorkspace {
   planner::PlanWindow window;
   dynamics::Data data;
+  mpc::MpcWorkspace mpc;  // ~15 MB
+  mpc::MpcPlan mpc_plan;
+  mpc::MpcStatus last_mpc_status = mpc::MpcStatus::kNotInitialized;
+  // MPC iterations that failed; each one hands the WBC the kinematic plan instead (the
+  // robot keeps going on the motion, the failure is counted and the MPC restarts cold).
+  std::uint64_t mpc_failures = 0;
 };
 
 // The state the control tick runs on: the estimator's, or (simulation only, for
@@ -86,7 +94,9 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
                                      hal::CommandFrame& command);
 
 // 50 Hz. (q, v): the state at t_state_ns (the control task's estimate when the planner
-// released). Real-time safe.
+// released). Kinematic: the motion's knots. MPC: one real-time iteration on the motion
+// sampled at the MPC's stage times; on failure the kinematic knots (counted in
+// ws.mpc_failures). Real-time safe.
 void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
                    const planner::MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                    hal::TimeNs t_state_ns, planner::ReferencePlan& out);

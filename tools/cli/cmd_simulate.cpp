@@ -2,7 +2,7 @@
 //                [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
-//                [--plan-latency-ms MS|measured]
+//                [--horizon SECONDS] [--plan-latency-ms MS|measured]
 //                [--duration SECONDS] [--balance-filter on|off] --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
@@ -46,7 +46,7 @@ int usage() {
                "                      [--seed N] [--latency-ticks N] [--integrator euler|cvode|rkm]\n"
                "                      [--variant s45|s42] [--mass KG]\n"
                "                      [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
-               "                      [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
+               "                      [--horizon SECONDS] [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
                "                      [--balance-filter on|off]\n"
                "                      --log run.csv --summary run.json\n");
   return 2;
@@ -89,6 +89,8 @@ int run_simulate(int argc, char** argv) {
     } else if (!std::strcmp(a, "--state") && v) {
       if (std::strcmp(v, "estimator") != 0 && std::strcmp(v, "truth") != 0) return bad("--state must be estimator or truth, got");
       motion_cfg.use_truth_state = std::strcmp(v, "truth") == 0;
+    } else if (!std::strcmp(a, "--horizon") && v) {
+      if (!parse_double(v, motion_cfg.stack.mpc.horizon_s)) return bad("--horizon needs seconds, got");
     } else if (!std::strcmp(a, "--sensors") && v) {
       if (std::strcmp(v, "ideal") != 0 && std::strcmp(v, "mti") != 0) return bad("--sensors must be mti or ideal, got");
       motion_cfg.ideal_sensors = std::strcmp(v, "ideal") == 0;
