@@ -12,6 +12,7 @@
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
+#include "sim/ideal_sensors.h"
 #include "tests/support/alloc_trap.h"
 
 namespace kuavo::stack {
@@ -22,26 +23,6 @@ const model::Model& robot() {
   static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
   EXPECT_TRUE(built);
   return m;
-}
-
-// What ideal sensors report while the robot follows the plan exactly; accel_world: the
-// base origin's acceleration.
-void sense(const planner::PlanKnot& knot, const Eigen::Vector3d& accel_world, hal::TimeNs stamp_ns,
-           hal::SensorFrame& frame) {
-  for (int j = 0; j < model::kNumJoints; ++j) {
-    frame.joints[j].position_rad = knot.q[7 + j];
-    frame.joints[j].velocity_rad_s = knot.v[6 + j];
-    frame.joints[j].torque_Nm = 0.0;
-    frame.joints[j].stamp_ns = stamp_ns;
-    frame.joints[j].valid = true;
-  }
-  const Eigen::Quaterniond o(knot.q[6], knot.q[3], knot.q[4], knot.q[5]);
-  const Eigen::Vector3d f = o.conjugate() * (accel_world + Eigen::Vector3d(0.0, 0.0, model::kGravity_m_s2));
-  frame.imu.orientation_xyzw = {o.x(), o.y(), o.z(), o.w()};
-  frame.imu.angular_rate_rad_s = {knot.v[3], knot.v[4], knot.v[5]};
-  frame.imu.acceleration_m_s2 = {f.x(), f.y(), f.z()};
-  frame.imu.stamp_ns = stamp_ns;
-  frame.imu.valid = true;
 }
 
 TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
@@ -75,7 +56,7 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
     return Eigen::Vector3d((world_velocity(after) - world_velocity(before)) / (2e-9 * h));
   };
   planner::motion_plan_sample_rt(m, *data, *plan, 0, truth);
-  sense(truth, Eigen::Vector3d::Zero(), 0, frame);
+  sim::ideal_sensor_frame(truth, Eigen::Vector3d::Zero(), 0, frame);
   ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
 
   constexpr int kTicks = 100'000;
@@ -89,7 +70,7 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
       const hal::TimeNs now = tick * kPeriod_ns;
       const Eigen::Vector3d accel = base_acceleration(now);
       planner::motion_plan_sample_rt(m, *data, *plan, now, truth);  // the test's oracle
-      sense(truth, accel, now, frame);
+      sim::ideal_sensor_frame(truth, accel, now, frame);
       if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++not_ok;
       for (const auto& c : command.joints) {
         const bool finite = std::isfinite(c.torque_ff_Nm) && std::isfinite(c.position_ref_rad) &&

@@ -1,0 +1,104 @@
+// The online stack with the centroidal RTI-MPC as its planner, closed on the Simbody plant
+// with the state estimator: the built-in dance end to end (BVH → retargeting → balance
+// filter → MPC + WBC), and stepping in place. Oracles: the simulator's truth (falls, loads),
+// the motion (tracking), the MPC's own status.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "controllers/planner/balance_filter.h"
+#include "controllers/planner/step_in_place.h"
+#include "controllers/standing/standing_controller.h"
+#include "sim/motion_loop.h"
+#include "tools/mocap/contacts.h"
+#include "tools/mocap/default_dance.h"
+#include "tools/mocap/human_targets.h"
+#include "tools/mocap/retarget.h"
+#include "tools/mocap/skeleton_map.h"
+
+namespace kuavo::test {
+namespace {
+
+const model::Model& robot() {
+  static model::Model m;
+  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
+  EXPECT_TRUE(built);
+  return m;
+}
+
+// The built-in dance as `kuavo retarget` makes it, then the balance filter.
+planner::MotionPlan& dance_plan() {
+  static auto plan = std::make_unique<planner::MotionPlan>();
+  static bool made = false;
+  if (made) return *plan;
+  const mocap::Bvh bvh = mocap::default_dance_bvh();
+  mocap::SkeletonMap map;
+  std::string error;
+  EXPECT_TRUE(mocap::map_skeleton(bvh, map, error)) << error;
+  mocap::HumanTargets targets;
+  EXPECT_TRUE(mocap::make_targets(bvh, map, robot(), {}, targets, error)) << error;
+  const auto labels = mocap::detect_contacts(targets, robot());
+  mocap::RetargetResult result;
+  mocap::retarget_motion(robot(), targets, labels, mocap::RetargetOptions{}, result);
+  plan->rate_hz = targets.rate_hz;
+  plan->frame_count = static_cast<int>(result.q.size());
+  for (std::size_t i = 0; i < result.q.size(); ++i) {
+    plan->q[i] = result.q[i];
+    plan->foot_contact[i] = {mocap::left_in_contact(result.contacts[i]), mocap::right_in_contact(result.contacts[i])};
+  }
+  EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
+  auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
+  planner::BalanceFilterReport report;
+  EXPECT_EQ(planner::balance_filter(robot(), planner::BalanceFilterConfig{}, *plan, *ws, report), nullptr);
+  made = true;
+  return *plan;
+}
+
+void print(const char* name, const sim::MotionSummary& s) {
+  std::printf("%s: fell %d at %.2f s of %.1f, legs %.4f rad, arms %.4f rad, CoM err %.3f m, ZMP at edge %.3f s, "
+              "est v rms %.4f m/s, MPC p50 %.2f ms, WBC p50 %.0f us, mpc failures %llu, not-ok ticks %llu\n",
+              name, s.run.fell, s.run.fell_at_s, s.run.sim_time_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad,
+              s.com_err_m_max, s.zmp_at_edge_s, s.estimator_velocity_rms_m_s, s.mpc_ms.p50, s.wbc_us.p50,
+              static_cast<unsigned long long>(s.mpc_failures), static_cast<unsigned long long>(s.wbc_not_ok_ticks));
+}
+
+TEST(MpcLoop, TheBuiltInDanceOnTheFloorWithTheEstimator) {
+  const planner::MotionPlan& plan = dance_plan();
+  sim::MotionRunConfig cfg;
+  cfg.stack.planner = stack::PlannerKind::kMpc;
+  const sim::MotionSummary s = sim::run_motion(robot(), plan, cfg);
+  print("dance, floor, MPC", s);
+  ASSERT_TRUE(s.run.ok) << s.run.error;
+  EXPECT_FALSE(s.run.fell);
+  EXPECT_GE(s.run.sim_time_s, planner::motion_plan_duration_s(plan));
+  EXPECT_LT(s.tracking_rms_legs_rad, 0.05);
+  EXPECT_LT(s.tracking_rms_arms_rad, 0.05);
+  EXPECT_EQ(s.mpc_failures, 0u);
+  EXPECT_GT(s.plans_applied, 1400u);  // 50 Hz over 31 s
+}
+
+TEST(MpcLoop, StepsInPlaceOnCarpet) {
+  static auto plan = std::make_unique<planner::MotionPlan>();
+  static dynamics::Data data;
+  dynamics::ConfigVector q0 = dynamics::neutral_configuration(robot());
+  q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot(), data, 0.78);
+  control::place_on_ground(robot(), data, q0);
+  planner::StepInPlaceConfig gait;
+  gait.steps = 6;
+  ASSERT_EQ(planner::make_step_in_place(robot(), q0, gait, *plan), nullptr);
+  sim::MotionRunConfig cfg;
+  cfg.stack.planner = stack::PlannerKind::kMpc;
+  cfg.run.ground = sim::kCarpet;
+  const sim::MotionSummary s = sim::run_motion(robot(), *plan, cfg);
+  print("steps, carpet, MPC", s);
+  ASSERT_TRUE(s.run.ok) << s.run.error;
+  EXPECT_FALSE(s.run.fell);
+  EXPECT_LT(s.tracking_rms_legs_rad, 0.03);
+  EXPECT_EQ(s.mpc_failures, 0u);
+  EXPECT_EQ(s.wbc_not_ok_ticks, 0u);
+}
+
+}  // namespace
+}  // namespace kuavo::test
