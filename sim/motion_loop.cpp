@@ -263,6 +263,13 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
         std::array<double, 2> load{};
         for (int c = 0; c < model::kNumContactPoints; ++c) load[c < kCornersPerFoot ? 0 : 1] += t.contact_force_N[c].z();
         trace->foot_force_z_N.push_back(load);
+        std::array<double, 4> feet{};
+        for (int c = 0; c < model::kNumContactPoints; ++c) {
+          const int foot = c < kCornersPerFoot ? 0 : 2;
+          feet[foot] += t.contact_point_m[c].x() / kCornersPerFoot;
+          feet[foot + 1] += t.contact_point_m[c].y() / kCornersPerFoot;
+        }
+        trace->foot_xy_m.push_back(feet);
         trace->base_velocity_est.push_back(
             {est.base_velocity_world_m_s.x(), est.base_velocity_world_m_s.y(), est.base_velocity_world_m_s.z()});
       }

@@ -66,6 +66,7 @@ struct MotionTrace {
   std::vector<std::array<double, 2>> support_lo, support_hi;  // support polygon's bounding box
   std::vector<std::array<double, 3>> base_velocity, base_velocity_est;
   std::vector<std::array<double, 2>> foot_force_z_N;  // [left, right] normal load from the ground
+  std::vector<std::array<double, 4>> foot_xy_m;       // [left x, y, right x, y]: sole centres
 };
 
 MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,

@@ -1,15 +1,17 @@
-// kuavo demo [--out DIR] [--planner kinematic|mpc]: the main job. The built-in dance
+// kuavo demo [--out DIR] [--planner mpc|kinematic]: the main job. The built-in dance
 // through the whole pipeline into the simulator, with a report folder:
 //   1. the built-in human dance (BVH, generated) -> geometric retargeting -> contact
 //      schedule -> dance.motion (+ CSV, retarget_report.json);
-//   2. the balance filter, then the online stack (estimator, planner, 500 Hz WBC) dancing
-//      it on the Simbody plant: floor and carpet with the estimator, and the floor once
-//      more on the simulator's true state for comparison (dance_*.csv/json/svg);
+//   2. the balance filter, then the online stack (estimator, centroidal RTI-MPC at 50 Hz,
+//      WBC at 500 Hz) dancing it on the Simbody plant: floor, and carpet with the MPC
+//      horizon at 1.2 s and at 0.6 s — the paper's horizon experiment, with the knee
+//      trajectories and foot placements of both (dance_*.csv/json/svg, horizon_*.svg);
 //   3. 20 steps in place on the floor (steps_floor.*);
 //   4. standing 10 s on floor and carpet with a 10 N·s push (stand_*.csv/json);
 //   5. REPORT.md: a table of every run's figures and links to the plots.
 #include <sys/stat.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -22,6 +24,7 @@
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
 #include "tools/cli/motion_report.h"
+#include "tools/report/svg_plot.h"
 
 namespace kuavo::cli {
 namespace {
@@ -42,7 +45,30 @@ std::string slurp(const std::string& path) {
 struct Case {
   std::string name, description;
   sim::MotionSummary summary;
+  sim::MotionTrace trace;
 };
+
+// Sole-centre positions at each touchdown (the foot's load rising through 100 N after it
+// had been below 5 N), as dots: one point between NaN separators.
+report::Series touchdowns(const std::string& name, const sim::MotionTrace& t, const std::string& color) {
+  report::Series s;
+  s.name = name;
+  s.color = color;
+  const double nan = std::nan("");
+  std::array<bool, 2> up{false, false};
+  for (std::size_t i = 0; i < t.foot_force_z_N.size(); ++i) {
+    for (int foot = 0; foot < 2; ++foot) {
+      const double f = t.foot_force_z_N[i][foot];
+      if (f < 5.0) up[foot] = true;
+      if (up[foot] && f > 100.0) {
+        up[foot] = false;
+        s.x.insert(s.x.end(), {nan, t.foot_xy_m[i][2 * foot]});
+        s.y.insert(s.y.end(), {nan, t.foot_xy_m[i][2 * foot + 1]});
+      }
+    }
+  }
+  return s;
+}
 
 std::string row(const Case& c) {
   const sim::MotionSummary& s = c.summary;
@@ -61,14 +87,14 @@ std::string row(const Case& c) {
 
 int run_demo(int argc, char** argv) {
   std::string out = "demo_report";
-  stack::PlannerKind planner_kind = stack::PlannerKind::kKinematic;
+  stack::PlannerKind planner_kind = stack::PlannerKind::kMpc;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--out") && i + 1 < argc) {
       out = argv[++i];
     } else if (!std::strcmp(argv[i], "--planner") && i + 1 < argc && stack::parse_planner(argv[i + 1], planner_kind)) {
       ++i;
     } else {
-      std::fprintf(stderr, "usage: kuavo demo [--out DIR] [--planner kinematic|mpc]\n");
+      std::fprintf(stderr, "usage: kuavo demo [--out DIR] [--planner mpc|kinematic]\n");
       return 2;
     }
   }
@@ -98,21 +124,21 @@ int run_demo(int argc, char** argv) {
     std::fflush(stdout);
     cfg.stack.planner = planner_kind;
     cfg.run.log_path = out + "/" + name + ".csv";
-    sim::MotionTrace trace;
-    Case c{name, description, sim::run_motion(*robot, plan, cfg, &trace)};
+    Case c{name, description, {}, {}};
+    c.summary = sim::run_motion(*robot, plan, cfg, &c.trace);
     std::ofstream(out + "/" + name + ".json") << sim::motion_summary_json(c.summary);
-    if (!write_motion_plots(*robot, trace, out + "/" + name, name, error)) std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
-    cases.push_back(c);
+    if (!write_motion_plots(*robot, c.trace, out + "/" + name, name, error)) std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
+    cases.push_back(std::move(c));
   };
   std::printf("== 2/5 the dance in the simulator (%s planner)\n", stack::to_string(planner_kind));
   sim::MotionRunConfig floor_cfg;
   run_case("dance_floor", "built-in dance, floor, estimator", *dance, floor_cfg);
   sim::MotionRunConfig carpet_cfg;
   carpet_cfg.run.ground = sim::kCarpet;
-  run_case("dance_carpet", "built-in dance, carpet, estimator", *dance, carpet_cfg);
-  sim::MotionRunConfig truth_cfg;
-  truth_cfg.use_truth_state = true;
-  run_case("dance_floor_truth", "built-in dance, floor, true state (comparison)", *dance, truth_cfg);
+  carpet_cfg.stack.mpc.horizon_s = 1.2;
+  run_case("dance_carpet", "built-in dance, carpet, estimator, MPC horizon 1.2 s", *dance, carpet_cfg);
+  carpet_cfg.stack.mpc.horizon_s = 0.6;
+  run_case("dance_carpet_h06", "built-in dance, carpet, estimator, MPC horizon 0.6 s", *dance, carpet_cfg);
   std::printf("== 3/5 stepping in place\n");
   run_case("steps_floor", "20 steps in place, floor, estimator", *steps, sim::MotionRunConfig{});
 
@@ -145,6 +171,42 @@ int run_demo(int argc, char** argv) {
     md << "### " << c.name << "\n\n![tracking](" << c.name << "_tracking.svg)\n\n![CoM](" << c.name
        << "_com.svg)\n\n![ZMP](" << c.name << "_zmp.svg)\n\n";
   }
+  // The horizon experiment: knee trajectories and foot placements, 1.2 s against 0.6 s.
+  const Case& long_h = cases[1];
+  const Case& short_h = cases[2];
+  report::Plot knee;
+  knee.title = "carpet: left knee, MPC horizon 1.2 s vs 0.6 s";
+  knee.x_label = "time [s]";
+  knee.y_label = "knee [rad]";
+  auto knee_series = [&](const std::string& name, const sim::MotionTrace& t, bool plan, const std::string& color) {
+    report::Series s;
+    s.name = name;
+    s.color = color;
+    s.dashed = plan;
+    s.x = t.time_s;
+    for (std::size_t i = 0; i < t.q.size(); ++i) s.y.push_back((plan ? t.q_ref[i] : t.q[i])[model::kLeftLegFirst + 3]);
+    return s;
+  };
+  knee.series = {knee_series("plan", long_h.trace, true, "#7f7f7f"), knee_series("horizon 1.2 s", long_h.trace, false, "#1f77b4"),
+                 knee_series("horizon 0.6 s", short_h.trace, false, "#d62728")};
+  report::Plot feet;
+  feet.title = "carpet: touchdown positions (sole centres), top view";
+  feet.x_label = "x [m]";
+  feet.y_label = "y [m]";
+  feet.equal_axes = true;
+  feet.height_px = 420;
+  feet.series = {touchdowns("horizon 1.2 s", long_h.trace, "#1f77b4"), touchdowns("horizon 0.6 s", short_h.trace, "#d62728")};
+  if (!report::write_text_file(out + "/horizon_knee.svg", report::render_svg(knee), &error) ||
+      !report::write_text_file(out + "/horizon_feet.svg", report::render_svg(feet), &error)) {
+    std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
+  }
+  auto outcome = [](const Case& c) {
+    return c.summary.run.fell ? "fell at " + std::to_string(c.summary.run.fell_at_s).substr(0, 5) + " s" : std::string("did not fall");
+  };
+  md << "## MPC horizon experiment (carpet)\n\n"
+     << "Horizon 1.2 s: " << outcome(long_h) << "; horizon 0.6 s: " << outcome(short_h)
+     << ". Knee trajectories: `horizon_knee.svg`; foot placements: `horizon_feet.svg`.\n\n"
+     << "![knee](horizon_knee.svg)\n\n![feet](horizon_feet.svg)\n\n";
   md << "## Balance filter on the dance\n\n"
      << "CoM corrected by up to " << filter.max_correction_m << " m; cart-table ZMP outside the support up to "
      << filter.zmp_outside_before_m << " m before, " << filter.zmp_outside_after_m << " m after; "
