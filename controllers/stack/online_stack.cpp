@@ -20,6 +20,9 @@ bool parse_planner(const char* text, PlannerKind& out) {
 }
 
 const char* stack_validate_config(const StackConfig& config) {
+  if (!(config.estimator_touchdown_delay_s >= 0.0 && config.estimator_touchdown_delay_s <= 0.2)) {
+    return "estimator touchdown delay outside 0..0.2 s";
+  }
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
@@ -47,6 +50,7 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
   stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, first);
   stack_apply_plan_rt(control, first);
   control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
+  control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
   control.started = true;
   control.ticks = 0;
   return true;
@@ -59,7 +63,11 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   planner::reference_plan_at_rt(ws.active, now_ns, ws.reference);
   const double dt_s = static_cast<double>(now_ns - ws.last_tick_ns) * 1e-9;
   ws.last_tick_ns = now_ns;
-  estimator::estimator_step_rt(model, ws.estimator, sensors, ws.reference.in_contact, dt_s, ws.estimate);
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    ws.planned_contact_s[c] = ws.reference.in_contact[c] ? ws.planned_contact_s[c] + dt_s : 0.0;
+    ws.estimator_contact[c] = ws.reference.in_contact[c] && ws.planned_contact_s[c] >= config.estimator_touchdown_delay_s;
+  }
+  estimator::estimator_step_rt(model, ws.estimator, sensors, ws.estimator_contact, dt_s, ws.estimate);
   const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
   const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
   ++ws.ticks;

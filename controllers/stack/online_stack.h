@@ -34,6 +34,10 @@ bool parse_planner(const char* text, PlannerKind& out);  // "kinematic" | "mpc"
 struct StackConfig {
   PlannerKind planner = PlannerKind::kKinematic;
   double plan_period_s = 0.02;  // 50 Hz; also the spacing of the plan's knots
+  // The estimator treats a planned touchdown as contact only after this long: a foot that
+  // lands late (soft ground, a robot behind its plan) would otherwise count as fixed while
+  // it still moves, and leg odometry would carry its motion into the base estimate.
+  double estimator_touchdown_delay_s = 0.03;
   wbc::WbcConfig wbc{};
   mpc::MpcConfig mpc{};
   estimator::EstimatorConfig estimator = dance_estimator_config();
@@ -58,6 +62,8 @@ struct ControlWorkspace {
   wbc::WbcWorkspace wbc;
   planner::ReferencePlan active;  // the plan the ticks follow
   wbc::WbcReference reference;    // this tick's, interpolated
+  std::array<double, model::kNumContactPoints> planned_contact_s{};  // how long each corner has been planned in contact
+  estimator::ContactFlags estimator_contact{};
   hal::TimeNs last_tick_ns = 0;
   bool started = false;
   std::uint64_t ticks = 0, plans_applied = 0;
