@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "sim/motor_model.h"
+#include "sim/plant_dynamics.h"
 #include "sim/simbody_model.h"
 
 namespace kuavo::sim {
@@ -34,10 +35,7 @@ void contact_point_motion(const model::Model& m, const SimbodyRobot& r, const Si
 struct ForceInputs {
   const model::Model* model = nullptr;
   const SimbodyRobot* robot = nullptr;
-  GroundParams ground = kFloor;
-  bool contact = true;
-  hal::CommandFrame command{};
-  std::array<ContactPointState, model::kNumContactPoints> points{};
+  PlantForceInputs forces;  // shared with PlantDynamics; forces.push points at push below
   Push push{};
   mutable std::uint64_t saturations = 0;
   // Contact wrench of the last force evaluation: [force; moment about the world origin].
@@ -56,17 +54,17 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = r.body(j + 1);
       bool saturated = false;
-      const double tau = drive_torque(in_->command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
+      const double tau = drive_torque(in_->forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
                                       m.limits.peak_torque_Nm[j], &saturated);
       if (saturated && in_->count_saturations) ++in_->saturations;
       b.applyOneMobilityForce(s, 0, tau, mobility_forces);
     }
     in_->contact_wrench.setZero();
-    if (in_->contact) {
+    if (in_->forces.contact) {
       for (int c = 0; c < model::kNumContactPoints; ++c) {
         Vec3 p, v;
         contact_point_motion(m, r, s, c, p, v);
-        const Vec3 force = contact_force(in_->ground, p, v, in_->points[c]);
+        const Vec3 force = contact_force(in_->forces.ground, p, v, in_->forces.points[c]);
         if (force.z() > 0.0) {
           r.body(m.frames[c].body).applyForceToBodyPoint(s, to_simtk(m.frames[c].position_m), to_simtk(force), body_forces);
           in_->contact_wrench.head<3>() += force;
@@ -169,17 +167,34 @@ struct Plant::Impl {
   SUNLinearSolver solver = nullptr;
   bool cvode_ready = false;
   bool needs_restart = true;
+  std::unique_ptr<PlantDynamics> dynamics;  // CVODE's ẏ (see plant_dynamics.h)
   std::unique_ptr<SimTK::Integrator> simbody_integrator;
   std::unique_ptr<SimTK::TimeStepper> stepper;
 
   Impl(const model::Model& m, const PlantConfig& c) : model(m), config(c), robot(m, c.gravity) {
     inputs.model = &model;
     inputs.robot = &robot;
-    inputs.ground = c.ground;
-    inputs.contact = c.contact;
+    inputs.forces.ground = c.ground;
+    inputs.forces.contact = c.contact;
+    inputs.forces.gravity = c.gravity;
+    inputs.forces.push = &inputs.push;
     SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
     robot.system().realizeTopology();
     state = robot.system().getDefaultState();
+    dynamics = std::make_unique<PlantDynamics>(m, layout_of(robot, state));
+  }
+
+  static SimbodyLayout layout_of(const SimbodyRobot& r, const SimTK::State& s) {
+    SimbodyLayout l;
+    l.num_q = s.getNQ();
+    l.num_u = s.getNU();
+    l.base_q = r.body(0).getFirstQIndex(s);
+    l.base_u = r.body(0).getFirstUIndex(s);
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
+      l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
+    }
+    return l;
   }
 
   ~Impl() {
@@ -193,6 +208,14 @@ struct Plant::Impl {
   static int rhs(sunrealtype t, N_Vector yv, N_Vector ydot, void* user) {
     auto* self = static_cast<Impl*>(user);
     ++self->evaluations;
+    if (self->config.derivatives == DerivativeEngine::kRigidBody) {
+      Eigen::Matrix<double, 6, 1> wrench;
+      sunrealtype* out = N_VGetArrayPointer(ydot);
+      const int ny = self->state.getNY();
+      if (!self->dynamics->derivative(t, N_VGetArrayPointer(yv), self->inputs.forces, out, wrench)) return 1;
+      for (int i = 0; i < 6; ++i) out[ny + i] = wrench[i];
+      return 0;
+    }
     SimTK::State& s = self->state;
     s.setTime(t);
     SimTK::Vector& ys = s.updY();
@@ -255,12 +278,13 @@ struct Plant::Impl {
       Vec3 v;
       contact_point_motion(model, robot, s, c, truth.contact_point_m[c], v);
       truth.contact_force_N[c] =
-          inputs.contact ? contact_force(inputs.ground, truth.contact_point_m[c], v, inputs.points[c]) : Vec3::Zero();
+          inputs.forces.contact ? contact_force(inputs.forces.ground, truth.contact_point_m[c], v, inputs.forces.points[c])
+                                : Vec3::Zero();
     }
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = robot.body(j + 1);
       truth.joint_torque_Nm[j] =
-          drive_torque(inputs.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
+          drive_torque(inputs.forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
     }
     const SimTK::MobilizedBody& base = robot.body(0);
     const SimTK::Vec3 a = base.getBodyOriginAcceleration(s);
@@ -276,7 +300,7 @@ struct Plant::Impl {
     for (int c = 0; c < model::kNumContactPoints; ++c) {
       Vec3 p, v;
       contact_point_motion(model, robot, s, c, p, v);
-      update_contact_point(inputs.ground, p, v, inputs.points[c]);
+      update_contact_point(inputs.forces.ground, p, v, inputs.forces.points[c]);
     }
   }
 };
@@ -288,7 +312,7 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
   Impl& p = *impl_;
   p.state.setTime(time_s);
   p.robot.set_state(p.state, q, v);
-  for (auto& c : p.inputs.points) c = ContactPointState{};
+  for (auto& c : p.inputs.forces.points) c = ContactPointState{};
   p.contact_impulse.setZero();
   p.robot.system().realize(p.state, SimTK::Stage::Velocity);
   p.update_contacts();
@@ -305,7 +329,7 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
   p.update_truth();
 }
 
-void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.command = command; }
+void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.forces.command = command; }
 void Plant::set_push(const Push& push) { impl_->inputs.push = push; }
 
 PlantError Plant::advance(double dt_s) {

@@ -27,9 +27,16 @@ enum class Integrator : std::uint8_t { kCvodeBdf = 0, kSimbodyRungeKuttaMerson =
 bool parse_integrator(const char* text, Integrator& out);  // "cvode" | "rkm" | "euler"
 const char* to_string(Integrator i);
 
+// Who computes CVODE's state derivative (kCvodeBdf only; the other integrators
+// always realize Simbody). kRigidBody: sim/plant_dynamics.h, the project's own
+// O(n) algorithms over Simbody's state layout, ~10x cheaper; kSimbody:
+// realize(Acceleration), the oracle the first is tested against.
+enum class DerivativeEngine : std::uint8_t { kRigidBody = 0, kSimbody = 1 };
+
 struct PlantConfig {
   GroundParams ground = kFloor;
   Integrator integrator = Integrator::kCvodeBdf;
+  DerivativeEngine derivatives = DerivativeEngine::kRigidBody;
   double euler_substep_s = 2.0e-4;  // kSemiImplicitEuler only
   // Loose enough for real-time-and-better on one core; tests/sim checks that a
   // 100x tighter run gives the same standing outcome (tilt, height, forces).
