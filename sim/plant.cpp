@@ -3,15 +3,14 @@
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <Simbody.h>
-#include <Eigen/LU>
 #include <cstdio>
 #include <cstring>
 
 #include "sim/motor_model.h"
+#include "sim/newton_system.h"
 #include "sim/plant_dynamics.h"
 #include "sim/simbody_model.h"
 
@@ -85,49 +84,6 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
   const ForceInputs* in_;
 };
 
-// CVODE's own dense LU is an unblocked textbook loop; at n = 75 it took 30-40 % of
-// a run. Eigen's blocked, vectorised partial-pivoting LU does the same job: a
-// SUNDIALS "direct" linear solver over the SUNDenseMatrix storage (column-major).
-struct EigenLuContent {
-  explicit EigenLuContent(int n) : lu(n) {}
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
-};
-
-int eigen_lu_setup(SUNLinearSolver s, SUNMatrix a) {
-  auto* c = static_cast<EigenLuContent*>(s->content);
-  const auto n = static_cast<Eigen::Index>(SUNDenseMatrix_Rows(a));
-  c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SUNDenseMatrix_Data(a), n, n));
-  // A zero pivot: tell CVODE the factorisation failed (recoverable: it retries with a smaller step).
-  return c->lu.matrixLU().diagonal().cwiseAbs().minCoeff() > 0.0 ? 0 : SUNLS_LUFACT_FAIL;
-}
-
-int eigen_lu_solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
-  auto* c = static_cast<EigenLuContent*>(s->content);
-  const auto n = static_cast<Eigen::Index>(N_VGetLength(b));
-  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(x), n) = c->lu.solve(Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(b), n));
-  return 0;
-}
-
-int eigen_lu_free(SUNLinearSolver s) {
-  if (s == nullptr) return 0;
-  delete static_cast<EigenLuContent*>(s->content);
-  s->content = nullptr;
-  SUNLinSolFreeEmpty(s);
-  return 0;
-}
-
-SUNLinearSolver make_eigen_lu_solver(SUNContext ctx, int n) {
-  SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
-  if (s == nullptr) return nullptr;
-  s->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
-  s->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
-  s->ops->setup = eigen_lu_setup;
-  s->ops->solve = eigen_lu_solve;
-  s->ops->free = eigen_lu_free;
-  s->content = new EigenLuContent(n);
-  return s;
-}
-
 }  // namespace
 
 bool parse_integrator(const char* text, Integrator& out) {
@@ -163,8 +119,9 @@ struct Plant::Impl {
   SUNContext sun = nullptr;
   void* cvode = nullptr;
   N_Vector y = nullptr;
-  SUNMatrix jac = nullptr;
+  SUNMatrix jac = nullptr;  // unused: CVODE's matrix-based interface wants one; NewtonSystem holds J
   SUNLinearSolver solver = nullptr;
+  NewtonSystem newton;
   bool cvode_ready = false;
   bool needs_restart = true;
   std::unique_ptr<PlantDynamics> dynamics;  // CVODE's ẏ (see plant_dynamics.h)
@@ -233,13 +190,23 @@ struct Plant::Impl {
     return 0;
   }
 
+  static int linear_system(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix, sunbooleantype jok,
+                           sunbooleantype* jcur, sunrealtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector) {
+    auto* self = static_cast<Impl*>(user);
+    bool current = false;
+    const int rc = self->newton.update(self->cvode, rhs, self, t, y, fy, jok, &current, gamma, tmp1, tmp2);
+    *jcur = current ? SUNTRUE : SUNFALSE;
+    return rc;
+  }
+
   bool start_cvode() {
     const int n = state.getNY() + 6;  // + contact impulse quadrature
+    if (n != NewtonSystem::kN || state.getNQ() != NewtonSystem::kNq) return fail("state layout is not [q; u] of the model");
     if (sun == nullptr && SUNContext_Create(nullptr, &sun) != 0) return fail("SUNContext_Create failed");
     if (y == nullptr) {
       y = N_VNew_Serial(n, sun);
-      jac = SUNDenseMatrix(n, n, sun);
-      solver = make_eigen_lu_solver(sun, n);
+      jac = SUNDenseMatrix(1, 1, sun);
+      solver = newton.make_linear_solver(sun);
       cvode = CVodeCreate(CV_BDF, sun);
       if (y == nullptr || jac == nullptr || solver == nullptr || cvode == nullptr) return fail("CVODE set-up failed");
     }
@@ -252,6 +219,7 @@ struct Plant::Impl {
       CVodeSetUserData(cvode, this);
       CVodeSStolerances(cvode, config.relative_tolerance, config.absolute_tolerance);
       CVodeSetLinearSolver(cvode, solver, jac);
+      CVodeSetLinSysFn(cvode, linear_system);
       CVodeSetMaxNumSteps(cvode, 100000);
       // Command changes at every tick move the step size and with it gamma; the
       // default (re-factor on a 30 % change) then factors almost every step, which
@@ -406,12 +374,15 @@ Plant::IntegratorStats Plant::integrator_stats() const {
   long v = 0;
   CVodeGetNumSteps(impl_->cvode, &v);
   st.steps = v;
-  CVodeGetNumJacEvals(impl_->cvode, &v);
-  st.jacobian_evaluations = v;
+  st.jacobian_evaluations = impl_->newton.jacobian_evaluations();
   CVodeGetNumLinSolvSetups(impl_->cvode, &v);
   st.linear_setups = v;
   CVodeGetNumErrTestFails(impl_->cvode, &v);
   st.error_test_failures = v;
+  CVodeGetNumNonlinSolvIters(impl_->cvode, &v);
+  st.nonlinear_iterations = v;
+  CVodeGetNumNonlinSolvConvFails(impl_->cvode, &v);
+  st.nonlinear_failures = v;
   return st;
 }
 

@@ -93,6 +93,7 @@ class Plant {
   std::uint64_t derivative_evaluations() const;
   struct IntegratorStats {
     long steps = 0, jacobian_evaluations = 0, linear_setups = 0, error_test_failures = 0;
+    long nonlinear_iterations = 0, nonlinear_failures = 0;
   };
   IntegratorStats integrator_stats() const;  // CVODE counters since construction
   const char* last_error() const;
