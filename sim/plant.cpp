@@ -391,6 +391,21 @@ const PlantTruth& Plant::truth() const { return impl_->truth; }
 std::uint64_t Plant::torque_saturations() const { return impl_->inputs.saturations; }
 std::uint64_t Plant::derivative_evaluations() const { return impl_->evaluations; }
 const char* Plant::last_error() const { return impl_->error; }
+
+double Plant::derivative_mismatch() {
+  Impl& p = *impl_;
+  const int ny = p.state.getNY();
+  Eigen::VectorXd y(ny), ours(ny + 6), theirs(ny + 6);
+  for (int i = 0; i < ny; ++i) y[i] = p.state.getY()[i];
+  Eigen::Matrix<double, 6, 1> wrench;
+  p.dynamics->derivative(p.state.getTime(), y.data(), p.inputs.forces, ours.data(), wrench);
+  ours.tail<6>() = wrench;
+  p.state.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);  // re-run the forces for their wrench
+  p.robot.system().realize(p.state, SimTK::Stage::Acceleration);
+  for (int i = 0; i < ny; ++i) theirs[i] = p.state.getYDot()[i];
+  theirs.tail<6>() = p.inputs.contact_wrench;
+  return ((ours - theirs).array().abs() / (1.0 + theirs.array().abs())).maxCoeff();
+}
 Eigen::Matrix<double, 6, 1> Plant::contact_impulse() const { return impl_->contact_impulse; }
 
 }  // namespace kuavo::sim

@@ -97,6 +97,10 @@ class Plant {
   };
   IntegratorStats integrator_stats() const;  // CVODE counters since construction
   const char* last_error() const;
+  // The cross-check of the CVODE derivative (plant_dynamics.h) against Simbody's
+  // realize(Acceleration) at the current state, command and contact anchors:
+  // max_i |ẏ_i − ẏ_simbody,i| / (1 + |ẏ_simbody,i|) over [q̇; u̇; contact wrench].
+  double derivative_mismatch();
   // Contact impulse since reset(): [∫f dt; ∫p×f dt about the world origin], integrated by
   // CVODE as quadrature states (zero with the Simbody integrator).
   Eigen::Matrix<double, 6, 1> contact_impulse() const;

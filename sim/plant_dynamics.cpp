@@ -1,6 +1,5 @@
 #include "sim/plant_dynamics.h"
 
-#include <Eigen/Cholesky>
 #include <cmath>
 
 #include "controllers/dynamics/rigid_body.h"
@@ -18,11 +17,49 @@ struct PlantDynamics::Work {
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   dynamics::VelocityVector rhs = dynamics::VelocityVector::Zero();
   std::array<Vec6, model::kNumBodies> external{};  // world axes, at the reference point
-  Eigen::LLT<dynamics::MassMatrix> llt;
+  dynamics::MassMatrix factor = dynamics::MassMatrix::Zero();
+  std::array<int, model::kNv> parent_dof{};  // λ(i) < i, −1 at the root
 };
 
+namespace {
+
+// M = LᵀL exploiting branch-induced sparsity (Featherstone, RBDA §6.5): M(i, j) ≠ 0
+// only when one DoF is an ancestor of the other, so the factor fills in nowhere else
+// and costs O(n·depth²) instead of O(n³). The base's six DoFs are a chain at the
+// root. L overwrites the lower triangle of m (row i, ancestor columns).
+void factor_ltl(dynamics::MassMatrix& m, const std::array<int, model::kNv>& parent) {
+  for (int k = model::kNv - 1; k >= 0; --k) {
+    const double d = std::sqrt(m(k, k));
+    m(k, k) = d;
+    for (int i = parent[k]; i >= 0; i = parent[i]) m(k, i) /= d;
+    for (int i = parent[k]; i >= 0; i = parent[i]) {
+      for (int j = i; j >= 0; j = parent[j]) m(i, j) -= m(k, i) * m(k, j);
+    }
+  }
+}
+
+// x ← M⁻¹x with M = LᵀL from factor_ltl.
+void solve_ltl(const dynamics::MassMatrix& l, const std::array<int, model::kNv>& parent, dynamics::VelocityVector& x) {
+  for (int i = model::kNv - 1; i >= 0; --i) {  // Lᵀy = x
+    x[i] /= l(i, i);
+    for (int j = parent[i]; j >= 0; j = parent[j]) x[j] -= l(i, j) * x[i];
+  }
+  for (int i = 0; i < model::kNv; ++i) {  // L·x = y
+    for (int j = parent[i]; j >= 0; j = parent[j]) x[i] -= l(i, j) * x[j];
+    x[i] /= l(i, i);
+  }
+}
+
+}  // namespace
+
 PlantDynamics::PlantDynamics(const model::Model& model, const SimbodyLayout& layout)
-    : model_(model), layout_(layout), work_(std::make_unique<Work>()) {}
+    : model_(model), layout_(layout), work_(std::make_unique<Work>()) {
+  for (int i = 0; i < 6; ++i) work_->parent_dof[i] = i - 1;
+  for (int b = 1; b < model::kNumBodies; ++b) {
+    const int p = model.bodies[b].parent;
+    work_->parent_dof[5 + b] = p == 0 ? 5 : 5 + p;  // bodies are numbered parents first
+  }
+}
 
 PlantDynamics::~PlantDynamics() = default;
 
@@ -94,8 +131,10 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   w.rhs.head<3>() += r.transpose() * w.external[0].head<3>();
   w.rhs.segment<3>(3) += r.transpose() * w.external[0].tail<3>();
 
-  w.llt.compute(d.mass_matrix);
-  const dynamics::VelocityVector vdot = w.llt.solve(w.rhs);
+  w.factor = d.mass_matrix;
+  factor_ltl(w.factor, w.parent_dof);
+  solve_ltl(w.factor, w.parent_dof, w.rhs);
+  const dynamics::VelocityVector& vdot = w.rhs;
 
   // Ours -> Simbody's u̇ and q̇. d/dt(R·v_b) = R·v̇_b + ω×(R·v_b); d/dt(R·ω_b) = R·ω̇_b.
   double* qdot = ydot;
