@@ -124,7 +124,11 @@ struct Plant::Impl {
   NewtonSystem newton;
   bool cvode_ready = false;
   bool needs_restart = true;
-  std::unique_ptr<PlantDynamics> dynamics;  // CVODE's ẏ (see plant_dynamics.h)
+  std::unique_ptr<PlantDynamics> dynamics;  // CVODE's ẏ and the truth (see plant_dynamics.h)
+  std::array<double, NewtonSystem::kN> y_end{};
+  static constexpr long kCrossCheckIntervals = 50;  // 0.1 s at the 2 ms control period
+  long intervals = 0;
+  double max_mismatch = 0.0;
   std::unique_ptr<SimTK::Integrator> simbody_integrator;
   std::unique_ptr<SimTK::TimeStepper> stepper;
 
@@ -263,6 +267,60 @@ struct Plant::Impl {
     truth.momentum << h[1][0], h[1][1], h[1][2], h[0][0], h[0][1], h[0][2];
   }
 
+  // Simbody's truth path is kept for the Simbody integrators and the kSimbody derivative.
+  bool truth_from_plant_dynamics() const {
+    return config.integrator == Integrator::kCvodeBdf && config.derivatives == DerivativeEngine::kRigidBody;
+  }
+
+  // At the end of an interval (or a reset): drives that clip are counted, the contact
+  // anchors move, the truth is filled. Returns false when the state is not finite.
+  bool finish_interval(bool count_saturations) {
+    if (!truth_from_plant_dynamics()) {
+      if (count_saturations) {
+        inputs.count_saturations = true;
+        robot.system().realize(state, SimTK::Stage::Dynamics);
+        inputs.count_saturations = false;
+      }
+      update_contacts();
+      update_truth();
+      return true;
+    }
+    const SimTK::Vector& ys = state.getY();
+    for (int i = 0; i < ys.size(); ++i) y_end[i] = ys[i];
+    std::uint64_t clipped = 0;
+    std::array<Vec3, model::kNumContactPoints> corner_velocity;
+    if (!dynamics->truth(state.getTime(), y_end.data(), inputs.forces, truth, corner_velocity, clipped)) return false;
+    if (count_saturations) inputs.saturations += clipped;
+    // The anchors move first, the reported forces use the moved anchors (as update_truth does).
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      update_contact_point(inputs.forces.ground, truth.contact_point_m[c], corner_velocity[c], inputs.forces.points[c]);
+      truth.contact_force_N[c] = inputs.forces.contact ? contact_force(inputs.forces.ground, truth.contact_point_m[c],
+                                                                       corner_velocity[c], inputs.forces.points[c])
+                                                       : Vec3::Zero();
+    }
+    // Simbody keeps watching: every kCrossCheckIntervals its derivative is compared with ours.
+    if (++intervals % kCrossCheckIntervals == 0) {
+      max_mismatch = std::max(max_mismatch, derivative_mismatch());
+    }
+    return true;
+  }
+
+  double derivative_mismatch() {
+    const int ny = state.getNY();
+    std::array<double, NewtonSystem::kN> ours{}, theirs{};
+    for (int i = 0; i < ny; ++i) y_end[i] = state.getY()[i];
+    Eigen::Matrix<double, 6, 1> wrench;
+    dynamics->derivative(state.getTime(), y_end.data(), inputs.forces, ours.data(), wrench);
+    for (int i = 0; i < 6; ++i) ours[ny + i] = wrench[i];
+    state.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);  // re-run the forces for their wrench
+    robot.system().realize(state, SimTK::Stage::Acceleration);
+    for (int i = 0; i < ny; ++i) theirs[i] = state.getYDot()[i];
+    for (int i = 0; i < 6; ++i) theirs[ny + i] = inputs.contact_wrench[i];
+    double worst = 0.0;
+    for (int i = 0; i < ny + 6; ++i) worst = std::max(worst, std::abs(ours[i] - theirs[i]) / (1.0 + std::abs(theirs[i])));
+    return worst;
+  }
+
   void update_contacts() {
     const SimTK::State& s = state;
     for (int c = 0; c < model::kNumContactPoints; ++c) {
@@ -294,7 +352,7 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
     p.stepper = std::make_unique<SimTK::TimeStepper>(p.robot.system(), *p.simbody_integrator);
     p.stepper->initialize(p.state);
   }
-  p.update_truth();
+  p.finish_interval(false);
 }
 
 void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.forces.command = command; }
@@ -345,11 +403,11 @@ PlantError Plant::advance(double dt_s) {
   }
   // Keep the base quaternion on the unit sphere (CVODE does not know it must be);
   // it drifts slowly, so project rarely and restart CVODE from the edited state.
-  p.robot.system().realize(p.state, SimTK::Stage::Position);
   const SimTK::MobilizedBody& base = p.robot.body(0);
   double quat_norm2 = 0.0;
   for (int i = 0; i < 4; ++i) quat_norm2 += base.getOneQ(p.state, i) * base.getOneQ(p.state, i);
   if (std::abs(quat_norm2 - 1.0) > 1e-7 || p.config.integrator == Integrator::kSimbodyRungeKuttaMerson) {
+    p.robot.system().realize(p.state, SimTK::Stage::Position);
     p.robot.system().project(p.state, 1e-10);
     p.needs_restart = true;
   }
@@ -360,11 +418,10 @@ PlantError Plant::advance(double dt_s) {
     }
   }
   // Count saturation once per interval at its end state (what the drive does now).
-  p.inputs.count_saturations = true;
-  p.robot.system().realize(p.state, SimTK::Stage::Dynamics);
-  p.inputs.count_saturations = false;
-  p.update_contacts();
-  p.update_truth();
+  if (!p.finish_interval(true)) {
+    p.fail("non-finite plant derivative");
+    return PlantError::kNonFiniteState;
+  }
   return PlantError::kOk;
 }
 
@@ -392,20 +449,8 @@ std::uint64_t Plant::torque_saturations() const { return impl_->inputs.saturatio
 std::uint64_t Plant::derivative_evaluations() const { return impl_->evaluations; }
 const char* Plant::last_error() const { return impl_->error; }
 
-double Plant::derivative_mismatch() {
-  Impl& p = *impl_;
-  const int ny = p.state.getNY();
-  Eigen::VectorXd y(ny), ours(ny + 6), theirs(ny + 6);
-  for (int i = 0; i < ny; ++i) y[i] = p.state.getY()[i];
-  Eigen::Matrix<double, 6, 1> wrench;
-  p.dynamics->derivative(p.state.getTime(), y.data(), p.inputs.forces, ours.data(), wrench);
-  ours.tail<6>() = wrench;
-  p.state.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);  // re-run the forces for their wrench
-  p.robot.system().realize(p.state, SimTK::Stage::Acceleration);
-  for (int i = 0; i < ny; ++i) theirs[i] = p.state.getYDot()[i];
-  theirs.tail<6>() = p.inputs.contact_wrench;
-  return ((ours - theirs).array().abs() / (1.0 + theirs.array().abs())).maxCoeff();
-}
+double Plant::derivative_mismatch() { return impl_->derivative_mismatch(); }
+double Plant::max_derivative_mismatch() const { return impl_->max_mismatch; }
 Eigen::Matrix<double, 6, 1> Plant::contact_impulse() const { return impl_->contact_impulse; }
 
 }  // namespace kuavo::sim

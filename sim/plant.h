@@ -1,8 +1,9 @@
 // The simulated robot: Simbody multibody dynamics built from the generated model
 // tables, ground contact at the 8 sole corners, the drives' PD law with torque
 // saturation, gravity and push disturbances. Integrated by SUNDIALS CVODE (BDF,
-// for the stiff contact) with derivatives from Simbody, or by Simbody's own
-// Runge-Kutta-Merson integrator as a cross-check. Deterministic: no clocks, no
+// for the stiff contact) with derivatives from our own O(n) dynamics over
+// Simbody's state (plant_dynamics.h says what runs where; Simbody re-checks them
+// live), or by Simbody's own Runge-Kutta-Merson integrator as a cross-check. Deterministic: no clocks, no
 // threads, no randomness here (sensor noise lives in sensor_model.h).
 // This header does not include <Simbody.h>, so C++20 code can use it.
 #pragma once
@@ -101,6 +102,9 @@ class Plant {
   // realize(Acceleration) at the current state, command and contact anchors:
   // max_i |ẏ_i − ẏ_simbody,i| / (1 + |ẏ_simbody,i|) over [q̇; u̇; contact wrench].
   double derivative_mismatch();
+  // The largest derivative_mismatch() of the run: with the default derivative and
+  // CVODE, the plant computes it every 50 intervals (Simbody watching live).
+  double max_derivative_mismatch() const;
   // Contact impulse since reset(): [∫f dt; ∫p×f dt about the world origin], integrated by
   // CVODE as quadrature states (zero with the Simbody integrator).
   Eigen::Matrix<double, 6, 1> contact_impulse() const;

@@ -11,6 +11,8 @@ namespace kuavo::sim {
 using dynamics::Mat3;
 using dynamics::Vec6;
 
+constexpr int kMaxY = model::kNq + model::kNv;
+
 struct PlantDynamics::Work {
   dynamics::Data data;
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
@@ -19,6 +21,10 @@ struct PlantDynamics::Work {
   std::array<Vec6, model::kNumBodies> external{};  // world axes, at the reference point
   dynamics::MassMatrix factor = dynamics::MassMatrix::Zero();
   std::array<int, model::kNv> parent_dof{};  // λ(i) < i, −1 at the root
+  // Of the last derivative() call.
+  std::array<Vec3, model::kNumContactPoints> contact_p{}, contact_v{}, contact_f{};
+  Vec3 base_acceleration_world = Vec3::Zero();
+  Eigen::Matrix<double, kMaxY, 1> ydot = Eigen::Matrix<double, kMaxY, 1>::Zero();
 };
 
 namespace {
@@ -103,6 +109,7 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
     w.external[body].tail<3>() += (point - origin).cross(force);
   };
   contact_wrench_out.setZero();
+  for (auto& f : w.contact_f) f.setZero();
   if (in.contact) {
     for (int c = 0; c < model::kNumContactPoints; ++c) {
       const model::Frame& f = model_.frames[c];
@@ -110,6 +117,9 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
       const Vec6& vb = d.velocity[f.body];
       const Vec3 pv = vb.head<3>() + vb.tail<3>().cross(p - origin);
       const Vec3 force = contact_force(in.ground, p, pv, in.points[c]);
+      w.contact_p[c] = p;
+      w.contact_v[c] = pv;
+      w.contact_f[c] = force;
       if (force.z() > 0.0) {
         apply(f.body, p, force);
         contact_wrench_out.head<3>() += force;
@@ -141,6 +151,7 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   double* udot = ydot + L.num_q;
   const Vec3 alpha_world = r * vdot.segment<3>(3);
   const Vec3 acc_world = r * vdot.head<3>() + omega_world.cross(vel_world);
+  w.base_acceleration_world = acc_world;
   for (int k = 0; k < 3; ++k) {
     udot[L.base_u + k] = alpha_world[k];
     udot[L.base_u + 3 + k] = acc_world[k];
@@ -161,6 +172,44 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   bool finite = true;
   for (int i = 0; i < L.num_q + L.num_u; ++i) finite = finite && std::isfinite(ydot[i]);
   return finite;
+}
+
+bool PlantDynamics::truth(double t_s, const double* y, const PlantForceInputs& in, PlantTruth& out,
+                          std::array<Vec3, model::kNumContactPoints>& contact_velocity_m_s,
+                          std::uint64_t& saturations) {
+  Work& w = *work_;
+  Eigen::Matrix<double, 6, 1> wrench;
+  if (!derivative(t_s, y, in, w.ydot.data(), wrench)) return false;
+  const dynamics::Data& d = w.data;
+  out.q = w.q;
+  if (out.q[6] < 0.0) out.q.segment<4>(3) *= -1.0;  // the same rotation; w ≥ 0 as Simbody reports it
+  out.v = w.v;
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    if (!in.contact) {  // derivative() skipped the corners
+      const model::Frame& f = model_.frames[c];
+      w.contact_p[c] = d.position_m[f.body] + d.rotation[f.body] * f.position_m;
+      const Vec6& vb = d.velocity[f.body];
+      w.contact_v[c] = vb.head<3>() + vb.tail<3>().cross(w.contact_p[c] - d.reference_point_m);
+    }
+    out.contact_point_m[c] = w.contact_p[c];
+    out.contact_force_N[c] = w.contact_f[c];
+    contact_velocity_m_s[c] = w.contact_v[c];
+  }
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    bool clipped = false;
+    out.joint_torque_Nm[j] =
+        drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], &clipped);
+    saturations += clipped;
+  }
+  const Vec3 g(0.0, 0.0, in.gravity ? -model::kGravity_m_s2 : 0.0);
+  out.base_specific_force_m_s2 = d.rotation[0].transpose() * (w.base_acceleration_world - g);
+  out.com_m = d.com_m;
+  // Momentum about the reference point, Σ I·V, then its moment moved to the CoM.
+  Vec6 h = Vec6::Zero();
+  for (int b = 0; b < model::kNumBodies; ++b) h += d.inertia[b] * d.velocity[b];
+  out.momentum.head<3>() = h.head<3>();
+  out.momentum.tail<3>() = h.tail<3>() - (d.com_m - d.reference_point_m).cross(h.head<3>());
+  return true;
 }
 
 }  // namespace kuavo::sim

@@ -5,12 +5,17 @@
 // contact, the push, gravity).
 //
 // Why not Simbody's realize(Acceleration) here: it costs ~37 µs an evaluation and
-// CVODE needs 10–20 evaluations per 2 ms tick; this costs a few µs. Simbody stays
-// the simulator's multibody model: it builds the system and fixes the state layout
-// (y is Simbody's [q; u], read through SimbodyLayout), reports the truth at every
-// tick end (pose, contact forces, momentum, IMU), runs the reference integrator
-// (--integrator rkm), and is the oracle for this derivative in tests/sim
-// (PlantDynamics.* compare the two at contact states to ~1e-12).
+// CVODE needs 10–20 evaluations per 2 ms tick; this costs ~8 µs. What runs where:
+// - Simbody builds the multibody system and fixes the state layout (y is Simbody's
+//   [q; u], read through SimbodyLayout); it sets and projects the state (reset,
+//   quaternion drift); it runs the reference integrator (--integrator rkm) and the
+//   Euler option end to end; with PlantConfig::derivatives = kSimbody it is CVODE's
+//   derivative and computes the truth, as before.
+// - With CVODE and the default kRigidBody: this file computes ẏ and the end-of-
+//   interval truth; Simbody re-computes ẏ every 50 intervals and the plant keeps the
+//   worst difference (Plant::max_derivative_mismatch()).
+// - tests/sim/plant_dynamics_test.cpp holds the two to 1e-8 of (1 + |ẏ|) at
+//   contact states (rounding reaches ~2e-10) and along a CVODE trajectory.
 //
 // Simbody's state, for reference: the base is a Free mobilizer, q = [quaternion
 // (w, x, y, z), unnormalised; origin position], u = [angular velocity; origin
@@ -30,6 +35,7 @@
 namespace kuavo::sim {
 
 struct Push;
+struct PlantTruth;
 
 // Where our quantities sit in Simbody's y = [q; u] (filled from the built system).
 struct SimbodyLayout {
@@ -63,6 +69,13 @@ class PlantDynamics {
   // is not finite.
   bool derivative(double t_s, const double* y, const PlantForceInputs& in, double* ydot,
                   Eigen::Matrix<double, 6, 1>& contact_wrench_out);
+
+  // The plant's truth at (t, y), from one derivative evaluation: pose and speeds in
+  // our conventions, sole corners (and their velocities, for the contact anchors),
+  // ground forces, drive torques, the IMU's specific force, CoM and centroidal
+  // momentum. Adds the drives that clip to *saturations. Returns false when not finite.
+  bool truth(double t_s, const double* y, const PlantForceInputs& in, PlantTruth& out,
+             std::array<Vec3, model::kNumContactPoints>& contact_velocity_m_s, std::uint64_t& saturations);
 
  private:
   const model::Model& model_;

@@ -108,5 +108,22 @@ TEST(PlantDynamics, CvodeTrajectoryMatchesSimbodyDerivative) {
   EXPECT_LE((a.contact_impulse() - b.contact_impulse()).cwiseAbs().maxCoeff(), 1e-5);
 }
 
+// The plant's own live check: every 50 intervals it compares the two derivatives.
+TEST(PlantDynamics, LiveCrossCheckRunsAndAgrees) {
+  const model::Model m = robot();
+  sim::PlantConfig cfg;
+  cfg.ground = sim::kCarpet;
+  sim::Plant plant(m, cfg);
+  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
+  q[2] += 0.005;
+  hal::CommandFrame hold;
+  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  plant.reset(q, dynamics::VelocityVector::Zero());
+  plant.set_command(hold);
+  for (int k = 0; k < 150; ++k) ASSERT_EQ(plant.advance(2e-3), sim::PlantError::kOk) << plant.last_error();
+  EXPECT_GT(plant.max_derivative_mismatch(), 0.0) << "never checked";
+  EXPECT_LE(plant.max_derivative_mismatch(), kDerivativeTolerance);
+}
+
 }  // namespace
 }  // namespace kuavo::test
