@@ -64,14 +64,14 @@ int NewtonSystem::update(void* cvode, CVRhsFn f, void* user, sunrealtype t, N_Ve
       for (int i = 0; i < kNz; ++i) jzu_(i, k) = (f1[kNq + kNu + i] - f0[kNq + kNu + i]) * inv;
     }
   }
+  juq_jqu_.noalias() = juq_ * jqu_;  // γ-free: every setup until the next J reuses it
   return 0;
 }
 
 int NewtonSystem::setup(SUNLinearSolver s, SUNMatrix) {
   auto* self = static_cast<NewtonSystem*>(s->content);
   const double g = self->gamma_;
-  self->schur_.noalias() = -(g * g) * (self->juq_ * self->jqu_);
-  self->schur_ -= g * self->juu_;
+  self->schur_ = -(g * g) * self->juq_jqu_ - g * self->juu_;
   self->schur_.diagonal().array() += 1.0;
   self->lu_.compute(self->schur_);
   // A zero pivot: tell CVODE the factorisation failed (recoverable: it retries with a smaller step).

@@ -56,6 +56,7 @@ class NewtonSystem {
   Eigen::Matrix<double, kNu, kNu> juu_ = Eigen::Matrix<double, kNu, kNu>::Zero();
   Eigen::Matrix<double, kNz, kNq> jzq_ = Eigen::Matrix<double, kNz, kNq>::Zero();
   Eigen::Matrix<double, kNz, kNu> jzu_ = Eigen::Matrix<double, kNz, kNu>::Zero();
+  Eigen::Matrix<double, kNu, kNu> juq_jqu_ = Eigen::Matrix<double, kNu, kNu>::Zero();  // Juq·N, once per J
   double gamma_ = 0.0;
   Eigen::Matrix<double, kNu, kNu> schur_ = Eigen::Matrix<double, kNu, kNu>::Zero();
   Eigen::PartialPivLU<Eigen::Matrix<double, kNu, kNu>> lu_;
