@@ -129,6 +129,7 @@ struct Plant::Impl {
   static constexpr long kCrossCheckIntervals = 50;  // 0.1 s at the 2 ms control period
   long intervals = 0;
   double max_mismatch = 0.0;
+  IntegratorStats stats_before_restart;  // summed over earlier CVODE runs (restarts after projection)
   std::unique_ptr<SimTK::Integrator> simbody_integrator;
   std::unique_ptr<SimTK::TimeStepper> stepper;
 
@@ -203,6 +204,23 @@ struct Plant::Impl {
     return rc;
   }
 
+  // CVODE's own counters since the last (re)start.
+  IntegratorStats cvode_stats() const {
+    IntegratorStats st;
+    long v = 0;
+    CVodeGetNumSteps(cvode, &v);
+    st.steps = v;
+    CVodeGetNumLinSolvSetups(cvode, &v);
+    st.linear_setups = v;
+    CVodeGetNumErrTestFails(cvode, &v);
+    st.error_test_failures = v;
+    CVodeGetNumNonlinSolvIters(cvode, &v);
+    st.nonlinear_iterations = v;
+    CVodeGetNumNonlinSolvConvFails(cvode, &v);
+    st.nonlinear_failures = v;
+    return st;
+  }
+
   bool start_cvode() {
     const int n = state.getNY() + 6;  // + contact impulse quadrature
     if (n != NewtonSystem::kN || state.getNQ() != NewtonSystem::kNq) return fail("state layout is not [q; u] of the model");
@@ -217,6 +235,14 @@ struct Plant::Impl {
     sunrealtype* data = N_VGetArrayPointer(y);
     for (int i = 0; i < state.getNY(); ++i) data[i] = state.getY()[i];
     for (int i = 0; i < 6; ++i) data[state.getNY() + i] = contact_impulse[i];
+    if (cvode_ready) {  // CVodeReInit zeroes CVODE's counters: keep what they held
+      const IntegratorStats now = cvode_stats();
+      stats_before_restart.steps += now.steps;
+      stats_before_restart.linear_setups += now.linear_setups;
+      stats_before_restart.error_test_failures += now.error_test_failures;
+      stats_before_restart.nonlinear_iterations += now.nonlinear_iterations;
+      stats_before_restart.nonlinear_failures += now.nonlinear_failures;
+    }
     int rc = cvode_ready ? CVodeReInit(cvode, state.getTime(), y) : CVodeInit(cvode, rhs, state.getTime(), y);
     if (rc != CV_SUCCESS) return fail("CVodeInit failed");
     if (!cvode_ready) {
@@ -426,20 +452,17 @@ PlantError Plant::advance(double dt_s) {
 }
 
 Plant::IntegratorStats Plant::integrator_stats() const {
+  const Impl& p = *impl_;
   IntegratorStats st;
-  if (impl_->cvode == nullptr) return st;
-  long v = 0;
-  CVodeGetNumSteps(impl_->cvode, &v);
-  st.steps = v;
-  st.jacobian_evaluations = impl_->newton.jacobian_evaluations();
-  CVodeGetNumLinSolvSetups(impl_->cvode, &v);
-  st.linear_setups = v;
-  CVodeGetNumErrTestFails(impl_->cvode, &v);
-  st.error_test_failures = v;
-  CVodeGetNumNonlinSolvIters(impl_->cvode, &v);
-  st.nonlinear_iterations = v;
-  CVodeGetNumNonlinSolvConvFails(impl_->cvode, &v);
-  st.nonlinear_failures = v;
+  if (p.cvode == nullptr) return st;
+  const IntegratorStats now = p.cvode_stats();
+  const IntegratorStats& before = p.stats_before_restart;
+  st.steps = before.steps + now.steps;
+  st.linear_setups = before.linear_setups + now.linear_setups;
+  st.error_test_failures = before.error_test_failures + now.error_test_failures;
+  st.nonlinear_iterations = before.nonlinear_iterations + now.nonlinear_iterations;
+  st.nonlinear_failures = before.nonlinear_failures + now.nonlinear_failures;
+  st.jacobian_evaluations = p.newton.jacobian_evaluations();
   return st;
 }
 
