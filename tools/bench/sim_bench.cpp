@@ -4,10 +4,13 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <vector>
 
 #include "controllers/standing/standing_controller.h"
 #include "sim/plant.h"
+#include "sim/plant_dynamics.h"
 #include "sim/sensor_model.h"
+#include "sim/simbody_model.h"
 
 namespace {
 
@@ -47,6 +50,44 @@ struct Loop {
     return plant->advance(0.002) == sim::PlantError::kOk;
   }
 };
+
+// One CVODE right-hand side: ours (plant_dynamics.h) beside Simbody's realize(Acceleration)
+// of the same robot with gravity only (the plant's custom force adds ~10 % to Simbody's figure).
+void derivative(benchmark::State& state, bool simbody) {
+  sim::SimbodyRobot r(robot(), true);
+  SimTK::State s = r.system().getDefaultState();
+  dynamics::ConfigVector q = dynamics::neutral_configuration(robot());
+  dynamics::VelocityVector v = dynamics::VelocityVector::Constant(0.1);
+  q[2] -= 0.002;  // every corner touching
+  r.set_state(s, q, v);
+  sim::SimbodyLayout l;
+  l.num_q = s.getNQ();
+  l.num_u = s.getNU();
+  l.base_q = r.body(0).getFirstQIndex(s);
+  l.base_u = r.body(0).getFirstUIndex(s);
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
+    l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
+  }
+  sim::PlantDynamics dyn(robot(), l);
+  sim::PlantForceInputs in;
+  for (auto& j : in.command.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  std::vector<double> y(s.getNY()), ydot(s.getNY());
+  for (int i = 0; i < s.getNY(); ++i) y[i] = s.getY()[i];
+  Eigen::Matrix<double, 6, 1> wrench;
+  for (auto _ : state) {
+    if (simbody) {
+      s.updY()[0] += 0.0;  // invalidates the cache as CVODE's new y does
+      r.system().realize(s, SimTK::Stage::Acceleration);
+      benchmark::DoNotOptimize(s.getYDot()[0]);
+    } else {
+      dyn.derivative(0.0, y.data(), in, ydot.data(), wrench);
+      benchmark::DoNotOptimize(ydot[0]);
+    }
+  }
+}
+BENCHMARK_CAPTURE(derivative, ours, false);
+BENCHMARK_CAPTURE(derivative, simbody_gravity_only, true);
 
 void closed_loop(benchmark::State& state, const sim::GroundParams& ground, sim::DerivativeEngine engine) {
   sim::PlantConfig cfg;
