@@ -19,7 +19,6 @@ struct PlantDynamics::Work {
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   dynamics::VelocityVector rhs = dynamics::VelocityVector::Zero();
   std::array<Vec6, model::kNumBodies> external{};  // world axes, at the reference point
-  dynamics::MassMatrix factor = dynamics::MassMatrix::Zero();
   std::array<int, model::kNv> parent_dof{};  // λ(i) < i, −1 at the root
   // Of the last derivative() call.
   std::array<Vec3, model::kNumContactPoints> contact_p{}, contact_v{}, contact_f{};
@@ -141,9 +140,8 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   w.rhs.head<3>() += r.transpose() * w.external[0].head<3>();
   w.rhs.segment<3>(3) += r.transpose() * w.external[0].tail<3>();
 
-  w.factor = d.mass_matrix;
-  factor_ltl(w.factor, w.parent_dof);
-  solve_ltl(w.factor, w.parent_dof, w.rhs);
+  factor_ltl(d.mass_matrix, w.parent_dof);  // in place: M is rebuilt at the next evaluation
+  solve_ltl(d.mass_matrix, w.parent_dof, w.rhs);
   const dynamics::VelocityVector& vdot = w.rhs;
 
   // Ours -> Simbody's u̇ and q̇. d/dt(R·v_b) = R·v̇_b + ω×(R·v_b); d/dt(R·ω_b) = R·ω̇_b.
