@@ -8,6 +8,7 @@
 #include <Simbody.h>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 
 #include "sim/motor_model.h"
 #include "sim/newton_system.h"
@@ -265,6 +266,7 @@ struct Plant::Impl {
 
   bool fail(const char* what) {
     std::snprintf(error, sizeof error, "%s", what);
+    for (char& c : error) c = c == '\n' ? ' ' : c;  // one line, for logs and JSON
     return false;
   }
 
@@ -385,6 +387,17 @@ void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.forces
 void Plant::set_push(const Push& push) { impl_->inputs.push = push; }
 
 PlantError Plant::advance(double dt_s) {
+  // Simbody reports a state gone bad (a diverging explicit integrator's NaNs) by
+  // throwing; the caller gets an error value instead of an abort.
+  try {
+    return advance_interval(dt_s);
+  } catch (const std::exception& e) {
+    impl_->fail(e.what());
+    return PlantError::kIntegratorFailed;
+  }
+}
+
+PlantError Plant::advance_interval(double dt_s) {
   Impl& p = *impl_;
   const double t_end = p.state.getTime() + dt_s;
   p.inputs.count_saturations = false;

@@ -110,6 +110,7 @@ class Plant {
   Eigen::Matrix<double, 6, 1> contact_impulse() const;
 
  private:
+  PlantError advance_interval(double dt_s);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
