@@ -3,15 +3,16 @@
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <Simbody.h>
-#include <Eigen/LU>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 
 #include "sim/motor_model.h"
+#include "sim/newton_system.h"
+#include "sim/plant_dynamics.h"
 #include "sim/simbody_model.h"
 
 namespace kuavo::sim {
@@ -34,10 +35,7 @@ void contact_point_motion(const model::Model& m, const SimbodyRobot& r, const Si
 struct ForceInputs {
   const model::Model* model = nullptr;
   const SimbodyRobot* robot = nullptr;
-  GroundParams ground = kFloor;
-  bool contact = true;
-  hal::CommandFrame command{};
-  std::array<ContactPointState, model::kNumContactPoints> points{};
+  PlantForceInputs forces;  // shared with PlantDynamics; forces.push points at push below
   Push push{};
   mutable std::uint64_t saturations = 0;
   // Contact wrench of the last force evaluation: [force; moment about the world origin].
@@ -56,17 +54,17 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = r.body(j + 1);
       bool saturated = false;
-      const double tau = drive_torque(in_->command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
+      const double tau = drive_torque(in_->forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
                                       m.limits.peak_torque_Nm[j], &saturated);
       if (saturated && in_->count_saturations) ++in_->saturations;
       b.applyOneMobilityForce(s, 0, tau, mobility_forces);
     }
     in_->contact_wrench.setZero();
-    if (in_->contact) {
+    if (in_->forces.contact) {
       for (int c = 0; c < model::kNumContactPoints; ++c) {
         Vec3 p, v;
         contact_point_motion(m, r, s, c, p, v);
-        const Vec3 force = contact_force(in_->ground, p, v, in_->points[c]);
+        const Vec3 force = contact_force(in_->forces.ground, p, v, in_->forces.points[c]);
         if (force.z() > 0.0) {
           r.body(m.frames[c].body).applyForceToBodyPoint(s, to_simtk(m.frames[c].position_m), to_simtk(force), body_forces);
           in_->contact_wrench.head<3>() += force;
@@ -86,49 +84,6 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
  private:
   const ForceInputs* in_;
 };
-
-// CVODE's own dense LU is an unblocked textbook loop; at n = 75 it took 30-40 % of
-// a run. Eigen's blocked, vectorised partial-pivoting LU does the same job: a
-// SUNDIALS "direct" linear solver over the SUNDenseMatrix storage (column-major).
-struct EigenLuContent {
-  explicit EigenLuContent(int n) : lu(n) {}
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
-};
-
-int eigen_lu_setup(SUNLinearSolver s, SUNMatrix a) {
-  auto* c = static_cast<EigenLuContent*>(s->content);
-  const auto n = static_cast<Eigen::Index>(SUNDenseMatrix_Rows(a));
-  c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SUNDenseMatrix_Data(a), n, n));
-  // A zero pivot: tell CVODE the factorisation failed (recoverable: it retries with a smaller step).
-  return c->lu.matrixLU().diagonal().cwiseAbs().minCoeff() > 0.0 ? 0 : SUNLS_LUFACT_FAIL;
-}
-
-int eigen_lu_solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
-  auto* c = static_cast<EigenLuContent*>(s->content);
-  const auto n = static_cast<Eigen::Index>(N_VGetLength(b));
-  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(x), n) = c->lu.solve(Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(b), n));
-  return 0;
-}
-
-int eigen_lu_free(SUNLinearSolver s) {
-  if (s == nullptr) return 0;
-  delete static_cast<EigenLuContent*>(s->content);
-  s->content = nullptr;
-  SUNLinSolFreeEmpty(s);
-  return 0;
-}
-
-SUNLinearSolver make_eigen_lu_solver(SUNContext ctx, int n) {
-  SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
-  if (s == nullptr) return nullptr;
-  s->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
-  s->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
-  s->ops->setup = eigen_lu_setup;
-  s->ops->solve = eigen_lu_solve;
-  s->ops->free = eigen_lu_free;
-  s->content = new EigenLuContent(n);
-  return s;
-}
 
 }  // namespace
 
@@ -165,21 +120,44 @@ struct Plant::Impl {
   SUNContext sun = nullptr;
   void* cvode = nullptr;
   N_Vector y = nullptr;
-  SUNMatrix jac = nullptr;
+  SUNMatrix jac = nullptr;  // unused: CVODE's matrix-based interface wants one; NewtonSystem holds J
   SUNLinearSolver solver = nullptr;
+  NewtonSystem newton;
   bool cvode_ready = false;
   bool needs_restart = true;
+  std::unique_ptr<PlantDynamics> dynamics;  // CVODE's ẏ and the truth (see plant_dynamics.h)
+  std::array<double, NewtonSystem::kN> y_end{};
+  static constexpr long kCrossCheckIntervals = 50;  // 0.1 s at the 2 ms control period
+  long intervals = 0;
+  double max_mismatch = 0.0;
+  IntegratorStats stats_before_restart;  // summed over earlier CVODE runs (restarts after projection)
   std::unique_ptr<SimTK::Integrator> simbody_integrator;
   std::unique_ptr<SimTK::TimeStepper> stepper;
 
   Impl(const model::Model& m, const PlantConfig& c) : model(m), config(c), robot(m, c.gravity) {
     inputs.model = &model;
     inputs.robot = &robot;
-    inputs.ground = c.ground;
-    inputs.contact = c.contact;
+    inputs.forces.ground = c.ground;
+    inputs.forces.contact = c.contact;
+    inputs.forces.gravity = c.gravity;
+    inputs.forces.push = &inputs.push;
     SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
     robot.system().realizeTopology();
     state = robot.system().getDefaultState();
+    dynamics = std::make_unique<PlantDynamics>(m, layout_of(robot, state));
+  }
+
+  static SimbodyLayout layout_of(const SimbodyRobot& r, const SimTK::State& s) {
+    SimbodyLayout l;
+    l.num_q = s.getNQ();
+    l.num_u = s.getNU();
+    l.base_q = r.body(0).getFirstQIndex(s);
+    l.base_u = r.body(0).getFirstUIndex(s);
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
+      l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
+    }
+    return l;
   }
 
   ~Impl() {
@@ -193,6 +171,14 @@ struct Plant::Impl {
   static int rhs(sunrealtype t, N_Vector yv, N_Vector ydot, void* user) {
     auto* self = static_cast<Impl*>(user);
     ++self->evaluations;
+    if (self->config.derivatives == DerivativeEngine::kRigidBody) {
+      Eigen::Matrix<double, 6, 1> wrench;
+      sunrealtype* out = N_VGetArrayPointer(ydot);
+      const int ny = self->state.getNY();
+      if (!self->dynamics->derivative(t, N_VGetArrayPointer(yv), self->inputs.forces, out, wrench)) return 1;
+      for (int i = 0; i < 6; ++i) out[ny + i] = wrench[i];
+      return 0;
+    }
     SimTK::State& s = self->state;
     s.setTime(t);
     SimTK::Vector& ys = s.updY();
@@ -210,25 +196,61 @@ struct Plant::Impl {
     return 0;
   }
 
+  static int linear_system(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix, sunbooleantype jok,
+                           sunbooleantype* jcur, sunrealtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector) {
+    auto* self = static_cast<Impl*>(user);
+    bool current = false;
+    const int rc = self->newton.update(self->cvode, rhs, self, t, y, fy, jok, &current, gamma, tmp1, tmp2);
+    *jcur = current ? SUNTRUE : SUNFALSE;
+    return rc;
+  }
+
+  // CVODE's own counters since the last (re)start.
+  IntegratorStats cvode_stats() const {
+    IntegratorStats st;
+    long v = 0;
+    CVodeGetNumSteps(cvode, &v);
+    st.steps = v;
+    CVodeGetNumLinSolvSetups(cvode, &v);
+    st.linear_setups = v;
+    CVodeGetNumErrTestFails(cvode, &v);
+    st.error_test_failures = v;
+    CVodeGetNumNonlinSolvIters(cvode, &v);
+    st.nonlinear_iterations = v;
+    CVodeGetNumNonlinSolvConvFails(cvode, &v);
+    st.nonlinear_failures = v;
+    return st;
+  }
+
   bool start_cvode() {
     const int n = state.getNY() + 6;  // + contact impulse quadrature
+    if (n != NewtonSystem::kN || state.getNQ() != NewtonSystem::kNq) return fail("state layout is not [q; u] of the model");
     if (sun == nullptr && SUNContext_Create(nullptr, &sun) != 0) return fail("SUNContext_Create failed");
     if (y == nullptr) {
       y = N_VNew_Serial(n, sun);
-      jac = SUNDenseMatrix(n, n, sun);
-      solver = make_eigen_lu_solver(sun, n);
+      jac = SUNDenseMatrix(1, 1, sun);
+      solver = newton.make_linear_solver(sun);
       cvode = CVodeCreate(CV_BDF, sun);
       if (y == nullptr || jac == nullptr || solver == nullptr || cvode == nullptr) return fail("CVODE set-up failed");
     }
     sunrealtype* data = N_VGetArrayPointer(y);
     for (int i = 0; i < state.getNY(); ++i) data[i] = state.getY()[i];
     for (int i = 0; i < 6; ++i) data[state.getNY() + i] = contact_impulse[i];
+    if (cvode_ready) {  // CVodeReInit zeroes CVODE's counters: keep what they held
+      const IntegratorStats now = cvode_stats();
+      stats_before_restart.steps += now.steps;
+      stats_before_restart.linear_setups += now.linear_setups;
+      stats_before_restart.error_test_failures += now.error_test_failures;
+      stats_before_restart.nonlinear_iterations += now.nonlinear_iterations;
+      stats_before_restart.nonlinear_failures += now.nonlinear_failures;
+    }
     int rc = cvode_ready ? CVodeReInit(cvode, state.getTime(), y) : CVodeInit(cvode, rhs, state.getTime(), y);
     if (rc != CV_SUCCESS) return fail("CVodeInit failed");
     if (!cvode_ready) {
       CVodeSetUserData(cvode, this);
       CVodeSStolerances(cvode, config.relative_tolerance, config.absolute_tolerance);
       CVodeSetLinearSolver(cvode, solver, jac);
+      CVodeSetLinSysFn(cvode, linear_system);
       CVodeSetMaxNumSteps(cvode, 100000);
       // Command changes at every tick move the step size and with it gamma; the
       // default (re-factor on a 30 % change) then factors almost every step, which
@@ -244,6 +266,7 @@ struct Plant::Impl {
 
   bool fail(const char* what) {
     std::snprintf(error, sizeof error, "%s", what);
+    for (char& c : error) c = c == '\n' ? ' ' : c;  // one line, for logs and JSON
     return false;
   }
 
@@ -255,12 +278,13 @@ struct Plant::Impl {
       Vec3 v;
       contact_point_motion(model, robot, s, c, truth.contact_point_m[c], v);
       truth.contact_force_N[c] =
-          inputs.contact ? contact_force(inputs.ground, truth.contact_point_m[c], v, inputs.points[c]) : Vec3::Zero();
+          inputs.forces.contact ? contact_force(inputs.forces.ground, truth.contact_point_m[c], v, inputs.forces.points[c])
+                                : Vec3::Zero();
     }
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = robot.body(j + 1);
       truth.joint_torque_Nm[j] =
-          drive_torque(inputs.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
+          drive_torque(inputs.forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
     }
     const SimTK::MobilizedBody& base = robot.body(0);
     const SimTK::Vec3 a = base.getBodyOriginAcceleration(s);
@@ -271,12 +295,66 @@ struct Plant::Impl {
     truth.momentum << h[1][0], h[1][1], h[1][2], h[0][0], h[0][1], h[0][2];
   }
 
+  // Simbody's truth path is kept for the Simbody integrators and the kSimbody derivative.
+  bool truth_from_plant_dynamics() const {
+    return config.integrator == Integrator::kCvodeBdf && config.derivatives == DerivativeEngine::kRigidBody;
+  }
+
+  // At the end of an interval (or a reset): drives that clip are counted, the contact
+  // anchors move, the truth is filled. Returns false when the state is not finite.
+  bool finish_interval(bool count_saturations) {
+    if (!truth_from_plant_dynamics()) {
+      if (count_saturations) {
+        inputs.count_saturations = true;
+        robot.system().realize(state, SimTK::Stage::Dynamics);
+        inputs.count_saturations = false;
+      }
+      update_contacts();
+      update_truth();
+      return true;
+    }
+    const SimTK::Vector& ys = state.getY();
+    for (int i = 0; i < ys.size(); ++i) y_end[i] = ys[i];
+    std::uint64_t clipped = 0;
+    std::array<Vec3, model::kNumContactPoints> corner_velocity;
+    if (!dynamics->truth(state.getTime(), y_end.data(), inputs.forces, truth, corner_velocity, clipped)) return false;
+    if (count_saturations) inputs.saturations += clipped;
+    // The anchors move first, the reported forces use the moved anchors (as update_truth does).
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      update_contact_point(inputs.forces.ground, truth.contact_point_m[c], corner_velocity[c], inputs.forces.points[c]);
+      truth.contact_force_N[c] = inputs.forces.contact ? contact_force(inputs.forces.ground, truth.contact_point_m[c],
+                                                                       corner_velocity[c], inputs.forces.points[c])
+                                                       : Vec3::Zero();
+    }
+    // Simbody keeps watching: every kCrossCheckIntervals its derivative is compared with ours.
+    if (++intervals % kCrossCheckIntervals == 0) {
+      max_mismatch = std::max(max_mismatch, derivative_mismatch());
+    }
+    return true;
+  }
+
+  double derivative_mismatch() {
+    const int ny = state.getNY();
+    std::array<double, NewtonSystem::kN> ours{}, theirs{};
+    for (int i = 0; i < ny; ++i) y_end[i] = state.getY()[i];
+    Eigen::Matrix<double, 6, 1> wrench;
+    dynamics->derivative(state.getTime(), y_end.data(), inputs.forces, ours.data(), wrench);
+    for (int i = 0; i < 6; ++i) ours[ny + i] = wrench[i];
+    state.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);  // re-run the forces for their wrench
+    robot.system().realize(state, SimTK::Stage::Acceleration);
+    for (int i = 0; i < ny; ++i) theirs[i] = state.getYDot()[i];
+    for (int i = 0; i < 6; ++i) theirs[ny + i] = inputs.contact_wrench[i];
+    double worst = 0.0;
+    for (int i = 0; i < ny + 6; ++i) worst = std::max(worst, std::abs(ours[i] - theirs[i]) / (1.0 + std::abs(theirs[i])));
+    return worst;
+  }
+
   void update_contacts() {
     const SimTK::State& s = state;
     for (int c = 0; c < model::kNumContactPoints; ++c) {
       Vec3 p, v;
       contact_point_motion(model, robot, s, c, p, v);
-      update_contact_point(inputs.ground, p, v, inputs.points[c]);
+      update_contact_point(inputs.forces.ground, p, v, inputs.forces.points[c]);
     }
   }
 };
@@ -288,7 +366,7 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
   Impl& p = *impl_;
   p.state.setTime(time_s);
   p.robot.set_state(p.state, q, v);
-  for (auto& c : p.inputs.points) c = ContactPointState{};
+  for (auto& c : p.inputs.forces.points) c = ContactPointState{};
   p.contact_impulse.setZero();
   p.robot.system().realize(p.state, SimTK::Stage::Velocity);
   p.update_contacts();
@@ -302,13 +380,24 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
     p.stepper = std::make_unique<SimTK::TimeStepper>(p.robot.system(), *p.simbody_integrator);
     p.stepper->initialize(p.state);
   }
-  p.update_truth();
+  p.finish_interval(false);
 }
 
-void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.command = command; }
+void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.forces.command = command; }
 void Plant::set_push(const Push& push) { impl_->inputs.push = push; }
 
 PlantError Plant::advance(double dt_s) {
+  // Simbody reports a state gone bad (a diverging explicit integrator's NaNs) by
+  // throwing; the caller gets an error value instead of an abort.
+  try {
+    return advance_interval(dt_s);
+  } catch (const std::exception& e) {
+    impl_->fail(e.what());
+    return PlantError::kIntegratorFailed;
+  }
+}
+
+PlantError Plant::advance_interval(double dt_s) {
   Impl& p = *impl_;
   const double t_end = p.state.getTime() + dt_s;
   p.inputs.count_saturations = false;
@@ -353,11 +442,11 @@ PlantError Plant::advance(double dt_s) {
   }
   // Keep the base quaternion on the unit sphere (CVODE does not know it must be);
   // it drifts slowly, so project rarely and restart CVODE from the edited state.
-  p.robot.system().realize(p.state, SimTK::Stage::Position);
   const SimTK::MobilizedBody& base = p.robot.body(0);
   double quat_norm2 = 0.0;
   for (int i = 0; i < 4; ++i) quat_norm2 += base.getOneQ(p.state, i) * base.getOneQ(p.state, i);
   if (std::abs(quat_norm2 - 1.0) > 1e-7 || p.config.integrator == Integrator::kSimbodyRungeKuttaMerson) {
+    p.robot.system().realize(p.state, SimTK::Stage::Position);
     p.robot.system().project(p.state, 1e-10);
     p.needs_restart = true;
   }
@@ -368,26 +457,25 @@ PlantError Plant::advance(double dt_s) {
     }
   }
   // Count saturation once per interval at its end state (what the drive does now).
-  p.inputs.count_saturations = true;
-  p.robot.system().realize(p.state, SimTK::Stage::Dynamics);
-  p.inputs.count_saturations = false;
-  p.update_contacts();
-  p.update_truth();
+  if (!p.finish_interval(true)) {
+    p.fail("non-finite plant derivative");
+    return PlantError::kNonFiniteState;
+  }
   return PlantError::kOk;
 }
 
 Plant::IntegratorStats Plant::integrator_stats() const {
+  const Impl& p = *impl_;
   IntegratorStats st;
-  if (impl_->cvode == nullptr) return st;
-  long v = 0;
-  CVodeGetNumSteps(impl_->cvode, &v);
-  st.steps = v;
-  CVodeGetNumJacEvals(impl_->cvode, &v);
-  st.jacobian_evaluations = v;
-  CVodeGetNumLinSolvSetups(impl_->cvode, &v);
-  st.linear_setups = v;
-  CVodeGetNumErrTestFails(impl_->cvode, &v);
-  st.error_test_failures = v;
+  if (p.cvode == nullptr) return st;
+  const IntegratorStats now = p.cvode_stats();
+  const IntegratorStats& before = p.stats_before_restart;
+  st.steps = before.steps + now.steps;
+  st.linear_setups = before.linear_setups + now.linear_setups;
+  st.error_test_failures = before.error_test_failures + now.error_test_failures;
+  st.nonlinear_iterations = before.nonlinear_iterations + now.nonlinear_iterations;
+  st.nonlinear_failures = before.nonlinear_failures + now.nonlinear_failures;
+  st.jacobian_evaluations = p.newton.jacobian_evaluations();
   return st;
 }
 
@@ -396,6 +484,9 @@ const PlantTruth& Plant::truth() const { return impl_->truth; }
 std::uint64_t Plant::torque_saturations() const { return impl_->inputs.saturations; }
 std::uint64_t Plant::derivative_evaluations() const { return impl_->evaluations; }
 const char* Plant::last_error() const { return impl_->error; }
+
+double Plant::derivative_mismatch() { return impl_->derivative_mismatch(); }
+double Plant::max_derivative_mismatch() const { return impl_->max_mismatch; }
 Eigen::Matrix<double, 6, 1> Plant::contact_impulse() const { return impl_->contact_impulse; }
 
 }  // namespace kuavo::sim

@@ -1,8 +1,9 @@
 // The simulated robot: Simbody multibody dynamics built from the generated model
 // tables, ground contact at the 8 sole corners, the drives' PD law with torque
 // saturation, gravity and push disturbances. Integrated by SUNDIALS CVODE (BDF,
-// for the stiff contact) with derivatives from Simbody, or by Simbody's own
-// Runge-Kutta-Merson integrator as a cross-check. Deterministic: no clocks, no
+// for the stiff contact) with derivatives from our own O(n) dynamics over
+// Simbody's state (plant_dynamics.h says what runs where; Simbody re-checks them
+// live), or by Simbody's own Runge-Kutta-Merson integrator as a cross-check. Deterministic: no clocks, no
 // threads, no randomness here (sensor noise lives in sensor_model.h).
 // This header does not include <Simbody.h>, so C++20 code can use it.
 #pragma once
@@ -27,9 +28,16 @@ enum class Integrator : std::uint8_t { kCvodeBdf = 0, kSimbodyRungeKuttaMerson =
 bool parse_integrator(const char* text, Integrator& out);  // "cvode" | "rkm" | "euler"
 const char* to_string(Integrator i);
 
+// Who computes CVODE's state derivative (kCvodeBdf only; the other integrators
+// always realize Simbody). kRigidBody: sim/plant_dynamics.h, the project's own
+// O(n) algorithms over Simbody's state layout, ~10x cheaper; kSimbody:
+// realize(Acceleration), the oracle the first is tested against.
+enum class DerivativeEngine : std::uint8_t { kRigidBody = 0, kSimbody = 1 };
+
 struct PlantConfig {
   GroundParams ground = kFloor;
   Integrator integrator = Integrator::kCvodeBdf;
+  DerivativeEngine derivatives = DerivativeEngine::kRigidBody;
   double euler_substep_s = 2.0e-4;  // kSemiImplicitEuler only
   // Loose enough for real-time-and-better on one core; tests/sim checks that a
   // 100x tighter run gives the same standing outcome (tilt, height, forces).
@@ -86,14 +94,23 @@ class Plant {
   std::uint64_t derivative_evaluations() const;
   struct IntegratorStats {
     long steps = 0, jacobian_evaluations = 0, linear_setups = 0, error_test_failures = 0;
+    long nonlinear_iterations = 0, nonlinear_failures = 0;
   };
   IntegratorStats integrator_stats() const;  // CVODE counters since construction
   const char* last_error() const;
+  // The cross-check of the CVODE derivative (plant_dynamics.h) against Simbody's
+  // realize(Acceleration) at the current state, command and contact anchors:
+  // max_i |ẏ_i − ẏ_simbody,i| / (1 + |ẏ_simbody,i|) over [q̇; u̇; contact wrench].
+  double derivative_mismatch();
+  // The largest derivative_mismatch() of the run: with the default derivative and
+  // CVODE, the plant computes it every 50 intervals (Simbody watching live).
+  double max_derivative_mismatch() const;
   // Contact impulse since reset(): [∫f dt; ∫p×f dt about the world origin], integrated by
   // CVODE as quadrature states (zero with the Simbody integrator).
   Eigen::Matrix<double, 6, 1> contact_impulse() const;
 
  private:
+  PlantError advance_interval(double dt_s);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
