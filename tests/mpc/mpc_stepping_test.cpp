@@ -100,3 +100,29 @@ TEST(MpcStepping, ShiftedWarmStartThroughFourSteps) {
 
 }  // namespace
 }  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// Every allowed horizon converges on the stepping problem (1.4 s uses the full capacity, 70).
+class MpcHorizon : public ::testing::TestWithParam<double> {};
+
+TEST_P(MpcHorizon, ConvergesOnTheSteppingProblem) {
+  mpc::MpcConfig cfg;
+  cfg.horizon_s = GetParam();
+  MpcFixture& f = mpc_fixture(cfg);
+  EXPECT_EQ(f.ws.horizon, static_cast<int>(std::lround(GetParam() / 0.02)));
+  stepping_window(f, 0, SteppingPlan{});
+  for (int it = 0; it < 12; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              mpc::MpcStatus::kOk);
+  }
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  EXPECT_EQ(f.plan.count, mpc::kMpcPlanKnots);
+}
+
+INSTANTIATE_TEST_SUITE_P(Horizons, MpcHorizon, ::testing::Values(0.6, 0.8, 1.0, 1.4),
+                         [](const auto& info) { return std::to_string(static_cast<int>(std::lround(info.param * 1000))) + "ms"; });
+
+}  // namespace
+}  // namespace kuavo::test
