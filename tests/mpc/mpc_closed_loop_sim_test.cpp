@@ -1,5 +1,7 @@
 // MPC + WBC on the Simbody plant with the true state (no estimator): MPC at 50 Hz, WBC at
-// 500 Hz interpolating the MPC's knots (wbc_interpolate_reference), lockstep, zero MPC latency.
+// 500 Hz interpolating the MPC's knots (wbc_interpolate_reference), lockstep. Each plan reaches
+// the WBC kLatencyTicks after its measurement (the MPC's compute time on the robot, ~10 ms with
+// the present solver); until then the WBC keeps interpolating the previous plan at "now".
 // Standing with a 10 N·s push, and steps in place.
 #include <gtest/gtest.h>
 
@@ -32,10 +34,13 @@ double tilt_deg(const dynamics::ConfigVector& q) {
   return std::acos(std::clamp((o.toRotationMatrix() * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0)) * 180.0 / M_PI;
 }
 
+constexpr int kLatencyTicks = 5;  // 10 ms at 500 Hz
+
 LoopResult run_loop(double seconds, const sim::Push& push, const SteppingPlan* stepping) {
   MpcFixture& f = mpc_fixture();
   static auto wbc_ws = std::make_unique<wbc::WbcWorkspace>();
-  static mpc::MpcPlan active;
+  static mpc::MpcPlan active, pending;
+  int pending_at_tick = -1;
   static wbc::WbcReference ref;
   static hal::CommandFrame command;
   const wbc::WbcConfig wcfg;
@@ -62,10 +67,15 @@ LoopResult run_loop(double seconds, const sim::Push& push, const SteppingPlan* s
       }
       ++out.mpc_calls;
       if (mpc::mpc_step_rt(f.model, f.config, f.ws, truth.q, truth.v, f.window, f.plan) == mpc::MpcStatus::kOk) {
-        active = f.plan;
+        pending = f.plan;
+        pending_at_tick = tick == 0 ? 0 : tick + kLatencyTicks;  // the first plan before starting
       } else {
         ++out.mpc_failures;
       }
+    }
+    if (pending_at_tick >= 0 && tick >= pending_at_tick) {
+      active = pending;
+      pending_at_tick = -1;
     }
     if (active.count < 2) {
       out.plant_ok = false;
