@@ -123,4 +123,33 @@ BENCHMARK(BM_MpcStepStanding)->Arg(600)->Arg(800)->Arg(1000)->Arg(1200)->Arg(140
 
 }  // namespace
 
+namespace {
+
+// The parts of one stage's linearization.
+void BM_CentroidalEvaluate(benchmark::State& state) {
+  Fixture& f = fixture();
+  static mpc::CentroidalPoint point;
+  static mpc::StateVector x;
+  static mpc::InputVector u = mpc::InputVector::Zero();
+  mpc::state_from_configuration(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(), x);
+  for (int c = 0; c < 8; ++c) u[3 * c + 2] = 67.0;
+  for (auto _ : state) {
+    mpc::centroidal_evaluate(f.robot, x, u, mpc::HeadVector::Zero(), point);
+    benchmark::DoNotOptimize(point.fx(0, 0));
+  }
+}
+BENCHMARK(BM_CentroidalEvaluate)->Unit(benchmark::kMicrosecond);
+
+void BM_ReferenceState(benchmark::State& state) {
+  Fixture& f = fixture();
+  static mpc::StateVector x;
+  for (auto _ : state) {
+    mpc::state_from_configuration(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(), x);
+    benchmark::DoNotOptimize(x[0]);
+  }
+}
+BENCHMARK(BM_ReferenceState)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
 BENCHMARK_MAIN();
