@@ -32,8 +32,22 @@
 // active set; one IPM step with warm start would be the same barrier step with less control.
 //
 // Cost (Leju's Q and R, FACTS.md §4.2, integrated: every stage term is multiplied by dt):
-//   ½‖x − x_ref‖²_Q + ½‖u − u_ref‖²_R per stage, terminal ½‖x_T − x_ref‖²_{Q·dt}.
-//   u_ref: joint velocities of the plan; forces m·g shared equally by the stance corners.
+//   ½‖x − x_ref‖²_Q + ½‖u − u_ref‖²_R per stage, terminal ½‖x_T − x_ref‖²_{Q·dt·scale}.
+//   x_ref from the plan knots (state_from_configuration of knot q, v); u_ref: the plan's joint
+//   velocities, and the least-norm stance forces carrying m·g with no moment about the CoM
+//   (the weight split over the stance corners, moment-balanced).
+//
+// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) stages; the
+// new tail repeats the last state and takes the reference inputs. x̄₀ is set to the
+// measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a QP failure, a stamp jump
+// backwards or beyond the horizon) linearizes about the reference.
+//
+// Using the plan (for the closed loop): plan.knots[i] describes stamp_ns + i·dt; interpolate
+// with wbc::wbc_interpolate_reference between the two knots around "now". Base twist, point
+// and CoM kinematics of the knots come from forward kinematics of the updated trajectory
+// (the twist to first order from the linearization); accelerations are forward differences
+// between knots. On any status other than kOk the plan has count 0: keep using the previous one
+// (its knots cover 0.2 s) and let the WBC's staleness check take over after that.
 #pragma once
 
 #include <array>
@@ -120,7 +134,10 @@ struct MpcPlan {  // a value type: copied through a triple buffer to the 500 Hz 
   MpcStatus status = MpcStatus::kNotInitialized;
   int qp_iterations = 0;              // Riccati factorizations this call (1 when solved)
   double cost = 0.0;                  // ½Σ tracking cost (no barriers) of the updated trajectory
-  double constraint_violation = 0.0;  // max |defect|, |equality| at the linearization point
+  // max |defect|, |equality row| at this call's linearization point (before its QP step). With a
+  // shifted warm start this includes the newly guessed tail stage (up to ~1 while stepping);
+  // repeated calls on a fixed state drive it to ~1e-15 (SQP convergence).
+  double constraint_violation = 0.0;
 };
 
 using Ocp = qp::OcpQp<kNx, kNu, kMaxStages, kMaxEqualities, 0>;

@@ -5,8 +5,6 @@
 
 #include <array>
 #include <cmath>
-#include <iostream>
-#include <cstdlib>
 
 #include "tests/mpc/mpc_fixture.h"
 #include "tests/support/alloc_trap.h"
@@ -162,12 +160,7 @@ TEST(MpcStep, RepeatedIterationsOnAFixedStateConverge) {
 }
 
 TEST(MpcStep, SidewaysVelocityDisturbanceIsBroughtBackWithinTheHorizon) {
-  mpc::MpcConfig cfg;
-  if (const char* e = std::getenv("KUAVO_MPC_WF")) cfg.weight_force = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_TS")) cfg.terminal_weight_scale = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_WP")) cfg.weight_base_position[1] = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_WL")) cfg.weight_leg_joint[0] = std::atof(e);
-  MpcFixture& f = mpc_fixture(cfg);
+  MpcFixture& f = mpc_fixture();
   standing_window(f, 0);
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   v[1] = 0.2;  // base axes = world here (identity orientation): 0.2 m/s to the left
