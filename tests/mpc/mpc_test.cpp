@@ -223,3 +223,44 @@ TEST(MpcStep, NoAllocationOverAHundredCalls) {
 
 }  // namespace
 }  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// Standing facing yaw ≈ π: the measurement is on the other side of the ±π cut from the plan.
+TEST(MpcStep, YawAcrossThePiCutIsTheSmallDifference) {
+  MpcFixture& f = mpc_fixture();
+  const dynamics::ConfigVector standing = f.q0;
+  auto turned = [&](double yaw) {
+    dynamics::ConfigVector q = standing;
+    const Eigen::AngleAxisd turn(yaw, Eigen::Vector3d::UnitZ());
+    q.head<3>() = turn * standing.head<3>();
+    const Eigen::Quaterniond o = Eigen::Quaterniond(turn) * Eigen::Quaterniond(standing[6], standing[3], standing[4], standing[5]);
+    q[3] = o.x();
+    q[4] = o.y();
+    q[5] = o.z();
+    q[6] = o.w();
+    return q;
+  };
+  f.q0 = turned(M_PI - 0.01);  // the plan
+  standing_window(f, 0);
+  const dynamics::ConfigVector measured = turned(-M_PI + 0.01);  // 0.02 rad further round
+  for (int it = 0; it < 8; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, measured, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              MpcStatus::kOk);
+  }
+  f.q0 = standing;
+  std::printf("yaw across the cut: x0 yaw %.4f, x_T yaw %.4f (reference %.4f), violation %.1e\n", f.ws.x[0][mpc::kXEuler],
+              f.ws.x[f.ws.horizon][mpc::kXEuler], f.ws.x_ref[0][mpc::kXEuler], f.plan.constraint_violation);
+  EXPECT_NEAR(f.ws.x[0][mpc::kXEuler], M_PI + 0.01, 1e-9);  // measurement unwrapped onto the plan's branch
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  // The feet are planted 0.02 rad round from the plan, so the base stays near the measurement
+  // (turning back needs a step); what must not happen is a 2π excursion anywhere.
+  for (int k = 0; k <= f.ws.horizon; ++k) {
+    EXPECT_LT(std::abs(f.ws.x[k][mpc::kXEuler] - f.ws.x_ref[k][mpc::kXEuler]), 0.03) << k;
+  }
+  EXPECT_LT(std::abs(std::remainder(f.plan.knots[0].base_euler_zyx_rad[0] - (M_PI + 0.01), 2 * M_PI)), 1e-6);
+}
+
+}  // namespace
+}  // namespace kuavo::test
