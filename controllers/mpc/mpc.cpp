@@ -219,6 +219,32 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   }
 }
 
+// Leju's soft swing x-y tracking: ½ w ‖p_xy(x) − p_xy,ref‖² per corner not in contact, Gauss-Newton
+// Hessian. Soft, so the optimizer may still move the touchdown spot.
+void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                       const planner::PlanKnot& knot, int k) {
+  if (cfg.weight_swing_xy <= 0.0) return;
+  auto& st = ws.qp.stages[k];
+  const CentroidalPoint& p = ws.point;
+  const Vec3 base = ws.x[k].segment<3>(kXBasePosition);
+  Eigen::Matrix<double, 3, kNumMpcJoints> jp;
+  Eigen::Matrix<double, 2, kNx> j;
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (knot.in_contact[c]) continue;
+    const int body = model.frames[c].body;
+    const Vec3 point = dynamics::frame_position(model, p.data, c);
+    point_position_jacobian(model, p, body, point, jp);
+    j.setZero();
+    j.block<2, 2>(0, kXBasePosition).setIdentity();
+    for (int e = 0; e < 3; ++e) j.col(kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
+    j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
+    const double w = cfg.dt_s * cfg.weight_swing_xy;
+    st.Q.noalias() += w * j.transpose() * j;
+    st.q.noalias() += w * j.transpose() * error;
+  }
+}
+
 double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
   double cost = 0.0;
   const int T = ws.horizon;
@@ -266,6 +292,7 @@ const char* mpc_validate_config(const MpcConfig& c) {
                      c.joint_limit_barrier_delta_rad)) {
     return "barrier mu and delta must be finite and > 0";
   }
+  if (bad(c.weight_swing_xy)) return "weight_swing_xy must be finite and >= 0";
   if (!(c.swing_position_gain_1_s >= 0.0 && std::isfinite(c.swing_position_gain_1_s))) {
     return "swing_position_gain_1_s must be finite and >= 0";
   }
@@ -388,6 +415,7 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
       ws.twist_du[k] = p.base_twist_du;
     }
     build_stage_cost(cfg, ws, knot, k, false);
+    add_swing_xy_cost(model, cfg, ws, knot, k);
     violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
   }
   build_stage_cost(cfg, ws, reference.knots[T], T, true);

@@ -20,9 +20,9 @@
 //     - 1 or 2 corners in contact (heel/toe phases): the velocity of their centroid = 0 (3 rows).
 //     - each corner not in contact: force = 0 (3 rows).
 //     - a foot with no corner in contact: normal-velocity rows (OCS2) on 3 of its 4 corners,
-//       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity; x-y is left free:
-//       the touchdown spot is softly tracked only through the leg joint cost, so the optimizer
-//       may move it.
+//       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity. x-y is soft only
+//       (weight_swing_xy on the corners' x-y, and the leg joint cost), so the optimizer may
+//       move the touchdown spot.
 //   inequalities, as relaxed log-barrier penalties (OCS2; μ, δ from Leju) in the stage cost's
 //   gradient and Gauss-Newton Hessian: friction pyramid |f_x|, |f_y| ≤ μ f_z (4 rows per stance
 //   corner, the same pyramid as the WBC), joint position limits (model.limits).
@@ -109,6 +109,9 @@ struct MpcConfig {
 
   // Swing normal-velocity row gain: v_z = v_z,ref + k (z_ref − z). Leju positionErrorGain 20.
   double swing_position_gain_1_s = 20.0;
+  // Soft x-y tracking of the swing corners (Leju: 500), m⁻² per corner; 0 leaves the touchdown
+  // spot to the leg joint cost alone.
+  double weight_swing_xy = 500.0;
 };
 
 // nullptr if usable, else what is wrong. Load time.
