@@ -42,8 +42,10 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
         min_stance_fz = std::min(min_stance_fz, f.ws.u[k][3 * c + 2]);
         continue;
       }
-      saw_swing = true;
       max_swing_force = std::max(max_swing_force, f.ws.u[k].segment<3>(3 * c).cwiseAbs().maxCoeff());
+      const int first = c < 4 ? 0 : 4;
+      if (knot.in_contact[first] || knot.in_contact[first + 1]) continue;  // heel-off: the heel pivots up freely
+      saw_swing = true;
       max_z_err = std::max(max_z_err, std::abs(p[3 * c + 2] - knot.point_position_m[3 * c + 2]));
     }
   }
@@ -59,6 +61,25 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
   EXPECT_LT(max_z_err, 0.01);  // the normal-velocity rows track z with gain 20/s
   EXPECT_GT(min_stance_fz, -1.0);
   EXPECT_GT(lean, 0.5);  // the CoM is moved over the stance foot
+}
+
+// Heel-toe: the last 0.1 s of double support on the swing foot's toes (partial-contact rows).
+TEST(MpcStepping, HeelToeSequenceConverges) {
+  MpcFixture& f = mpc_fixture();
+  SteppingPlan plan;
+  plan.heel_off_s = 0.1;
+  stepping_window(f, 0, plan);
+  for (int it = 0; it < 15; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              MpcStatus::kOk) << it;
+  }
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  // During heel-off (stages 10–14) the heels carry nothing and rise as the foot pivots on its toes.
+  const Eigen::Matrix<double, 24, 1> p14 = predicted_corners(f, 14);
+  std::printf("heel-off: left heel force %.1e N, heel z at lift-off %.1f mm, toe z %.2f mm\n",
+              f.ws.u[12].segment<6>(6).cwiseAbs().maxCoeff(), 1e3 * p14[8], 1e3 * p14[2]);
+  EXPECT_LT(f.ws.u[12].segment<6>(6).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT(std::abs(p14[2]), 1e-3);  // the toes stay down
 }
 
 // 50 Hz calls with the window advancing one stage each time and the "measured" state taken from
@@ -169,7 +190,15 @@ struct RowOracle {
         out.segment<3>(n_rows) = r.transpose() * twist.head<3>();
         out.segment<3>(n_rows + 3) = r.transpose() * twist.tail<3>();
         n_rows += 6;
-      } else if (n == 0) {
+      } else if (n > 0) {  // partial contact: the contact corners' centroid does not move
+        dynamics::Vec3 centre = dynamics::Vec3::Zero();
+        for (int c = first; c < first + 4; ++c) {
+          if (knot->in_contact[c]) centre += dynamics::frame_position(m, data, c) / n;
+        }
+        dynamics::point_jacobian(m, data, m.frames[first].body, centre, jac);
+        out.segment<3>(n_rows) = r.transpose() * (jac * v).head<3>();
+        n_rows += 3;
+      } else {
         for (int c = first; c < first + 3; ++c) {
           out[n_rows++] = dynamics::frame_velocity(m, data, c).z() + f->config.swing_position_gain_1_s * dynamics::frame_position(m, data, c).z() -
                           knot->point_velocity_m_s[3 * c + 2] - f->config.swing_position_gain_1_s * knot->point_position_m[3 * c + 2];
@@ -182,7 +211,9 @@ struct RowOracle {
 
 TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
   MpcFixture& f = mpc_fixture();
-  stepping_window(f, 0, SteppingPlan{});
+  SteppingPlan plan;
+  plan.heel_off_s = 0.1;  // stages 10–14: left toes only (partial-contact rows)
+  stepping_window(f, 0, plan);
   dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
   v0[0] = 0.1;
   v0[1] = -0.1;
@@ -191,14 +222,16 @@ TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
   static RowOracle oracle;
   constexpr double kStep = 1e-6;
   int swing_stages = 0;
-  for (const int k : {2, 20, 25, 40, 55}) {
+  int partial_stages = 0;
+  for (const int k : {2, 12, 20, 25, 40, 47, 55}) {
     const auto& st = f.ws.qp.stages[k];
     oracle.f = &f;
     oracle.knot = &f.window.knots[k];
     oracle.head = f.ws.head_rad[k];
     const Eigen::VectorXd value = oracle.rows(f.ws.x[k], f.ws.u[k]);
     ASSERT_EQ(value.size(), st.num_eq) << k;
-    swing_stages += st.num_eq > 12 ? 1 : 0;
+    swing_stages += st.num_eq == 21 ? 1 : 0;
+    partial_stages += st.num_eq == 15 ? 1 : 0;  // 6 zero-force + 3 centroid + 6 twist
     const int ne = st.num_eq;
     EXPECT_LT((value + st.e.head(ne)).cwiseAbs().maxCoeff(), 1e-9) << k;
     Eigen::MatrixXd cx(ne, mpc::kNx), du(ne, mpc::kNu);
@@ -221,6 +254,7 @@ TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
     EXPECT_LT(eu, 1e-6) << k;
   }
   EXPECT_GE(swing_stages, 2);
+  EXPECT_GE(partial_stages, 2);
 }
 
 }  // namespace
