@@ -127,6 +127,21 @@ void add_friction_barrier(const MpcConfig& c, const Vec3& f, int corner, StageT&
   }
 }
 
+// Two unit vectors, in the foot body's axes, normal to the line through the foot's two contact
+// corners.
+void line_normals(const model::Model& model, const planner::ContactFlags& flags, int first, std::array<Vec3, 2>& out) {
+  int ends[2] = {first, first};
+  int found = 0;
+  for (int c = first; c < first + kPointsPerFoot && found < 2; ++c) {
+    if (flags[c]) ends[found++] = c;
+  }
+  const Vec3 d = (model.frames[ends[1]].position_m - model.frames[ends[0]].position_m).normalized();
+  int axis = 0;  // the foot axis least aligned with the line
+  d.cwiseAbs().minCoeff(&axis);
+  out[0] = d.cross(Vec3::Unit(axis)).normalized();
+  out[1] = d.cross(out[0]);
+}
+
 // Equality rows of stage k (see mpc.h); returns the max |residual|.
 double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
                         const planner::PlanKnot& knot, int k) {
@@ -169,6 +184,25 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
       st.e.segment(rows, m) = -motion.head(m);
       violation = std::max(violation, motion.head(m).cwiseAbs().maxCoeff());
       rows += m;
+      if (n == 2) {
+        // Two corners (toes or heels): the foot may only roll about the line through them, so
+        // its angular velocity across that line is zero too (2 rows, directions fixed in the foot).
+        std::array<Vec3, 2> across;
+        line_normals(model, knot.in_contact, first, across);
+        const Mat3& foot_rotation = p.data.rotation[body];  // base axes (base at identity)
+        const Vec3 omega = motion.tail<3>();
+        for (const Vec3& e_foot : across) {
+          const Vec3 e = foot_rotation * e_foot;
+          st.C.row(rows).noalias() = e.transpose() * mdx.bottomRows<3>();
+          for (int a = body; a > 0; a = model.bodies[a].parent) {  // e turns with the foot
+            if (a - 1 < kNumMpcJoints) st.C(rows, kXJoints + a - 1) += omega.dot(p.data.motion_subspace[a].tail<3>().cross(e));
+          }
+          st.D.row(rows).noalias() = e.transpose() * mdu.bottomRows<3>();
+          st.e[rows] = -omega.dot(e);
+          violation = std::max(violation, std::abs(omega.dot(e)));
+          ++rows;
+        }
+      }
     } else {
       // Swing: v_z + k z − (v_z,ref + k z_ref) = 0 on 3 corners, world z.
       const double gain = cfg.swing_position_gain_1_s;

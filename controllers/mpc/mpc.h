@@ -17,7 +17,9 @@
 //       centre + angular velocity). Four 3-row corner constraints would be 12 rows of rank 6
 //       and the OCP solver needs D full row rank (ocp_qp.h); 3 non-collinear fixed corners are
 //       exactly "the foot does not move".
-//     - 1 or 2 corners in contact (heel/toe phases): the velocity of their centroid = 0 (3 rows).
+//     - 2 corners in contact (toe or heel phases): the velocity of their centroid = 0 and the
+//       foot's angular velocity across the line through them = 0 (5 rows: it may roll about it).
+//     - 1 corner in contact: its velocity = 0 (3 rows).
 //     - each corner not in contact: force = 0 (3 rows).
 //     - a foot with no corner in contact: normal-velocity rows (OCS2) on 3 of its 4 corners,
 //       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity. x-y is soft only
@@ -63,6 +65,7 @@ namespace kuavo::mpc {
 
 inline constexpr int kMaxStages = 70;        // 1.4 s at 0.02 s
 inline constexpr int kMaxEqualities = 30;    // both feet in swing: 2 × (4 × 3 zero force + 3 normal velocity)
+                                             // (≥ 2 × (2 × 3 + 5) for two-corner contacts)
 inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s at dt 0.02)
 
 struct MpcConfig {

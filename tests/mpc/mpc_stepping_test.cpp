@@ -196,8 +196,22 @@ struct RowOracle {
           if (knot->in_contact[c]) centre += dynamics::frame_position(m, data, c) / n;
         }
         dynamics::point_jacobian(m, data, m.frames[first].body, centre, jac);
-        out.segment<3>(n_rows) = r.transpose() * (jac * v).head<3>();
+        const dynamics::Vec6 twist = jac * v;
+        out.segment<3>(n_rows) = r.transpose() * twist.head<3>();
         n_rows += 3;
+        if (n == 2) {  // angular velocity across the contact line, directions fixed in the foot
+          int ends[2] = {first, first}, found = 0;
+          for (int c = first; c < first + 4; ++c) {
+            if (knot->in_contact[c] && found < 2) ends[found++] = c;
+          }
+          const dynamics::Vec3 d = (m.frames[ends[1]].position_m - m.frames[ends[0]].position_m).normalized();
+          int axis = 0;
+          d.cwiseAbs().minCoeff(&axis);
+          const dynamics::Vec3 e1 = d.cross(dynamics::Vec3::Unit(axis)).normalized(), e2 = d.cross(e1);
+          const dynamics::Mat3 foot = data.rotation[m.frames[first].body];
+          out[n_rows++] = (foot * e1).dot(twist.tail<3>());
+          out[n_rows++] = (foot * e2).dot(twist.tail<3>());
+        }
       } else {
         for (int c = first; c < first + 3; ++c) {
           out[n_rows++] = dynamics::frame_velocity(m, data, c).z() + f->config.swing_position_gain_1_s * dynamics::frame_position(m, data, c).z() -
@@ -231,7 +245,7 @@ TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
     const Eigen::VectorXd value = oracle.rows(f.ws.x[k], f.ws.u[k]);
     ASSERT_EQ(value.size(), st.num_eq) << k;
     swing_stages += st.num_eq == 21 ? 1 : 0;
-    partial_stages += st.num_eq == 15 ? 1 : 0;  // 6 zero-force + 3 centroid + 6 twist
+    partial_stages += st.num_eq == 17 ? 1 : 0;  // 6 zero-force + 3 centroid + 2 across the toe line + 6 twist
     const int ne = st.num_eq;
     EXPECT_LT((value + st.e.head(ne)).cwiseAbs().maxCoeff(), 1e-9) << k;
     Eigen::MatrixXd cx(ne, mpc::kNx), du(ne, mpc::kNu);
