@@ -78,7 +78,15 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   q.segment<kNumMpcJoints>(7) = x.segment<kNumMpcJoints>(kXJoints);
   q.segment<2>(7 + kNumMpcJoints) = head_rad;
   dynamics::forward_kinematics(model, d, q);
-  dynamics::crba(model, d);  // composite inertias, momentum matrix at the base origin (base axes)
+  // Composite inertias and the momentum matrix at the base origin (base axes): crba() without
+  // the joint-space mass matrix, which the MPC never reads.
+  for (int b = 0; b < model::kNumBodies; ++b) d.composite[b] = d.inertia[b];
+  for (int b = model::kNumBodies - 1; b > 0; --b) {
+    d.composite[model.bodies[b].parent] += d.composite[b];
+    d.momentum_matrix_ref.col(5 + b) = d.composite[b] * d.motion_subspace[b];
+  }
+  d.momentum_matrix_ref.leftCols<6>() = d.composite[0].matrix();  // base twist columns (R = I)
+  d.total_mass_kg = d.composite[0].mass;
   const double m = d.total_mass_kg;
   p.mass_kg = m;
   const Vec3 c = d.composite[0].first_moment / m;
@@ -94,14 +102,15 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   const auto uj = u.segment<kNumMpcJoints>(kUJointVelocity);
 
   // Base twist from the momentum.
-  const dynamics::Mat6 ab = d.centroidal_matrix.leftCols<6>();
-  const Eigen::PartialPivLU<dynamics::Mat6> lu(ab);
+  // A_b⁻¹ explicitly: six fixed-size products below are cheaper than LU solves with many
+  // right-hand sides. A_b = [m I, −m[c]×; ·, ·] is well conditioned (m, I_G of a 55 kg robot).
+  const dynamics::Mat6 ab_inv = dynamics::Mat6(d.centroidal_matrix.leftCols<6>()).inverse();
   const auto aj = d.centroidal_matrix.block<6, kNumMpcJoints>(0, 6);
   Vec6 rhs;
   rhs.head<3>() = m * (r.transpose() * com_vel);
   rhs.tail<3>() = r.transpose() * h;
   rhs.noalias() -= aj * uj;
-  p.base_twist = lu.solve(rhs);
+  p.base_twist.noalias() = ab_inv * rhs;
 
   // Body velocities and subtree momenta at v = [v_b; q̇_j; head 0].
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
@@ -126,20 +135,16 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   auto& tdu = p.base_twist_du;
   tdx.setZero();
   tdu.setZero();
-  dynamics::Mat6 block = dynamics::Mat6::Zero();
-  block.topLeftCorner<3, 3>() = m * r.transpose();
-  tdx.block<6, 3>(0, kXComVelocity) = lu.solve(block.leftCols<3>());
-  block.setZero();
-  block.bottomRightCorner<3, 3>() = r.transpose();
-  tdx.block<6, 3>(0, kXMomentum) = lu.solve(block.rightCols<3>());
+  tdx.block<6, 3>(0, kXComVelocity).noalias() = ab_inv.leftCols<3>() * (m * r.transpose());
+  tdx.block<6, 3>(0, kXMomentum).noalias() = ab_inv.rightCols<3>() * r.transpose();
   for (int i = 0; i < 3; ++i) {
     Vec6 col;
     col.head<3>() = m * (p.rotation_derivative[i].transpose() * com_vel);
     col.tail<3>() = p.rotation_derivative[i].transpose() * h;
-    tdx.col(kXEuler + i) = lu.solve(col);
+    tdx.col(kXEuler + i).noalias() = ab_inv * col;
   }
-  tdx.block<6, kNumMpcJoints>(0, kXJoints) = -lu.solve(p.momentum_dq);
-  tdu.block<6, kNumMpcJoints>(0, kUJointVelocity) = -lu.solve(aj);
+  tdx.block<6, kNumMpcJoints>(0, kXJoints).noalias() = -ab_inv * p.momentum_dq;
+  tdu.block<6, kNumMpcJoints>(0, kUJointVelocity).noalias() = -ab_inv * aj;
 
   // f and its Jacobians.
   p.f.setZero();

@@ -127,6 +127,21 @@ void add_friction_barrier(const MpcConfig& c, const Vec3& f, int corner, StageT&
   }
 }
 
+// Two unit vectors, in the foot body's axes, normal to the line through the foot's two contact
+// corners.
+void line_normals(const model::Model& model, const planner::ContactFlags& flags, int first, std::array<Vec3, 2>& out) {
+  int ends[2] = {first, first};
+  int found = 0;
+  for (int c = first; c < first + kPointsPerFoot && found < 2; ++c) {
+    if (flags[c]) ends[found++] = c;
+  }
+  const Vec3 d = (model.frames[ends[1]].position_m - model.frames[ends[0]].position_m).normalized();
+  int axis = 0;  // the foot axis least aligned with the line
+  d.cwiseAbs().minCoeff(&axis);
+  out[0] = d.cross(Vec3::Unit(axis)).normalized();
+  out[1] = d.cross(out[0]);
+}
+
 // Equality rows of stage k (see mpc.h); returns the max |residual|.
 double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
                         const planner::PlanKnot& knot, int k) {
@@ -169,6 +184,25 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
       st.e.segment(rows, m) = -motion.head(m);
       violation = std::max(violation, motion.head(m).cwiseAbs().maxCoeff());
       rows += m;
+      if (n == 2) {
+        // Two corners (toes or heels): the foot may only roll about the line through them, so
+        // its angular velocity across that line is zero too (2 rows, directions fixed in the foot).
+        std::array<Vec3, 2> across;
+        line_normals(model, knot.in_contact, first, across);
+        const Mat3& foot_rotation = p.data.rotation[body];  // base axes (base at identity)
+        const Vec3 omega = motion.tail<3>();
+        for (const Vec3& e_foot : across) {
+          const Vec3 e = foot_rotation * e_foot;
+          st.C.row(rows).noalias() = e.transpose() * mdx.bottomRows<3>();
+          for (int a = body; a > 0; a = model.bodies[a].parent) {  // e turns with the foot
+            if (a - 1 < kNumMpcJoints) st.C(rows, kXJoints + a - 1) += omega.dot(p.data.motion_subspace[a].tail<3>().cross(e));
+          }
+          st.D.row(rows).noalias() = e.transpose() * mdu.bottomRows<3>();
+          st.e[rows] = -omega.dot(e);
+          violation = std::max(violation, std::abs(omega.dot(e)));
+          ++rows;
+        }
+      }
     } else {
       // Swing: v_z + k z − (v_z,ref + k z_ref) = 0 on 3 corners, world z.
       const double gain = cfg.swing_position_gain_1_s;
@@ -219,6 +253,32 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   }
 }
 
+// Leju's soft swing x-y tracking: ½ w ‖p_xy(x) − p_xy,ref‖² per corner not in contact, Gauss-Newton
+// Hessian. Soft, so the optimizer may still move the touchdown spot.
+void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                       const planner::PlanKnot& knot, int k) {
+  if (cfg.weight_swing_xy <= 0.0) return;
+  auto& st = ws.qp.stages[k];
+  const CentroidalPoint& p = ws.point;
+  const Vec3 base = ws.x[k].segment<3>(kXBasePosition);
+  Eigen::Matrix<double, 3, kNumMpcJoints> jp;
+  Eigen::Matrix<double, 2, kNx> j;
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (knot.in_contact[c]) continue;
+    const int body = model.frames[c].body;
+    const Vec3 point = dynamics::frame_position(model, p.data, c);
+    point_position_jacobian(model, p, body, point, jp);
+    j.setZero();
+    j.block<2, 2>(0, kXBasePosition).setIdentity();
+    for (int e = 0; e < 3; ++e) j.col(kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
+    j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
+    const double w = cfg.dt_s * cfg.weight_swing_xy;
+    st.Q.noalias() += w * j.transpose() * j;
+    st.q.noalias() += w * j.transpose() * error;
+  }
+}
+
 double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
   double cost = 0.0;
   const int T = ws.horizon;
@@ -266,6 +326,7 @@ const char* mpc_validate_config(const MpcConfig& c) {
                      c.joint_limit_barrier_delta_rad)) {
     return "barrier mu and delta must be finite and > 0";
   }
+  if (bad(c.weight_swing_xy)) return "weight_swing_xy must be finite and >= 0";
   if (!(c.swing_position_gain_1_s >= 0.0 && std::isfinite(c.swing_position_gain_1_s))) {
     return "swing_position_gain_1_s must be finite and >= 0";
   }
@@ -388,6 +449,7 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
       ws.twist_du[k] = p.base_twist_du;
     }
     build_stage_cost(cfg, ws, knot, k, false);
+    add_swing_xy_cost(model, cfg, ws, knot, k);
     violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
   }
   build_stage_cost(cfg, ws, reference.knots[T], T, true);

@@ -17,12 +17,14 @@
 //       centre + angular velocity). Four 3-row corner constraints would be 12 rows of rank 6
 //       and the OCP solver needs D full row rank (ocp_qp.h); 3 non-collinear fixed corners are
 //       exactly "the foot does not move".
-//     - 1 or 2 corners in contact (heel/toe phases): the velocity of their centroid = 0 (3 rows).
+//     - 2 corners in contact (toe or heel phases): the velocity of their centroid = 0 and the
+//       foot's angular velocity across the line through them = 0 (5 rows: it may roll about it).
+//     - 1 corner in contact: its velocity = 0 (3 rows).
 //     - each corner not in contact: force = 0 (3 rows).
 //     - a foot with no corner in contact: normal-velocity rows (OCS2) on 3 of its 4 corners,
-//       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity; x-y is left free:
-//       the touchdown spot is softly tracked only through the leg joint cost, so the optimizer
-//       may move it.
+//       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity. x-y is soft only
+//       (weight_swing_xy on the corners' x-y, and the leg joint cost), so the optimizer may
+//       move the touchdown spot.
 //   inequalities, as relaxed log-barrier penalties (OCS2; μ, δ from Leju) in the stage cost's
 //   gradient and Gauss-Newton Hessian: friction pyramid |f_x|, |f_y| ≤ μ f_z (4 rows per stance
 //   corner, the same pyramid as the WBC), joint position limits (model.limits).
@@ -32,8 +34,22 @@
 // active set; one IPM step with warm start would be the same barrier step with less control.
 //
 // Cost (Leju's Q and R, FACTS.md §4.2, integrated: every stage term is multiplied by dt):
-//   ½‖x − x_ref‖²_Q + ½‖u − u_ref‖²_R per stage, terminal ½‖x_T − x_ref‖²_{Q·dt}.
-//   u_ref: joint velocities of the plan; forces m·g shared equally by the stance corners.
+//   ½‖x − x_ref‖²_Q + ½‖u − u_ref‖²_R per stage, terminal ½‖x_T − x_ref‖²_{Q·dt·scale}.
+//   x_ref from the plan knots (state_from_configuration of knot q, v); u_ref: the plan's joint
+//   velocities, and the least-norm stance forces carrying m·g with no moment about the CoM
+//   (the weight split over the stance corners, moment-balanced).
+//
+// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) stages; the
+// new tail repeats the last state and takes the reference inputs. x̄₀ is set to the
+// measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a QP failure, a stamp jump
+// backwards or beyond the horizon) linearizes about the reference.
+//
+// Using the plan (for the closed loop): plan.knots[i] describes stamp_ns + i·dt; interpolate
+// with wbc::wbc_interpolate_reference between the two knots around "now". Base twist, point
+// and CoM kinematics of the knots come from forward kinematics of the updated trajectory
+// (the twist to first order from the linearization); accelerations are forward differences
+// between knots. On any status other than kOk the plan has count 0: keep using the previous one
+// (its knots cover 0.2 s) and let the WBC's staleness check take over after that.
 #pragma once
 
 #include <array>
@@ -49,6 +65,7 @@ namespace kuavo::mpc {
 
 inline constexpr int kMaxStages = 70;        // 1.4 s at 0.02 s
 inline constexpr int kMaxEqualities = 30;    // both feet in swing: 2 × (4 × 3 zero force + 3 normal velocity)
+                                             // (≥ 2 × (2 × 3 + 5) for two-corner contacts)
 inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s at dt 0.02)
 
 struct MpcConfig {
@@ -95,6 +112,9 @@ struct MpcConfig {
 
   // Swing normal-velocity row gain: v_z = v_z,ref + k (z_ref − z). Leju positionErrorGain 20.
   double swing_position_gain_1_s = 20.0;
+  // Soft x-y tracking of the swing corners (Leju: 500), m⁻² per corner; 0 leaves the touchdown
+  // spot to the leg joint cost alone.
+  double weight_swing_xy = 500.0;
 };
 
 // nullptr if usable, else what is wrong. Load time.
@@ -120,7 +140,10 @@ struct MpcPlan {  // a value type: copied through a triple buffer to the 500 Hz 
   MpcStatus status = MpcStatus::kNotInitialized;
   int qp_iterations = 0;              // Riccati factorizations this call (1 when solved)
   double cost = 0.0;                  // ½Σ tracking cost (no barriers) of the updated trajectory
-  double constraint_violation = 0.0;  // max |defect|, |equality| at the linearization point
+  // max |defect|, |equality row| at this call's linearization point (before its QP step). With a
+  // shifted warm start this includes the newly guessed tail stage (up to ~1 while stepping);
+  // repeated calls on a fixed state drive it to ~1e-15 (SQP convergence).
+  double constraint_violation = 0.0;
 };
 
 using Ocp = qp::OcpQp<kNx, kNu, kMaxStages, kMaxEqualities, 0>;

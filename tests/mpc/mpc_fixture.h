@@ -62,6 +62,7 @@ struct SteppingPlan {
   double stance_s = 0.3;
   double swing_s = 0.4;
   double height_m = 0.05;
+  double heel_off_s = 0.0;  // the swing foot's heel corners leave the ground this long before lift-off
 };
 
 inline void stepping_window(MpcFixture& f, hal::TimeNs t0_ns, const SteppingPlan& plan,
@@ -73,9 +74,15 @@ inline void stepping_window(MpcFixture& f, hal::TimeNs t0_ns, const SteppingPlan
     const double t = static_cast<double>(knot.stamp_ns) * 1e-9;
     const int cycle = static_cast<int>(std::floor(t / period));
     const double in_cycle = t - cycle * period;
-    if (in_cycle < plan.stance_s) continue;
-    const double s = (in_cycle - plan.stance_s) / plan.swing_s;
     const int first = (cycle % 2 == 0) ? 0 : 4;  // left first
+    if (in_cycle < plan.stance_s) {
+      if (in_cycle >= plan.stance_s - plan.heel_off_s) {  // toe-only contact (corners 0, 1 are the toes)
+        knot.in_contact[first + 2] = false;
+        knot.in_contact[first + 3] = false;
+      }
+      continue;
+    }
+    const double s = (in_cycle - plan.stance_s) / plan.swing_s;
     for (int c = first; c < first + 4; ++c) {
       knot.in_contact[c] = false;
       knot.point_position_m[3 * c + 2] += plan.height_m * std::sin(M_PI * s);

@@ -42,8 +42,10 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
         min_stance_fz = std::min(min_stance_fz, f.ws.u[k][3 * c + 2]);
         continue;
       }
-      saw_swing = true;
       max_swing_force = std::max(max_swing_force, f.ws.u[k].segment<3>(3 * c).cwiseAbs().maxCoeff());
+      const int first = c < 4 ? 0 : 4;
+      if (knot.in_contact[first] || knot.in_contact[first + 1]) continue;  // heel-off: the heel pivots up freely
+      saw_swing = true;
       max_z_err = std::max(max_z_err, std::abs(p[3 * c + 2] - knot.point_position_m[3 * c + 2]));
     }
   }
@@ -59,6 +61,25 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
   EXPECT_LT(max_z_err, 0.01);  // the normal-velocity rows track z with gain 20/s
   EXPECT_GT(min_stance_fz, -1.0);
   EXPECT_GT(lean, 0.5);  // the CoM is moved over the stance foot
+}
+
+// Heel-toe: the last 0.1 s of double support on the swing foot's toes (partial-contact rows).
+TEST(MpcStepping, HeelToeSequenceConverges) {
+  MpcFixture& f = mpc_fixture();
+  SteppingPlan plan;
+  plan.heel_off_s = 0.1;
+  stepping_window(f, 0, plan);
+  for (int it = 0; it < 15; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              MpcStatus::kOk) << it;
+  }
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  // During heel-off (stages 10–14) the heels carry nothing and rise as the foot pivots on its toes.
+  const Eigen::Matrix<double, 24, 1> p14 = predicted_corners(f, 14);
+  std::printf("heel-off: left heel force %.1e N, heel z at lift-off %.1f mm, toe z %.2f mm\n",
+              f.ws.u[12].segment<6>(6).cwiseAbs().maxCoeff(), 1e3 * p14[8], 1e3 * p14[2]);
+  EXPECT_LT(f.ws.u[12].segment<6>(6).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT(std::abs(p14[2]), 1e-3);  // the toes stay down
 }
 
 // 50 Hz calls with the window advancing one stage each time and the "measured" state taken from
@@ -96,6 +117,234 @@ TEST(MpcStepping, ShiftedWarmStartThroughFourSteps) {
   EXPECT_LT(max_violation, 1e-3);
   EXPECT_NEAR(q[2], f.q0[2], 0.03);
   EXPECT_NEAR(q[1], f.q0[1], 0.05);
+}
+
+}  // namespace
+}  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// Every allowed horizon converges on the stepping problem (1.4 s uses the full capacity, 70).
+class MpcHorizon : public ::testing::TestWithParam<double> {};
+
+TEST_P(MpcHorizon, ConvergesOnTheSteppingProblem) {
+  mpc::MpcConfig cfg;
+  cfg.horizon_s = GetParam();
+  MpcFixture& f = mpc_fixture(cfg);
+  EXPECT_EQ(f.ws.horizon, static_cast<int>(std::lround(GetParam() / 0.02)));
+  stepping_window(f, 0, SteppingPlan{});
+  for (int it = 0; it < 12; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              mpc::MpcStatus::kOk);
+  }
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  EXPECT_EQ(f.plan.count, mpc::kMpcPlanKnots);
+}
+
+INSTANTIATE_TEST_SUITE_P(Horizons, MpcHorizon, ::testing::Values(0.6, 0.8, 1.0, 1.4),
+                         [](const auto& info) { return std::to_string(static_cast<int>(std::lround(info.param * 1000))) + "ms"; });
+
+}  // namespace
+}  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// The equality rows as the QP holds them (C, D, e of a stage), against an independent
+// evaluation with the rigid-body library's world kinematics, differentiated by central
+// differences: stance foot twist rows, swing zero-force and normal-velocity rows.
+struct RowOracle {
+  MpcFixture* f;
+  const planner::PlanKnot* knot;
+  mpc::HeadVector head;
+  mpc::CentroidalPoint point;
+  dynamics::Data data;
+  dynamics::FrameJacobian jac;
+
+  Eigen::VectorXd rows(const mpc::StateVector& x, const mpc::InputVector& u) {
+    const model::Model& m = f->model;
+    mpc::centroidal_evaluate(m, x, u, head, point);  // only for the base twist (checked in centroidal_model_test)
+    const dynamics::ConfigVector q = mpc::configuration_from_state(x, head);
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    v.head<6>() = point.base_twist;
+    v.segment<mpc::kNumMpcJoints>(6) = u.segment<mpc::kNumMpcJoints>(mpc::kUJointVelocity);
+    dynamics::forward_kinematics(m, data, q);
+    dynamics::forward_velocities(m, data, v);
+    const dynamics::Mat3 r = data.rotation[0];
+    Eigen::VectorXd out(mpc::kMaxEqualities);
+    int n_rows = 0;
+    for (int foot = 0; foot < 2; ++foot) {
+      const int first = 4 * foot;
+      int n = 0;
+      for (int c = first; c < first + 4; ++c) n += knot->in_contact[c] ? 1 : 0;
+      for (int c = first; c < first + 4; ++c) {
+        if (knot->in_contact[c]) continue;
+        for (int i = 0; i < 3; ++i) out[n_rows++] = u[3 * c + i];
+      }
+      if (n == 4) {
+        dynamics::Vec3 centre = dynamics::Vec3::Zero();
+        for (int c = first; c < first + 4; ++c) centre += dynamics::frame_position(m, data, c) / 4.0;
+        dynamics::point_jacobian(m, data, m.frames[first].body, centre, jac);
+        const dynamics::Vec6 twist = jac * v;
+        out.segment<3>(n_rows) = r.transpose() * twist.head<3>();
+        out.segment<3>(n_rows + 3) = r.transpose() * twist.tail<3>();
+        n_rows += 6;
+      } else if (n > 0) {  // partial contact: the contact corners' centroid does not move
+        dynamics::Vec3 centre = dynamics::Vec3::Zero();
+        for (int c = first; c < first + 4; ++c) {
+          if (knot->in_contact[c]) centre += dynamics::frame_position(m, data, c) / n;
+        }
+        dynamics::point_jacobian(m, data, m.frames[first].body, centre, jac);
+        const dynamics::Vec6 twist = jac * v;
+        out.segment<3>(n_rows) = r.transpose() * twist.head<3>();
+        n_rows += 3;
+        if (n == 2) {  // angular velocity across the contact line, directions fixed in the foot
+          int ends[2] = {first, first}, found = 0;
+          for (int c = first; c < first + 4; ++c) {
+            if (knot->in_contact[c] && found < 2) ends[found++] = c;
+          }
+          const dynamics::Vec3 d = (m.frames[ends[1]].position_m - m.frames[ends[0]].position_m).normalized();
+          int axis = 0;
+          d.cwiseAbs().minCoeff(&axis);
+          const dynamics::Vec3 e1 = d.cross(dynamics::Vec3::Unit(axis)).normalized(), e2 = d.cross(e1);
+          const dynamics::Mat3 foot = data.rotation[m.frames[first].body];
+          out[n_rows++] = (foot * e1).dot(twist.tail<3>());
+          out[n_rows++] = (foot * e2).dot(twist.tail<3>());
+        }
+      } else {
+        for (int c = first; c < first + 3; ++c) {
+          out[n_rows++] = dynamics::frame_velocity(m, data, c).z() + f->config.swing_position_gain_1_s * dynamics::frame_position(m, data, c).z() -
+                          knot->point_velocity_m_s[3 * c + 2] - f->config.swing_position_gain_1_s * knot->point_position_m[3 * c + 2];
+        }
+      }
+    }
+    return out.head(n_rows);
+  }
+};
+
+TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
+  MpcFixture& f = mpc_fixture();
+  SteppingPlan plan;
+  plan.heel_off_s = 0.1;  // stages 10–14: left toes only (partial-contact rows)
+  stepping_window(f, 0, plan);
+  dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
+  v0[0] = 0.1;
+  v0[1] = -0.1;
+  for (int it = 0; it < 3; ++it) mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan);
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
+  static RowOracle oracle;
+  constexpr double kStep = 1e-6;
+  int swing_stages = 0;
+  int partial_stages = 0;
+  for (const int k : {2, 12, 20, 25, 40, 47, 55}) {
+    const auto& st = f.ws.qp.stages[k];
+    oracle.f = &f;
+    oracle.knot = &f.window.knots[k];
+    oracle.head = f.ws.head_rad[k];
+    const Eigen::VectorXd value = oracle.rows(f.ws.x[k], f.ws.u[k]);
+    ASSERT_EQ(value.size(), st.num_eq) << k;
+    swing_stages += st.num_eq == 21 ? 1 : 0;
+    partial_stages += st.num_eq == 17 ? 1 : 0;  // 6 zero-force + 3 centroid + 2 across the toe line + 6 twist
+    const int ne = st.num_eq;
+    EXPECT_LT((value + st.e.head(ne)).cwiseAbs().maxCoeff(), 1e-9) << k;
+    Eigen::MatrixXd cx(ne, mpc::kNx), du(ne, mpc::kNu);
+    for (int i = 0; i < mpc::kNx; ++i) {
+      mpc::StateVector xp = f.ws.x[k], xm = f.ws.x[k];
+      xp[i] += kStep;
+      xm[i] -= kStep;
+      cx.col(i) = (oracle.rows(xp, f.ws.u[k]) - oracle.rows(xm, f.ws.u[k])) / (2 * kStep);
+    }
+    for (int i = 0; i < mpc::kNu; ++i) {
+      mpc::InputVector up = f.ws.u[k], um = f.ws.u[k];
+      up[i] += kStep;
+      um[i] -= kStep;
+      du.col(i) = (oracle.rows(f.ws.x[k], up) - oracle.rows(f.ws.x[k], um)) / (2 * kStep);
+    }
+    const double ex = (st.C.topRows(ne) - cx).cwiseAbs().maxCoeff() / std::max(1.0, cx.cwiseAbs().maxCoeff());
+    const double eu = (st.D.topRows(ne) - du).cwiseAbs().maxCoeff() / std::max(1.0, du.cwiseAbs().maxCoeff());
+    std::printf("stage %d: %d rows, relative error C %.1e, D %.1e\n", k, ne, ex, eu);
+    EXPECT_LT(ex, 1e-6) << k;
+    EXPECT_LT(eu, 1e-6) << k;
+  }
+  EXPECT_GE(swing_stages, 2);
+  EXPECT_GE(partial_stages, 2);
+}
+
+}  // namespace
+}  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+double barrier(double h, double mu, double delta) {  // OCS2's relaxed log barrier, by its definition
+  if (h > delta) return -mu * std::log(h);
+  const double z = (h - 2.0 * delta) / delta;
+  return 0.5 * mu * (z * z - 1.0) - mu * std::log(delta);
+}
+
+// The stage cost written out from its definition (mpc.h), with world kinematics for the swing
+// corners: its finite-difference gradient must be the QP's (q, r) at the linearization point.
+double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::InputVector& u, dynamics::Data& data) {
+  const mpc::MpcConfig& c = f.config;
+  const planner::PlanKnot& knot = f.window.knots[k];
+  mpc::StateVector e = x - f.ws.x_ref[k];
+  e[mpc::kXEuler] = std::remainder(e[mpc::kXEuler], 2 * M_PI);
+  const mpc::InputVector du = u - f.ws.u_ref[k];
+  double cost = 0.5 * c.dt_s * (e.dot(f.ws.weight_state.cwiseProduct(e)) + du.dot(f.ws.weight_input.cwiseProduct(du)));
+  for (int j = 0; j < mpc::kNumMpcJoints; ++j) {
+    const double qj = x[mpc::kXJoints + j];
+    cost += c.dt_s * (barrier(qj - f.model.limits.position_min_rad[j], c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad) +
+                      barrier(f.model.limits.position_max_rad[j] - qj, c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad));
+  }
+  dynamics::forward_kinematics(f.model, data, mpc::configuration_from_state(x, f.ws.head_rad[k]));
+  for (int p = 0; p < 8; ++p) {
+    const dynamics::Vec3 fp = u.segment<3>(3 * p);
+    if (knot.in_contact[p]) {
+      const double mu = c.friction_coefficient;
+      for (const double h : {mu * fp.z() - fp.x(), mu * fp.z() + fp.x(), mu * fp.z() - fp.y(), mu * fp.z() + fp.y()}) {
+        cost += c.dt_s * barrier(h, c.friction_barrier_mu, c.friction_barrier_delta_N);
+      }
+    } else {
+      const Eigen::Vector2d d = dynamics::frame_position(f.model, data, p).head<2>() - knot.point_position_m.segment<2>(3 * p);
+      cost += 0.5 * c.dt_s * c.weight_swing_xy * d.squaredNorm();
+    }
+  }
+  return cost;
+}
+
+TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
+  MpcFixture& f = mpc_fixture();
+  stepping_window(f, 0, SteppingPlan{});
+  dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
+  v0[1] = 0.15;
+  for (int it = 0; it < 2; ++it) mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan);
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
+  static dynamics::Data data;
+  constexpr double kStep = 1e-6;
+  for (const int k : {3, 22, 50}) {
+    const auto& st = f.ws.qp.stages[k];
+    mpc::StateVector gx;
+    mpc::InputVector gu;
+    for (int i = 0; i < mpc::kNx; ++i) {
+      mpc::StateVector xp = f.ws.x[k], xm = f.ws.x[k];
+      xp[i] += kStep;
+      xm[i] -= kStep;
+      gx[i] = (stage_cost(f, k, xp, f.ws.u[k], data) - stage_cost(f, k, xm, f.ws.u[k], data)) / (2 * kStep);
+    }
+    for (int i = 0; i < mpc::kNu; ++i) {
+      mpc::InputVector up = f.ws.u[k], um = f.ws.u[k];
+      up[i] += kStep;
+      um[i] -= kStep;
+      gu[i] = (stage_cost(f, k, f.ws.x[k], up, data) - stage_cost(f, k, f.ws.x[k], um, data)) / (2 * kStep);
+    }
+    const double ex = (st.q - gx).cwiseAbs().maxCoeff() / std::max(1e-3, gx.cwiseAbs().maxCoeff());
+    const double eu = (st.r - gu).cwiseAbs().maxCoeff() / std::max(1e-3, gu.cwiseAbs().maxCoeff());
+    std::printf("stage %d: gradient relative error x %.1e (max %.2e), u %.1e (max %.2e)\n", k, ex, gx.cwiseAbs().maxCoeff(), eu,
+                gu.cwiseAbs().maxCoeff());
+    EXPECT_LT(ex, 1e-5) << k;
+    EXPECT_LT(eu, 1e-5) << k;
+  }
 }
 
 }  // namespace

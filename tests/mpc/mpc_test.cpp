@@ -5,8 +5,6 @@
 
 #include <array>
 #include <cmath>
-#include <iostream>
-#include <cstdlib>
 
 #include "tests/mpc/mpc_fixture.h"
 #include "tests/support/alloc_trap.h"
@@ -162,12 +160,7 @@ TEST(MpcStep, RepeatedIterationsOnAFixedStateConverge) {
 }
 
 TEST(MpcStep, SidewaysVelocityDisturbanceIsBroughtBackWithinTheHorizon) {
-  mpc::MpcConfig cfg;
-  if (const char* e = std::getenv("KUAVO_MPC_WF")) cfg.weight_force = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_TS")) cfg.terminal_weight_scale = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_WP")) cfg.weight_base_position[1] = std::atof(e);
-  if (const char* e = std::getenv("KUAVO_MPC_WL")) cfg.weight_leg_joint[0] = std::atof(e);
-  MpcFixture& f = mpc_fixture(cfg);
+  MpcFixture& f = mpc_fixture();
   standing_window(f, 0);
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   v[1] = 0.2;  // base axes = world here (identity orientation): 0.2 m/s to the left
@@ -214,13 +207,59 @@ TEST(MpcStep, NoAllocationOverAHundredCalls) {
   std::size_t allocations = 0;
   int ok = 0;
   for (int call = 1; call <= 100; ++call) {
-    standing_window(f, static_cast<hal::TimeNs>(call) * 20'000'000);  // the planner's part, outside the trap
+    // The planner's part, outside the trap; the second half steps in place (swing rows).
+    if (call <= 50) {
+      standing_window(f, static_cast<hal::TimeNs>(call) * 20'000'000);
+    } else {
+      stepping_window(f, static_cast<hal::TimeNs>(call) * 20'000'000, SteppingPlan{});
+    }
     AllocTrap trap;
     ok += mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan) == MpcStatus::kOk ? 1 : 0;
     allocations += trap.count();
   }
   EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(ok, 100);
+}
+
+}  // namespace
+}  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// Standing facing yaw ≈ π: the measurement is on the other side of the ±π cut from the plan.
+TEST(MpcStep, YawAcrossThePiCutIsTheSmallDifference) {
+  MpcFixture& f = mpc_fixture();
+  const dynamics::ConfigVector standing = f.q0;
+  auto turned = [&](double yaw) {
+    dynamics::ConfigVector q = standing;
+    const Eigen::AngleAxisd turn(yaw, Eigen::Vector3d::UnitZ());
+    q.head<3>() = turn * standing.head<3>();
+    const Eigen::Quaterniond o = Eigen::Quaterniond(turn) * Eigen::Quaterniond(standing[6], standing[3], standing[4], standing[5]);
+    q[3] = o.x();
+    q[4] = o.y();
+    q[5] = o.z();
+    q[6] = o.w();
+    return q;
+  };
+  f.q0 = turned(M_PI - 0.01);  // the plan
+  standing_window(f, 0);
+  const dynamics::ConfigVector measured = turned(-M_PI + 0.01);  // 0.02 rad further round
+  for (int it = 0; it < 8; ++it) {
+    ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, measured, dynamics::VelocityVector::Zero(), f.window, f.plan),
+              MpcStatus::kOk);
+  }
+  f.q0 = standing;
+  std::printf("yaw across the cut: x0 yaw %.4f, x_T yaw %.4f (reference %.4f), violation %.1e\n", f.ws.x[0][mpc::kXEuler],
+              f.ws.x[f.ws.horizon][mpc::kXEuler], f.ws.x_ref[0][mpc::kXEuler], f.plan.constraint_violation);
+  EXPECT_NEAR(f.ws.x[0][mpc::kXEuler], M_PI + 0.01, 1e-9);  // measurement unwrapped onto the plan's branch
+  EXPECT_LT(f.plan.constraint_violation, 1e-6);
+  // The feet are planted 0.02 rad round from the plan, so the base stays near the measurement
+  // (turning back needs a step); what must not happen is a 2π excursion anywhere.
+  for (int k = 0; k <= f.ws.horizon; ++k) {
+    EXPECT_LT(std::abs(f.ws.x[k][mpc::kXEuler] - f.ws.x_ref[k][mpc::kXEuler]), 0.03) << k;
+  }
+  EXPECT_LT(std::abs(std::remainder(f.plan.knots[0].base_euler_zyx_rad[0] - (M_PI + 0.01), 2 * M_PI)), 1e-6);
 }
 
 }  // namespace

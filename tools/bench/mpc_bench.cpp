@@ -4,10 +4,12 @@
 // the p50 of its three phases: linearization + QP build, the Riccati solve (+ step), the plan
 // written for the WBC. The state alternates between standing still and a 0.1 m/s sideways
 // CoM disturbance; the stamps advance one stage per call (warm start shifted by one, as at 50 Hz).
+// BM_MpcStepStepping: the same at 1.2 s while stepping in place (swing-foot rows in the QP).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -33,7 +35,8 @@ struct Fixture {
     q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot, data, 0.78);
     control::place_on_ground(robot, data, q0);
   }
-  void set_window(hal::TimeNs t0_ns) {
+  // Standing, or stepping in place (double support 0.3 s, one foot swinging 0.4 s, 50 mm apex).
+  void set_window(hal::TimeNs t0_ns, bool stepping) {
     window.count = planner::kMaxWindowKnots;
     window.dt_s = cfg.dt_s;
     planner::ContactFlags all{};
@@ -42,6 +45,21 @@ struct Fixture {
     for (int k = 1; k < window.count; ++k) {
       window.knots[k] = window.knots[0];
       window.knots[k].stamp_ns = t0_ns + static_cast<hal::TimeNs>(k) * 20'000'000;
+    }
+    if (!stepping) return;
+    for (int k = 0; k < window.count; ++k) {
+      planner::PlanKnot& knot = window.knots[k];
+      const double t = static_cast<double>(knot.stamp_ns) * 1e-9;
+      const int cycle = static_cast<int>(t / 0.7);
+      const double in_cycle = t - cycle * 0.7;
+      if (in_cycle < 0.3) continue;
+      const double s = (in_cycle - 0.3) / 0.4;
+      const int first = cycle % 2 == 0 ? 0 : 4;
+      for (int c = first; c < first + 4; ++c) {
+        knot.in_contact[c] = false;
+        knot.point_position_m[3 * c + 2] += 0.05 * std::sin(M_PI * s);
+        knot.point_velocity_m_s[3 * c + 2] = 0.05 * M_PI / 0.4 * std::cos(M_PI * s);
+      }
     }
   }
 };
@@ -56,7 +74,7 @@ double percentile(std::vector<double>& v, int p) {
   return v[std::min(v.size() - 1, v.size() * static_cast<std::size_t>(p) / 100)];
 }
 
-void BM_MpcStep(benchmark::State& state) {
+void BM_MpcStep(benchmark::State& state, bool stepping) {
   Fixture& f = fixture();
   f.cfg = {};
   f.cfg.horizon_s = static_cast<double>(state.range(0)) / 1000.0;
@@ -69,7 +87,7 @@ void BM_MpcStep(benchmark::State& state) {
   int i = 0, failures = 0;
   for (auto _ : state) {
     state.PauseTiming();
-    f.set_window(t);  // the planner's part
+    f.set_window(t, stepping);  // the planner's part
     state.ResumeTiming();
     const auto t0 = Clock::now();
     mpc::MpcStatus s = mpc::mpc_build_qp_rt(f.robot, f.cfg, f.ws, f.q0, v[i], f.window);
@@ -97,8 +115,40 @@ void BM_MpcStep(benchmark::State& state) {
   state.counters["plan_p50_us"] = percentile(write, 50);
   state.counters["failures"] = failures;
 }
-BENCHMARK(BM_MpcStep)->Arg(600)->Arg(800)->Arg(1000)->Arg(1200)->Arg(1400)->ArgName("horizon_ms")
+void BM_MpcStepStanding(benchmark::State& state) { BM_MpcStep(state, false); }
+void BM_MpcStepStepping(benchmark::State& state) { BM_MpcStep(state, true); }
+BENCHMARK(BM_MpcStepStepping)->Arg(1200)->ArgName("horizon_ms")->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_MpcStepStanding)->Arg(600)->Arg(800)->Arg(1000)->Arg(1200)->Arg(1400)->ArgName("horizon_ms")
     ->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+}  // namespace
+
+namespace {
+
+// The parts of one stage's linearization.
+void BM_CentroidalEvaluate(benchmark::State& state) {
+  Fixture& f = fixture();
+  static mpc::CentroidalPoint point;
+  static mpc::StateVector x;
+  static mpc::InputVector u = mpc::InputVector::Zero();
+  mpc::state_from_configuration(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(), x);
+  for (int c = 0; c < 8; ++c) u[3 * c + 2] = 67.0;
+  for (auto _ : state) {
+    mpc::centroidal_evaluate(f.robot, x, u, mpc::HeadVector::Zero(), point);
+    benchmark::DoNotOptimize(point.fx(0, 0));
+  }
+}
+BENCHMARK(BM_CentroidalEvaluate)->Unit(benchmark::kMicrosecond);
+
+void BM_ReferenceState(benchmark::State& state) {
+  Fixture& f = fixture();
+  static mpc::StateVector x;
+  for (auto _ : state) {
+    mpc::state_from_configuration(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(), x);
+    benchmark::DoNotOptimize(x[0]);
+  }
+}
+BENCHMARK(BM_ReferenceState)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
