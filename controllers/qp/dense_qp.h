@@ -88,7 +88,7 @@ struct DenseQpWorkspace {
   using Square = Eigen::Matrix<double, NV, NV>;
   static constexpr int kNumCodes = 2 * (NI + NV);
 
-  Eigen::LLT<Square, Eigen::Lower> llt;  // H = L Lᵀ
+  Square L = Square::Zero();  // H = L Lᵀ in the lower triangle (the strict upper holds H's)
   // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
   // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
   // factorization V = Q R, i.e. RᵀR = NᵀH⁻¹N. Q itself is never formed.

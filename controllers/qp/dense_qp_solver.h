@@ -105,11 +105,11 @@ void solve_normal(const DenseQp<NV, NE, NI>& qp, ConstraintCode c, DenseQpWorksp
     const int j = C::row(c) - NI, m = NV - j;
     ws.v.setZero();
     ws.v(j) = C::upper(c) ? -1.0 : 1.0;
-    ws.llt.matrixLLT().bottomRightCorner(m, m).template triangularView<Eigen::Lower>().solveInPlace(ws.v.tail(m));
+    ws.L.bottomRightCorner(m, m).template triangularView<Eigen::Lower>().solveInPlace(ws.v.tail(m));
     return;
   }
   C::normal(qp, c, ws.v);
-  ws.llt.matrixL().solveInPlace(ws.v);
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.v);
 }
 
 // From ws.v: d = R⁻ᵀVᵀv, r = R⁻¹d (dual direction), y = v − V r (the part of v outside the
@@ -151,7 +151,7 @@ double project(DenseQpWorkspace<NV, NE, NI>& ws) {
     }
   }
   ws.z = ws.y;
-  ws.llt.matrixU().solveInPlace(ws.z);
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.z);
   return ws.y.squaredNorm();
 }
 
@@ -206,7 +206,7 @@ void working_set_minimizer(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, N
   const int q = ws.q;
   ws.x = -ws.gt;
   if (q == 0) {
-    ws.llt.matrixU().solveInPlace(ws.x);
+    ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.x);
     return;
   }
   const auto V1 = ws.V.leftCols(q);
@@ -219,13 +219,13 @@ void working_set_minimizer(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, N
   R1.transpose().solveInPlace(u);
   R1.solveInPlace(u);
   ws.x.noalias() += V1 * u;
-  ws.llt.matrixU().solveInPlace(ws.x);
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.x);
   for (int k = 0; k < q; ++k) delta(k) = ws.rhs(k) - C::dot(qp, ws.active[k], ws.x);
   R1.transpose().solveInPlace(delta);
   R1.solveInPlace(delta);
   u += delta;
   ws.column.noalias() = V1 * delta;
-  ws.llt.matrixU().solveInPlace(ws.column);
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.column);
   ws.x += ws.column;
 }
 
@@ -239,16 +239,14 @@ bool impose_block(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& w
   if (m == 0) return true;
   for (int k = 0; k < m; ++k) C::normal(qp, codes[k], ws.V.col(k));
   const auto V1 = ws.V.leftCols(m);
-  ws.llt.matrixL().solveInPlace(ws.V.leftCols(m));
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.V.leftCols(m));
   // Gram matrix and its Cholesky factor in the lower triangle (Eigen's blocked Cholesky runs
   // column-major there), then R = Lᵀ.
   auto G = ws.R.topLeftCorner(m, m);
   G.template triangularView<Eigen::Lower>().setZero();
   G.template selfadjointView<Eigen::Lower>().rankUpdate(V1.transpose());
   ws.gram_diagonal.head(m) = G.diagonal();
-  Eigen::Ref<Eigen::MatrixXd> G_ref(G);
-  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> chol(G_ref);
-  if (chol.info() != Eigen::Success) return false;
+  if (Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(G) >= 0) return false;
   for (int k = 0; k < m; ++k) {
     if (!(G(k, k) * G(k, k) > kBlockPivotTolerance * ws.gram_diagonal(k))) return false;
   }
@@ -355,13 +353,15 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
     return sol.status;
   }
 
-  ws.llt.compute(qp.H);
-  if (ws.llt.info() != Eigen::Success) {
+  // In place, without Eigen::LLT's l1 norm (a strided pass over H, for a condition estimate
+  // that is never used).
+  ws.L = qp.H;
+  if (Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(ws.L) >= 0) {
     write_solution(qp, ws, sol, QpStatus::kNotConvex, 0);
     return sol.status;
   }
   ws.gt = qp.g;
-  ws.llt.matrixL().solveInPlace(ws.gt);
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.gt);
   if constexpr (NI > 0) {
     for (int i = 0; i < NI; ++i) {
       const double n = qp.C.row(i).norm();
