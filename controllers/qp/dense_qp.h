@@ -55,6 +55,12 @@ struct DenseQpSettings {
   // A new constraint normal whose component outside the span of the working set is below
   // this fraction of its length (in the H⁻¹ metric) counts as linearly dependent.
   double dependency_tolerance = 1e-10;
+  // The dual of an infeasible QP is unbounded. A multiplier whose size (times its row norm)
+  // passes this multiple of the data scale max(1, ‖g‖∞, max|Hᵢⱼ|) ends the solve with
+  // kInfeasible: in a nearly dependent working set roundoff would otherwise let GI take
+  // ever larger steps until the iteration cap. A feasible problem needs multipliers of the
+  // order of its gradient (times the conditioning of the active rows), far below this.
+  double infeasible_multiplier = 1e12;
   // Start from the working set stored in the solution passed in (the previous tick's).
   bool warm_start = false;
 };
@@ -82,23 +88,27 @@ struct DenseQpWorkspace {
   using Square = Eigen::Matrix<double, NV, NV>;
   static constexpr int kNumCodes = 2 * (NI + NV);
 
-  Eigen::LLT<Square, Eigen::Lower> llt;  // H = L Lᵀ
-  // Goldfarb–Idnani factors: J = L⁻ᵀ Q, and R upper triangular with L⁻¹ N = Q [R; 0] for the
-  // working-set normals N. Columns [0, q) of J span the working set, [q, NV) its complement.
-  Square J = Square::Zero();
+  Square L = Square::Zero();  // H = L Lᵀ in the lower triangle (the strict upper holds H's)
+  // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
+  // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
+  // factorization V = Q R, i.e. RᵀR = NᵀH⁻¹N. Q itself is never formed.
+  Square V = Square::Zero();
   Square R = Square::Zero();
-  Vector d = Vector::Zero();          // Jᵀ n for the constraint being added
-  Vector z = Vector::Zero();          // primal step direction
-  Vector r = Vector::Zero();          // dual step direction (working set)
+  Vector v = Vector::Zero();          // L⁻¹n for the constraint being added
+  Vector d = Vector::Zero();          // Qᵀv = R⁻ᵀVᵀv (first q entries)
+  Vector y = Vector::Zero();          // v minus its projection on the span of V: ‖y‖² = nᵀz
+  Vector z = Vector::Zero();          // primal step direction L⁻ᵀy
+  Vector r = Vector::Zero();          // dual step direction R⁻¹d (working set)
   Vector u = Vector::Zero();          // multipliers of the working set, GI sign (≥ 0 for inequalities)
   Vector x = Vector::Zero();
-  Vector column = Vector::Zero();     // scratch for rotations
-  Vector householder = Vector::Zero();
+  Vector gt = Vector::Zero();         // L⁻¹g
+  Vector column = Vector::Zero();     // scratch
+  Vector rhs = Vector::Zero();        // working-set bounds (right-hand sides)
+  Vector gram_diagonal = Vector::Zero();
   Eigen::Matrix<double, NI, 1> cx = Eigen::Matrix<double, NI, 1>::Zero();
   Eigen::Matrix<double, NI, 1> inv_row_norm = Eigen::Matrix<double, NI, 1>::Zero();
   std::array<ConstraintCode, NV> active{};  // equalities as -1 - i, first
   std::array<std::uint8_t, kNumCodes> is_active{};
-  double beta = 0.0;  // R(q, q) of the last added constraint
   int q = 0;
   int num_eq_active = 0;
 };

@@ -1,23 +1,32 @@
-// Dense QP solver: the Goldfarb–Idnani dual active-set method (Math. Prog. 27, 1983), in
-// the factored form of QuadProg, with a warm start from the previous working set.
+// Dense QP solver: the Goldfarb–Idnani dual active-set method (Math. Prog. 27, 1983) in its
+// range-space form, with a warm start from the previous working set.
 //
 // Why this method: the WBC and IK Hessians are strictly convex by construction (task weights
 // plus regularization), which is exactly GI's requirement; it needs no feasible starting point
 // (the WBC has none at hand); every iterate is dual feasible, so after the cap one still has the
-// minimizer over a subset of the constraints; and each working-set change costs O(NV²) with no
-// refactorization. Adding a constraint uses one Householder reflection (4·NV·(NV−q) flops)
-// instead of QuadProg's chain of Givens rotations; dropping one restores R with Givens.
+// minimizer over a subset of the constraints; and each working-set change costs O(NV²).
 //
-// Warm start: the previous working set is first imposed as equalities, then members with a
-// negative multiplier are dropped one at a time. The result is a valid GI starting point (the
-// minimizer over a working set, dual feasible), so correctness never depends on the guess; a
-// good guess only removes the add/drop iterations.
+// Why the range-space form: with H = L Lᵀ and the working-set normals N, GI needs the
+// projection of L⁻¹n onto the span of V = L⁻¹N and onto its complement. QuadProg keeps the
+// full orthogonal basis J = L⁻ᵀQ (NV² numbers that every added constraint updates). Here only V
+// and the triangle R of V = Q R are kept (RᵀR = NᵀH⁻¹N): the projection of v = L⁻¹n is
+// V R⁻¹R⁻ᵀVᵀv, taken twice so that what roundoff leaves after the first pass is removed
+// ("twice is enough", as in Gram–Schmidt). The gain is the start: the equalities and the warm
+// start's working set enter as one block — one triangular solve for V, one symmetric product
+// and one Cholesky for R, all matrix-matrix work — instead of one Householder update of J per
+// constraint. Dropping a constraint deletes a column of V and restores R with Givens rotations.
 //
-// Real-time: no allocation, no exceptions; cost ≤ one Cholesky + inverse (≈ NV³) plus
-// (NE + max_iterations) · O(NV²).
+// Warm start: the equalities and the previous working set are imposed as equalities (in one
+// block; one at a time, with the exact dependency test, if a pivot of the block says some are
+// nearly dependent), then members with a negative multiplier are dropped one at a time. The
+// result is a valid GI starting point (the minimizer over a working set, dual feasible), so
+// correctness never depends on the guess; a good guess only removes the add/drop iterations.
+//
+// Real-time: no allocation, no exceptions; cost ≈ NV³/3 (Cholesky of H) + NV²·q (V) + NV·q²/2
+// (R) for a working set of q rows, plus (max_iterations) · O(NV² + NV·q).
 #pragma once
 
-#include <Eigen/Householder>
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
@@ -26,7 +35,19 @@
 namespace kuavo::qp {
 namespace dense_detail {
 
-// Constraint code helpers: the inequality is written GI-style as nᵀx ≥ bound.
+// A block working set whose Cholesky pivot leaves less than this fraction (squared) of a
+// column's length outside the span of the others is redone one constraint at a time with the
+// exact (twice projected) test. The Gram matrix carries roundoff ε·κ(V)², so its pivots can
+// only be trusted well above ε; 1e-8 (1e-4 of the length) keeps R well conditioned.
+inline constexpr double kBlockPivotTolerance = 1e-8;
+// Projection passes: a second pass is taken when the first one's estimated error (relative to
+// the part of v outside the span) exceeds kSecondPassTolerance — 1e-12, three decades below
+// the primal tolerance, so that the steps' accuracy never limits the result.
+inline constexpr double kRoundoff = 2.2e-16;
+inline constexpr double kSecondPassTolerance = 1e-12;
+
+// Constraint code helpers: the GI constraint is nᵀx ≥ bound (inequalities, code = 2·row + side)
+// or nᵀx = bound (equalities, code = −1 − row).
 template <int NV, int NE, int NI>
 struct Codes {
   static int row(ConstraintCode c) { return c >> 1; }
@@ -34,6 +55,9 @@ struct Codes {
   static bool is_bound(ConstraintCode c) { return row(c) >= NI; }
 
   static double bound(const DenseQp<NV, NE, NI>& qp, ConstraintCode c) {
+    if constexpr (NE > 0) {
+      if (c < 0) return qp.b(-1 - c);
+    }
     const int i = row(c);
     if (i < NI) return upper(c) ? -qp.c_upper(i) : qp.c_lower(i);
     return upper(c) ? -qp.x_upper(i - NI) : qp.x_lower(i - NI);
@@ -41,6 +65,9 @@ struct Codes {
   // nᵀv
   template <typename V>
   static double dot(const DenseQp<NV, NE, NI>& qp, ConstraintCode c, const V& v) {
+    if constexpr (NE > 0) {
+      if (c < 0) return qp.A.row(-1 - c).dot(v);
+    }
     const int i = row(c);
     const double s = upper(c) ? -1.0 : 1.0;
     if constexpr (NI > 0) {
@@ -48,76 +75,108 @@ struct Codes {
     }
     return s * v(i - NI);
   }
-  // ws.d = Jᵀ n
-  static void project(const DenseQp<NV, NE, NI>& qp, ConstraintCode c, DenseQpWorkspace<NV, NE, NI>& ws) {
+  // out = n
+  template <typename V>
+  static void normal(const DenseQp<NV, NE, NI>& qp, ConstraintCode c, V&& out) {
+    if constexpr (NE > 0) {
+      if (c < 0) {
+        out = qp.A.row(-1 - c).transpose();
+        return;
+      }
+    }
     const int i = row(c);
+    const double s = upper(c) ? -1.0 : 1.0;
     if constexpr (NI > 0) {
       if (i < NI) {
-        ws.d.noalias() = ws.J.transpose() * qp.C.row(i).transpose();
-      } else {
-        ws.d = ws.J.row(i - NI).transpose();
+        out = s * qp.C.row(i).transpose();
+        return;
       }
-    } else {
-      ws.d = ws.J.row(i - NI).transpose();  // n is a unit vector: a row of J
     }
-    if (upper(c)) ws.d = -ws.d;
+    out.setZero();
+    out(i - NI) = s;
   }
 };
 
-// From ws.d: z = J₂ d₂ (primal direction), r = R⁻¹ d₁ (dual direction). Returns ‖d₂‖² = nᵀz.
+// ws.v = L⁻¹n. A bound's n is ±eⱼ, so L⁻¹n is zero above j: only the trailing block is solved.
 template <int NV, int NE, int NI>
-double step_directions(DenseQpWorkspace<NV, NE, NI>& ws) {
-  const int q = ws.q, m = NV - q;
-  if (m > 0) {
-    ws.z.noalias() = ws.J.rightCols(m) * ws.d.tail(m);
-  } else {
-    ws.z.setZero();
+void solve_normal(const DenseQp<NV, NE, NI>& qp, ConstraintCode c, DenseQpWorkspace<NV, NE, NI>& ws) {
+  using C = Codes<NV, NE, NI>;
+  if (c >= 0 && C::is_bound(c)) {
+    const int j = C::row(c) - NI, m = NV - j;
+    ws.v.setZero();
+    ws.v(j) = C::upper(c) ? -1.0 : 1.0;
+    ws.L.bottomRightCorner(m, m).template triangularView<Eigen::Lower>().solveInPlace(ws.v.tail(m));
+    return;
   }
-  if (q > 0) {
-    ws.r.head(q) = ws.d.head(q);
-    ws.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>().solveInPlace(ws.r.head(q));
-  }
-  return m > 0 ? ws.d.tail(m).squaredNorm() : 0.0;
+  C::normal(qp, c, ws.v);
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.v);
 }
 
-// As step_directions but without z, for a constraint that will be added with a full step:
-// then z = β·(new column q of J) after the reflection (J₂ d₂ = J₂H·H d₂ = J₂H·β e₁), which
-// saves one pass over J. Returns ‖d₂‖².
+// From ws.v: d = R⁻ᵀVᵀv, r = R⁻¹d (dual direction), y = v − V r (the part of v outside the
+// span of V), z = L⁻ᵀy (primal direction). Returns ‖y‖² = nᵀz.
 template <int NV, int NE, int NI>
-double dual_direction(DenseQpWorkspace<NV, NE, NI>& ws) {
-  const int q = ws.q, m = NV - q;
+double project(DenseQpWorkspace<NV, NE, NI>& ws) {
+  const int q = ws.q;
+  ws.y = ws.v;
   if (q > 0) {
-    ws.r.head(q) = ws.d.head(q);
-    ws.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>().solveInPlace(ws.r.head(q));
+    const auto V1 = ws.V.leftCols(q);
+    const auto R1 = ws.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>();
+    auto d = ws.d.head(q);
+    auto r = ws.r.head(q);
+    auto delta = ws.column.head(q);
+    d.noalias() = V1.transpose() * ws.v;
+    R1.transpose().solveInPlace(d);
+    r = d;
+    R1.solveInPlace(r);
+    ws.y.noalias() -= V1 * r;
+    // The first pass solves with R from a Gram matrix: y carries an error of about
+    // ε·κ(R)²·‖v‖. When that is not negligible next to ‖y‖, a second pass on what the first
+    // left removes it ("twice is enough", as in Gram–Schmidt). κ(R) is estimated from its
+    // diagonal (a lower bound, good enough to find the ill-conditioned sets).
+    double r_min = std::abs(ws.R(0, 0)), r_max = r_min;
+    for (int k = 1; k < q; ++k) {
+      const double a = std::abs(ws.R(k, k));
+      r_min = std::min(r_min, a);
+      r_max = std::max(r_max, a);
+    }
+    const double kappa = r_max / r_min;
+    const double error = kRoundoff * kappa * kappa * ws.v.norm();
+    if (!(error <= kSecondPassTolerance * ws.y.norm())) {
+      delta.noalias() = V1.transpose() * ws.y;
+      R1.transpose().solveInPlace(delta);
+      d += delta;
+      R1.solveInPlace(delta);
+      r += delta;
+      ws.y.noalias() -= V1 * delta;
+    }
   }
-  return m > 0 ? ws.d.tail(m).squaredNorm() : 0.0;
+  ws.z = ws.y;
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.z);
+  return ws.y.squaredNorm();
 }
 
-// Appends the constraint whose Jᵀn is in ws.d (its component outside the span must be nonzero).
+// Appends the constraint whose L⁻¹n is in ws.v, after project() (d and ‖y‖ = y_norm > 0).
 template <int NV, int NE, int NI>
-void add_to_working_set(DenseQpWorkspace<NV, NE, NI>& ws, ConstraintCode code, double multiplier) {
-  const int q = ws.q, m = NV - q;
-  double tau = 0.0, beta = 0.0;
-  auto tail = ws.d.tail(m);
-  auto essential = ws.householder.head(m - 1);
-  tail.makeHouseholder(essential, tau, beta);
-  ws.J.rightCols(m).applyHouseholderOnTheRight(essential, tau, ws.column.data());
+void add_to_working_set(DenseQpWorkspace<NV, NE, NI>& ws, ConstraintCode code, double multiplier, double y_norm) {
+  const int q = ws.q;
+  ws.V.col(q) = ws.v;
   ws.R.col(q).head(q) = ws.d.head(q);
-  ws.R(q, q) = beta;
-  ws.beta = beta;
+  ws.R(q, q) = y_norm;
+  ws.R.col(q).tail(NV - q - 1).setZero();
   ws.u(q) = multiplier;
   ws.active[q] = code;
   if (code >= 0) ws.is_active[code] = 1;
   ws.q = q + 1;
 }
 
-// Removes working-set position pos and restores R to triangular form with Givens rotations,
-// applied to the same columns of J so that L⁻¹N = Q R still holds.
+// Removes working-set position pos: its column leaves V, and Givens rotations from the left
+// restore R to triangular form (V = Q R still holds with a rotated Q, which is never stored).
 template <int NV, int NE, int NI>
 void drop_from_working_set(DenseQpWorkspace<NV, NE, NI>& ws, int pos) {
   if (ws.active[pos] >= 0) ws.is_active[ws.active[pos]] = 0;
   const int q = ws.q - 1;
   for (int j = pos; j < q; ++j) {
+    ws.V.col(j) = ws.V.col(j + 1);
     ws.R.col(j).head(j + 2) = ws.R.col(j + 1).head(j + 2);
     ws.active[j] = ws.active[j + 1];
     ws.u(j) = ws.u(j + 1);
@@ -134,11 +193,75 @@ void drop_from_working_set(DenseQpWorkspace<NV, NE, NI>& ws, int pos) {
       ws.R(j + 1, k) = -s * rj + c * rj1;
     }
     ws.R(j + 1, j) = 0.0;
-    ws.column = c * ws.J.col(j) + s * ws.J.col(j + 1);
-    ws.J.col(j + 1) = -s * ws.J.col(j) + c * ws.J.col(j + 1);
-    ws.J.col(j) = ws.column;
   }
   ws.q = q;
+}
+
+// x and u of the minimizer of the cost with the working set taken as equalities:
+// RᵀR u = rhs + Vᵀ(L⁻¹g), x = L⁻ᵀ(V u − L⁻¹g); then one step of iterative refinement on the
+// working-set residuals rhs − Nᵀx, from the problem data.
+template <int NV, int NE, int NI>
+void working_set_minimizer(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& ws) {
+  using C = Codes<NV, NE, NI>;
+  const int q = ws.q;
+  ws.x = -ws.gt;
+  if (q == 0) {
+    ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.x);
+    return;
+  }
+  const auto V1 = ws.V.leftCols(q);
+  const auto R1 = ws.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>();
+  auto u = ws.u.head(q);
+  auto delta = ws.r.head(q);
+  for (int k = 0; k < q; ++k) ws.rhs(k) = C::bound(qp, ws.active[k]);
+  u = ws.rhs.head(q);
+  u.noalias() += V1.transpose() * ws.gt;
+  R1.transpose().solveInPlace(u);
+  R1.solveInPlace(u);
+  ws.x.noalias() += V1 * u;
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.x);
+  for (int k = 0; k < q; ++k) delta(k) = ws.rhs(k) - C::dot(qp, ws.active[k], ws.x);
+  R1.transpose().solveInPlace(delta);
+  R1.solveInPlace(delta);
+  u += delta;
+  ws.column.noalias() = V1 * delta;
+  ws.L.template triangularView<Eigen::Lower>().transpose().solveInPlace(ws.column);
+  ws.x += ws.column;
+}
+
+// Imposes the m constraints codes[0, m) as the working set in one block: V = L⁻¹N by one
+// triangular solve, R by the Cholesky of the Gram matrix VᵀV. Returns false (working set left
+// empty) if the Cholesky says some are nearly dependent.
+template <int NV, int NE, int NI>
+bool impose_block(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& ws, const ConstraintCode* codes, int m) {
+  using C = Codes<NV, NE, NI>;
+  ws.q = 0;
+  if (m == 0) return true;
+  for (int k = 0; k < m; ++k) C::normal(qp, codes[k], ws.V.col(k));
+  const auto V1 = ws.V.leftCols(m);
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.V.leftCols(m));
+  // Gram matrix and its Cholesky factor in the lower triangle (Eigen's blocked Cholesky runs
+  // column-major there), then R = Lᵀ.
+  auto G = ws.R.topLeftCorner(m, m);
+  G.template triangularView<Eigen::Lower>().setZero();
+  G.template selfadjointView<Eigen::Lower>().rankUpdate(V1.transpose());
+  ws.gram_diagonal.head(m) = G.diagonal();
+  if (Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(G) >= 0) return false;
+  for (int k = 0; k < m; ++k) {
+    if (!(G(k, k) * G(k, k) > kBlockPivotTolerance * ws.gram_diagonal(k))) return false;
+  }
+  for (int j = 0; j < m; ++j) {
+    for (int i = j + 1; i < m; ++i) {
+      G(j, i) = G(i, j);
+      G(i, j) = 0.0;
+    }
+  }
+  for (int k = 0; k < m; ++k) {
+    ws.active[k] = codes[k];
+    if (codes[k] >= 0) ws.is_active[codes[k]] = 1;
+  }
+  ws.q = m;
+  return true;
 }
 
 template <typename M>
@@ -182,16 +305,28 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
                         DenseQpWorkspace<NV, NE, NI>& ws, DenseQpSolution<NV, NE, NI>& sol) {
   using namespace dense_detail;
   using Cd = Codes<NV, NE, NI>;
+  using Workspace = DenseQpWorkspace<NV, NE, NI>;
   constexpr double kInf = kInfinity;
   const double dep_tol2 = settings.dependency_tolerance * settings.dependency_tolerance;
   int iterations = 0;
 
-  // Copy the warm-start guess before anything touches sol.
-  std::array<ConstraintCode, NV> guess{};
+  // The block to impose first: every equality, then the warm-start guess (copied before
+  // anything touches sol), as far as it is valid.
+  std::array<ConstraintCode, NV> block{};
+  int block_size = 0;
+  for (int i = 0; i < NE; ++i) block[block_size++] = -1 - i;
   int guess_size = 0;
   if (settings.warm_start) {
-    guess_size = std::clamp(sol.working_set_size, 0, NV);
-    std::copy_n(sol.working_set.begin(), guess_size, guess.begin());
+    ws.is_active.fill(0);
+    const int n = std::clamp(sol.working_set_size, 0, NV);
+    for (int k = 0; k < n && block_size < NV && guess_size < settings.max_iterations; ++k) {
+      const ConstraintCode c = sol.working_set[k];
+      if (c < 0 || c >= Workspace::kNumCodes || ws.is_active[c]) continue;
+      if (!std::isfinite(Cd::bound(qp, c))) continue;
+      ws.is_active[c] = 1;
+      block[block_size++] = c;
+      ++guess_size;
+    }
   }
 
   ws.q = 0;
@@ -218,65 +353,65 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
     return sol.status;
   }
 
-  ws.llt.compute(qp.H);
-  if (ws.llt.info() != Eigen::Success) {
+  // In place, without Eigen::LLT's l1 norm (a strided pass over H, for a condition estimate
+  // that is never used).
+  ws.L = qp.H;
+  if (Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(ws.L) >= 0) {
     write_solution(qp, ws, sol, QpStatus::kNotConvex, 0);
     return sol.status;
   }
-  // J = L⁻ᵀ, row by row: row j of J is L⁻¹e_j, nonzero from j on, so each is a triangular
-  // solve of size NV − j (NV³/3 flops in all, a third of a solve against the identity).
-  ws.J.setZero();
-  for (int j = 0; j < NV; ++j) {
-    const int m = NV - j;
-    ws.column.head(m).setZero();
-    ws.column(0) = 1.0;
-    ws.llt.matrixLLT().bottomRightCorner(m, m).template triangularView<Eigen::Lower>().solveInPlace(ws.column.head(m));
-    ws.J.row(j).tail(m) = ws.column.head(m).transpose();
-  }
-  ws.R.setZero();
-  ws.x = -qp.g;
-  ws.llt.solveInPlace(ws.x);  // unconstrained minimizer
+  ws.gt = qp.g;
+  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.gt);
   if constexpr (NI > 0) {
     for (int i = 0; i < NI; ++i) {
       const double n = qp.C.row(i).norm();
       ws.inv_row_norm(i) = n > 0.0 ? 1.0 / n : 0.0;
     }
   }
+  // Multipliers beyond this (times their row norm) mean the dual is unbounded: infeasible.
+  const double multiplier_limit =
+      settings.infeasible_multiplier *
+      std::max({1.0, qp.g.cwiseAbs().maxCoeff(), qp.H.diagonal().cwiseAbs().maxCoeff()});
 
-  // Equalities: always in the working set, in order. A dependent row is dropped if it is
-  // consistent with the others (redundant), otherwise the problem is infeasible.
-  if constexpr (NE > 0) for (int i = 0; i < NE; ++i) {
-    ws.d.noalias() = ws.J.transpose() * qp.A.row(i).transpose();
-    const double zn = dual_direction(ws);
-    const double residual = qp.b(i) - qp.A.row(i).dot(ws.x);
-    if (zn <= dep_tol2 * ws.d.squaredNorm()) {
-      const double scale = 1.0 + std::abs(qp.b(i)) + qp.A.row(i).norm() * ws.x.norm();
-      if (std::abs(residual) <= settings.primal_tolerance * scale) continue;  // redundant
-      write_solution(qp, ws, sol, QpStatus::kInfeasible, 0);
-      return sol.status;
+  if (impose_block(qp, ws, block.data(), block_size)) {
+    ws.num_eq_active = NE;
+    iterations = guess_size;
+    working_set_minimizer(qp, ws);
+  } else {
+    // Some of the block is (nearly) dependent: add one constraint at a time from the
+    // unconstrained minimizer, each with a full step, testing dependency exactly.
+    ws.q = 0;
+    ws.is_active.fill(0);
+    working_set_minimizer(qp, ws);
+    // Equalities: always in the working set, in order. A dependent row is dropped if it is
+    // consistent with the others (redundant), otherwise the problem is infeasible.
+    for (int k = 0; k < block_size; ++k) {
+      const ConstraintCode c = block[k];
+      if (c >= 0 && iterations >= settings.max_iterations) break;
+      solve_normal(qp, c, ws);
+      const double zn = project(ws);
+      const double residual = Cd::bound(qp, c) - Cd::dot(qp, c, ws.x);
+      if (zn <= dep_tol2 * ws.v.squaredNorm()) {
+        if (c >= 0) continue;  // a guess: skip it
+        const int i = -1 - c;
+        const double scale = 1.0 + std::abs(qp.b(i)) + qp.A.row(i).norm() * ws.x.norm();
+        if (std::abs(residual) <= settings.primal_tolerance * scale) continue;  // redundant
+        write_solution(qp, ws, sol, QpStatus::kInfeasible, 0);
+        return sol.status;
+      }
+      const double t = residual / zn;
+      ws.u.head(ws.q) -= t * ws.r.head(ws.q);
+      add_to_working_set(ws, c, t, std::sqrt(zn));
+      ws.x += t * ws.z;
+      if (c < 0) {
+        ws.num_eq_active = ws.q;
+      } else {
+        ++iterations;
+      }
     }
-    const double t = residual / zn;
-    ws.u.head(ws.q) -= t * ws.r.head(ws.q);
-    add_to_working_set(ws, -1 - i, t);
-    ws.x += (t * ws.beta) * ws.J.col(ws.q - 1);
   }
-  ws.num_eq_active = ws.q;
 
-  // Warm start: impose the guess, then restore dual feasibility by dropping negative multipliers.
-  for (int k = 0; k < guess_size && iterations < settings.max_iterations; ++k) {
-    const ConstraintCode c = guess[k];
-    if (c < 0 || c >= DenseQpWorkspace<NV, NE, NI>::kNumCodes || ws.is_active[c] || ws.q >= NV) continue;
-    const double bnd = Cd::bound(qp, c);
-    if (!std::isfinite(bnd)) continue;
-    Cd::project(qp, c, ws);
-    const double zn = dual_direction(ws);
-    if (zn <= dep_tol2 * ws.d.squaredNorm()) continue;
-    const double t = -(Cd::dot(qp, c, ws.x) - bnd) / zn;
-    ws.u.head(ws.q) -= t * ws.r.head(ws.q);
-    add_to_working_set(ws, c, t);
-    ws.x += (t * ws.beta) * ws.J.col(ws.q - 1);
-    ++iterations;
-  }
+  // Restore dual feasibility: drop the most negative inequality multiplier, re-solve.
   while (iterations < settings.max_iterations) {
     int worst = -1;
     double worst_u = 0.0;
@@ -287,13 +422,8 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
       }
     }
     if (worst < 0) break;
-    const ConstraintCode c = ws.active[worst];
     drop_from_working_set(ws, worst);
-    Cd::project(qp, c, ws);
-    step_directions(ws);
-    const double t = -worst_u;  // moves this multiplier to zero
-    ws.x += t * ws.z;
-    ws.u.head(ws.q) -= t * ws.r.head(ws.q);
+    working_set_minimizer(qp, ws);
     ++iterations;
   }
 
@@ -319,15 +449,17 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
       return sol.status;
     }
     const double bnd = Cd::bound(qp, p);
+    const double p_norm = Cd::row(p) < NI ? 1.0 / ws.inv_row_norm(Cd::row(p)) : 1.0;
     double slack = Cd::dot(qp, p, ws.x) - bnd;  // < 0: violated
     double u_plus = 0.0;
+    solve_normal(qp, p, ws);  // L⁻¹n does not depend on the working set
+    const double v_norm2 = ws.v.squaredNorm();
     for (;;) {
       if (iterations >= settings.max_iterations) {
         write_solution(qp, ws, sol, QpStatus::kMaxIterations, iterations);
         return sol.status;
       }
-      Cd::project(qp, p, ws);
-      const double zn = step_directions(ws);
+      const double zn = project(ws);
       // Dual step bound: the first working-set inequality whose multiplier reaches zero.
       double t1 = kInf;
       int blocking = -1;
@@ -337,7 +469,7 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
           if (ratio < t1) { t1 = ratio; blocking = k; }
         }
       }
-      const double t2 = zn > dep_tol2 * ws.d.squaredNorm() ? -slack / zn : kInf;
+      const double t2 = zn > dep_tol2 * v_norm2 ? -slack / zn : kInf;
       if (t1 == kInf && t2 == kInf) {
         // p is a combination of working-set normals that cannot be relaxed: no x satisfies all.
         write_solution(qp, ws, sol, QpStatus::kInfeasible, iterations);
@@ -348,8 +480,12 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
       ws.u.head(ws.q) -= t * ws.r.head(ws.q);
       u_plus += t;
       ++iterations;
+      if (u_plus * p_norm > multiplier_limit) {
+        write_solution(qp, ws, sol, QpStatus::kInfeasible, iterations);
+        return sol.status;
+      }
       if (t2 <= t1) {
-        add_to_working_set(ws, p, u_plus);
+        add_to_working_set(ws, p, u_plus, std::sqrt(zn));
         break;
       }
       drop_from_working_set(ws, blocking);

@@ -10,9 +10,9 @@
 // This keeps every matrix at its fixed size (no per-stage nullspace basis of varying width),
 // and costs only O(NU²·NC) more per constrained stage.
 //
-// Speed: P[B A] is one product, [B A]ᵀ(P[B A]) only its lower triangle, the Cholesky and the
-// triangular solve run in place on the block, Qxx − XXᵀ is a symmetric rank update — no
-// temporaries, every product noalias.
+// Speed: P[B A] is one product, [B A]ᵀ(P[B A]) one product for only the lower triangle of
+// the whole block, the Cholesky and the triangular solve run in place on the block, Qxx − XXᵀ
+// is a symmetric rank update — no temporaries, every product noalias.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -72,6 +72,7 @@ template <int NX, int NU, int N, int NC, int NG>
 struct RiccatiWorkspace {
   static constexpr int NZ = NU + NX;
   std::array<RiccatiStage<NX, NU, NC, NG>, N + 1> stage{};
+  Eigen::Matrix<double, NX, NZ> BA = Eigen::Matrix<double, NX, NZ>::Zero();   // [B A]
   Eigen::Matrix<double, NX, NZ> PBA = Eigen::Matrix<double, NX, NZ>::Zero();  // Pₖ₊₁[B A]
   Eigen::Matrix<double, NG, NU> GuW = Eigen::Matrix<double, NG, NU>::Zero();  // √W Gu
   Eigen::Matrix<double, NG, NX> GxW = Eigen::Matrix<double, NG, NX>::Zero();  // √W Gx
@@ -131,14 +132,15 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     auto X = w.block.template bottomLeftCorner<NX, NU>();  // Qxu, then Qxu Lu⁻ᵀ
     auto Qxx = w.block.template bottomRightCorner<NX, NX>();
 
-    ws.PBA.template leftCols<NU>().noalias() = P_next * s.B;
-    ws.PBA.template rightCols<NX>().noalias() = P_next * s.A;
+    // One product for P[B A] and one lower-triangular product for the whole block
+    // [B A]ᵀ(P[B A]): each operand is packed once, not once per sub-block.
+    ws.BA.template leftCols<NU>() = s.B;
+    ws.BA.template rightCols<NX>() = s.A;
+    ws.PBA.noalias() = P_next * ws.BA;
     Quu = s.R;
-    Quu.template triangularView<Eigen::Lower>() += s.B.transpose() * ws.PBA.template leftCols<NU>();
     X = s.S.transpose();
-    X.noalias() += s.A.transpose() * ws.PBA.template leftCols<NU>();
     Qxx = s.Q;
-    Qxx.template triangularView<Eigen::Lower>() += s.A.transpose() * ws.PBA.template rightCols<NX>();
+    w.block.template triangularView<Eigen::Lower>() += ws.BA.transpose() * ws.PBA;
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false);
 
     Eigen::LLT<Eigen::Ref<Eigen::Matrix<double, NU, NU>>, Eigen::Lower> llt(Quu);

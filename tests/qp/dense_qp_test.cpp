@@ -147,6 +147,52 @@ TEST(DenseQp, InfeasibleInequalitiesAreReported) {
   EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible);
 }
 
+// WBC-sized problems made infeasible with a pair of nearly opposite rows: c·x ≥ 1 and
+// (−c + 1e-9·e)·x ≥ 1 need 1e-9·e·x ≥ 2, impossible inside the box (|x| < 10, ‖e‖₁ < 10³).
+// The pair is nearly dependent, so roundoff lets GI take ever larger steps on it; the solver
+// must still say kInfeasible within the cap (the multiplier limit), not run into the cap.
+template <int NV, int NE, int NI>
+void nearly_opposite_rows_are_infeasible(std::uint64_t seed) {
+  auto f = std::make_unique<Fixture<NV, NE, NI>>();
+  std::mt19937_64 rng(seed);
+  for (int n = 0; n < 30; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    f->qp.C.row(1) = -f->qp.C.row(0);
+    for (int j = 0; j < NV; ++j) f->qp.C(1, j) += 1e-9 * gaussian(rng);
+    f->qp.c_lower(0) = 1.0;
+    f->qp.c_upper(0) = kInfinity;
+    f->qp.c_lower(1) = 1.0;
+    f->qp.c_upper(1) = kInfinity;
+    EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kInfeasible) << n;
+    EXPECT_TRUE(f->sol.x.allFinite());
+  }
+}
+
+TEST(DenseQp, NearlyDependentInfeasibleRowsAreReportedBeforeTheCap) {
+  nearly_opposite_rows_are_infeasible<58, 6, 60>(15);
+  nearly_opposite_rows_are_infeasible<82, 32, 92>(16);
+}
+
+// A generous multiplier limit must not turn a feasible problem with large multipliers into
+// kInfeasible: scale the cost by 1e6 (multipliers scale with it; the data scale too).
+TEST(DenseQp, LargeMultipliersOfAFeasibleProblemAreNotInfeasibility) {
+  auto f = std::make_unique<Fixture<56, 18, 60>>();
+  std::mt19937_64 rng(17);
+  for (int n = 0; n < 10; ++n) {
+    make_random_dense_qp(f->qp, rng, 10.0, 1e-4);
+    f->qp.H *= 1e6;
+    f->qp.g *= 1e6;
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    const KktResiduals k = dense_kkt(f->qp, f->sol);
+    EXPECT_LE(k.equality, kPrimalTol);
+    EXPECT_LE(k.inequality, kPrimalTol);
+    EXPECT_LE(k.stationarity, kStationarityTol);
+    EXPECT_LE(k.dual_sign, 0.0);
+    EXPECT_LE(k.complementarity, kComplementarityTol * 1e6);  // |z|·distance: z is 1e6 larger
+    EXPECT_GT(f->sol.z_bound.cwiseAbs().maxCoeff(), 1e6);
+  }
+}
+
 TEST(DenseQp, BadInputIsRejected) {
   auto f = std::make_unique<Fixture<10, 2, 4>>();
   std::mt19937_64 rng(9);

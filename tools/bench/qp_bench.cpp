@@ -1,7 +1,9 @@
 // QP solver benchmarks (run pinned: taskset -c 1 build/bench/qp_bench).
 //   Dense WBC size: 82 vars, 32 equalities, 92 two-sided inequalities (+ bounds), and the
 //   torque-eliminated 56 vars / 18 equalities / 60 inequalities; warm start = re-solve of the
-//   previous tick's problem with a small change in g, from its working set.
+//   previous tick's problem with a small change in g, from its working set. 58 / 6 / 60 is the
+//   shape the WBC solves (random data here; wbc_bench times the real one). The solver caches
+//   nothing between calls, so changing only g costs the same as a new H would.
 //   OCP: N = 60, nx = 38, nu = 50 — one Riccati factorization + solve (what one RTI costs
 //   per interior-point iteration), with and without 12 stage equalities, and a full
 //   interior-point solve with 20 inequalities per stage.
@@ -102,6 +104,9 @@ void BM_DenseWbc82_Heavy_Cold(benchmark::State& s) { dense_solve<82, 32, 92>(s, 
 void BM_DenseWbc56_Typical_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true, 4.0); }
 void BM_DenseWbc56_Typical_Cold(benchmark::State& s) { dense_solve<56, 18, 60>(s, false, 4.0); }
 void BM_DenseWbc56_Heavy_Warm(benchmark::State& s) { dense_solve<56, 18, 60>(s, true, 1.0); }
+void BM_DenseWbc58_Typical_Warm(benchmark::State& s) { dense_solve<58, 6, 60>(s, true, 4.0); }
+void BM_DenseWbc58_Typical_Cold(benchmark::State& s) { dense_solve<58, 6, 60>(s, false, 4.0); }
+void BM_DenseWbc58_Heavy_Warm(benchmark::State& s) { dense_solve<58, 6, 60>(s, true, 1.0); }
 void BM_DenseIk34Bounds_Warm(benchmark::State& s) { dense_solve<34, 0, 0>(s, true, 1.0); }
 BENCHMARK(BM_DenseWbc82_Typical_Warm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseWbc82_Typical_Cold)->Unit(benchmark::kMicrosecond);
@@ -110,6 +115,9 @@ BENCHMARK(BM_DenseWbc82_Heavy_Cold)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseWbc56_Typical_Warm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseWbc56_Typical_Cold)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseWbc56_Heavy_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc58_Typical_Warm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc58_Typical_Cold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DenseWbc58_Heavy_Warm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseIk34Bounds_Warm)->Unit(benchmark::kMicrosecond);
 
 constexpr int kNx = 38, kNu = 50, kN = 60, kNc = 12, kNg = 20;
