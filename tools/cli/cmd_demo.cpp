@@ -135,10 +135,13 @@ int run_demo(int argc, char** argv) {
   run_case("dance_floor", "built-in dance, floor, estimator", *dance, floor_cfg);
   sim::MotionRunConfig carpet_cfg;
   carpet_cfg.run.ground = sim::kCarpet;
+  carpet_cfg.run.push.start_s = 15.0;  // the disturbance: 10 N·s sideways on the torso
+  carpet_cfg.run.push.duration_s = 0.1;
+  carpet_cfg.run.push.force_N = sim::Vec3(0.0, 100.0, 0.0);
   carpet_cfg.stack.mpc.horizon_s = 1.2;
-  run_case("dance_carpet", "built-in dance, carpet, estimator, MPC horizon 1.2 s", *dance, carpet_cfg);
+  run_case("dance_carpet", "built-in dance, carpet, 10 N·s push at 15 s, estimator, MPC horizon 1.2 s", *dance, carpet_cfg);
   carpet_cfg.stack.mpc.horizon_s = 0.6;
-  run_case("dance_carpet_h06", "built-in dance, carpet, estimator, MPC horizon 0.6 s", *dance, carpet_cfg);
+  run_case("dance_carpet_h06", "built-in dance, carpet, 10 N·s push at 15 s, estimator, MPC horizon 0.6 s", *dance, carpet_cfg);
   std::printf("== 3/5 stepping in place\n");
   run_case("steps_floor", "20 steps in place, floor, estimator", *steps, sim::MotionRunConfig{});
 
@@ -203,7 +206,7 @@ int run_demo(int argc, char** argv) {
   auto outcome = [](const Case& c) {
     return c.summary.run.fell ? "fell at " + std::to_string(c.summary.run.fell_at_s).substr(0, 5) + " s" : std::string("did not fall");
   };
-  md << "## MPC horizon experiment (carpet)\n\n"
+  md << "## MPC horizon experiment (carpet, 10 N·s sideways push at 15 s)\n\n"
      << "Horizon 1.2 s: " << outcome(long_h) << "; horizon 0.6 s: " << outcome(short_h)
      << ". Knee trajectories: `horizon_knee.svg`; foot placements: `horizon_feet.svg`.\n\n"
      << "![knee](horizon_knee.svg)\n\n![feet](horizon_feet.svg)\n\n";
