@@ -108,27 +108,34 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
       }
       const PlantTruth& t = plant.truth();
       write_row(static_cast<double>(ev.time_ns + ev.dt_ns) * 1e-9, t, log);
-      const double tilt = tilt_deg(t.q);
-      out.max_tilt_deg = std::max(out.max_tilt_deg, tilt);
-      out.min_base_height_m = std::min(out.min_base_height_m, t.q[2]);
-      for (const Vec3& p : t.contact_point_m) out.max_foot_sink_m = std::max(out.max_foot_sink_m, -p.z());
-      if (!out.fell && (t.q[2] < kFallHeight_m || tilt > kFallTilt_deg)) {
-        out.fell = true;
-        out.fell_at_s = plant.time_s();
-      }
+      record_plant_state(t, plant.time_s(), out);
       if (out.fell && plant.time_s() > out.fell_at_s + 0.5) break;  // nothing left to learn
     }
   }
-  const double wall_s = static_cast<double>(rtos::now_ns() - wall_start) * 1e-9;
-  out.sim_time_s = plant.time_s();
-  out.real_time_factor = wall_s > 0.0 ? out.sim_time_s / wall_s : 0.0;
-  out.torque_saturations = plant.torque_saturations();
-  if (out.control_ticks > 0) {
-    out.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / out.control_ticks;
-    out.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / out.control_ticks;
-  }
-  out.log_sha256 = log.digest();
+  finish_run_summary(plant, static_cast<double>(rtos::now_ns() - wall_start) * 1e-9, log.digest(), out);
   return out;
+}
+
+void record_plant_state(const PlantTruth& t, double time_s, RunSummary& s) {
+  const double tilt = tilt_deg(t.q);
+  s.max_tilt_deg = std::max(s.max_tilt_deg, tilt);
+  s.min_base_height_m = std::min(s.min_base_height_m, t.q[2]);
+  for (const Vec3& p : t.contact_point_m) s.max_foot_sink_m = std::max(s.max_foot_sink_m, -p.z());
+  if (!s.fell && (t.q[2] < kFallHeight_m || tilt > kFallTilt_deg)) {
+    s.fell = true;
+    s.fell_at_s = time_s;
+  }
+}
+
+void finish_run_summary(const Plant& plant, double wall_s, const std::string& log_sha256, RunSummary& s) {
+  s.sim_time_s = plant.time_s();
+  s.real_time_factor = wall_s > 0.0 ? s.sim_time_s / wall_s : 0.0;
+  s.torque_saturations = plant.torque_saturations();
+  if (s.control_ticks > 0) {
+    s.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / s.control_ticks;
+    s.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / s.control_ticks;
+  }
+  s.log_sha256 = log_sha256;
 }
 
 std::string summary_json(const RunSummary& s) {

@@ -45,6 +45,11 @@ inline constexpr double kFallHeight_m = 0.5;
 inline constexpr double kFallTilt_deg = 45.0;
 inline constexpr double kControlPeriod_s = 0.002;  // 500 Hz
 
+// Shared by the closed loops. After each plant step: tilt, height, sink, fall.
+void record_plant_state(const PlantTruth& truth, double time_s, RunSummary& s);
+// After the loop: time, real-time factor (wall_s from rtos_shim), plant counters, log hash.
+void finish_run_summary(const Plant& plant, double wall_s, const std::string& log_sha256, RunSummary& s);
+
 // Stands the robot in the standing pose under the standing controller.
 RunSummary run_standing(const model::Model& model, const RunConfig& config);
 

@@ -205,14 +205,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
       const PlantTruth& t = plant.truth();
       planner::motion_plan_sample_rt(model, *metrics_data, motion, ev.time_ns + ev.dt_ns, motion_now);
       const Balance bal = balance_of(t);
-      const double tilt = tilt_deg(t.q);
-      run.max_tilt_deg = std::max(run.max_tilt_deg, tilt);
-      run.min_base_height_m = std::min(run.min_base_height_m, t.q[2]);
-      for (const Vec3& p : t.contact_point_m) run.max_foot_sink_m = std::max(run.max_foot_sink_m, -p.z());
-      if (!run.fell && (t.q[2] < kFallHeight_m || tilt > kFallTilt_deg)) {
-        run.fell = true;
-        run.fell_at_s = t_s;
-      }
+      record_plant_state(t, t_s, run);
       const Eigen::Quaterniond base(t.q[6], t.q[3], t.q[4], t.q[5]);
       const Vec3 v_world = base * t.v.head<3>();
       const estimator::EstimateOutput& est = control->estimate;
@@ -276,15 +269,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
       if (run.fell && t_s > run.fell_at_s + 0.5) break;  // nothing left to learn
     }
   }
-  const double wall_s = static_cast<double>(rtos::now_ns() - wall_start) * 1e-9;
-  run.sim_time_s = plant.time_s();
-  run.real_time_factor = wall_s > 0.0 ? run.sim_time_s / wall_s : 0.0;
-  run.torque_saturations = plant.torque_saturations();
-  if (run.control_ticks > 0) {
-    run.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / run.control_ticks;
-    run.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / run.control_ticks;
-  }
-  run.log_sha256 = log.digest();
+  finish_run_summary(plant, static_cast<double>(rtos::now_ns() - wall_start) * 1e-9, log.digest(), run);
   if (tracked > 0) {
     out.tracking_rms_legs_rad = std::sqrt(sq_legs / tracked);
     out.tracking_rms_arms_rad = std::sqrt(sq_arms / tracked);

@@ -21,9 +21,16 @@ struct Polygon2 {
 // Convex hull (Andrew's monotone chain), counter-clockwise, collinear points dropped.
 template <int N>
 Polygon2<N> convex_hull(std::array<Eigen::Vector2d, N> points, int n) {
-  std::sort(points.begin(), points.begin() + n, [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
+  // Insertion sort by (x, y): n ≤ N is tiny (std::sort also trips GCC 12's -Warray-bounds here).
+  for (int i = 1; i < n; ++i) {
+    const Eigen::Vector2d key = points[i];
+    int j = i - 1;
+    while (j >= 0 && (points[j].x() > key.x() || (points[j].x() == key.x() && points[j].y() > key.y()))) {
+      points[j + 1] = points[j];
+      --j;
+    }
+    points[j + 1] = key;
+  }
   auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
   };

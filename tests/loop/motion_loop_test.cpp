@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tests/support/test_robot.h"
 #include "controllers/planner/balance_filter.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
@@ -21,19 +22,12 @@
 namespace kuavo::test {
 namespace {
 
-const model::Model& robot() {
-  static model::Model m;
-  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
-  EXPECT_TRUE(built);
-  return m;
-}
+const model::Model& robot() { return kuavo::test::s45_robot(); }
 
 planner::MotionPlan& step_plan(int steps) {
   static auto plan = std::make_unique<planner::MotionPlan>();
   static auto data = std::make_unique<dynamics::Data>();
-  dynamics::ConfigVector q0 = dynamics::neutral_configuration(robot());
-  q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot(), *data, 0.78);
-  control::place_on_ground(robot(), *data, q0);
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
   planner::StepInPlaceConfig cfg;
   cfg.steps = steps;
   EXPECT_EQ(planner::make_step_in_place(robot(), q0, cfg, *plan), nullptr);

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tests/support/test_robot.h"
 #include "controllers/planner/balance_filter.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
@@ -21,12 +22,7 @@
 namespace kuavo::test {
 namespace {
 
-const model::Model& robot() {
-  static model::Model m;
-  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
-  EXPECT_TRUE(built);
-  return m;
-}
+const model::Model& robot() { return kuavo::test::s45_robot(); }
 
 // The built-in dance as `kuavo retarget` makes it, then the balance filter.
 planner::MotionPlan& dance_plan() {
@@ -118,9 +114,7 @@ TEST(MpcLoop, HorizonExperimentOnCarpetWithAPush) {
 TEST(MpcLoop, StepsInPlaceOnCarpet) {
   static auto plan = std::make_unique<planner::MotionPlan>();
   static dynamics::Data data;
-  dynamics::ConfigVector q0 = dynamics::neutral_configuration(robot());
-  q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot(), data, 0.78);
-  control::place_on_ground(robot(), data, q0);
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
   planner::StepInPlaceConfig gait;
   gait.steps = 6;
   ASSERT_EQ(planner::make_step_in_place(robot(), q0, gait, *plan), nullptr);

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tests/support/test_robot.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/planner/support_polygon.h"
 #include "controllers/standing/standing_controller.h"
@@ -15,12 +16,7 @@
 namespace kuavo::planner {
 namespace {
 
-const model::Model& robot() {
-  static model::Model m;
-  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
-  EXPECT_TRUE(built);
-  return m;
-}
+const model::Model& robot() { return kuavo::test::s45_robot(); }
 
 TEST(SupportPolygon, HullMarginAndProjectionOfASquare) {
   // Unit square corners plus interior and edge points, in scrambled order.
@@ -73,25 +69,18 @@ double worst_zmp_outside(const model::Model& m, const MotionPlan& plan) {
   return worst;
 }
 
-dynamics::ConfigVector standing_q() {
-  static dynamics::Data data;
-  dynamics::ConfigVector q0 = dynamics::neutral_configuration(robot());
-  q0.tail<model::kNumJoints>() = control::centred_standing_pose(robot(), data, 0.78);
-  control::place_on_ground(robot(), data, q0);
-  return q0;
-}
 
 TEST(BalanceFilter, LeavesABalancedStillMotionAlone) {
   auto plan = std::make_unique<MotionPlan>();
   auto ws = std::make_unique<BalanceFilterWorkspace>();
   plan->rate_hz = 100.0;
   plan->frame_count = 200;
-  for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = standing_q(), plan->foot_contact[i] = {true, true};
+  for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = kuavo::test::standing_configuration(), plan->foot_contact[i] = {true, true};
   ASSERT_EQ(motion_plan_finish(*plan), nullptr);
   BalanceFilterReport report;
   ASSERT_EQ(balance_filter(robot(), BalanceFilterConfig{}, *plan, *ws, report), nullptr);
   EXPECT_LT(report.max_correction_m, 1e-6);
-  for (int i = 0; i < plan->frame_count; ++i) EXPECT_LT((plan->q[i] - standing_q()).cwiseAbs().maxCoeff(), 1e-6);
+  for (int i = 0; i < plan->frame_count; ++i) EXPECT_LT((plan->q[i] - kuavo::test::standing_configuration()).cwiseAbs().maxCoeff(), 1e-6);
 }
 
 TEST(BalanceFilter, BringsAFastWeightShiftsZmpBackIntoTheSupportAndKeepsTheFeet) {
@@ -102,7 +91,7 @@ TEST(BalanceFilter, BringsAFastWeightShiftsZmpBackIntoTheSupportAndKeepsTheFeet)
   cfg.shift_s = 0.35;  // far too fast for a quasi-static shift: the ZMP leaves the feet
   cfg.swing_s = 0.4;
   cfg.shift_fraction = 0.9;
-  ASSERT_EQ(make_step_in_place(robot(), standing_q(), cfg, *plan), nullptr);
+  ASSERT_EQ(make_step_in_place(robot(), kuavo::test::standing_configuration(), cfg, *plan), nullptr);
   const double before = worst_zmp_outside(robot(), *plan);
   static dynamics::Data data;
   std::vector<std::array<Vec3, kNumPoints>> corners(plan->frame_count);

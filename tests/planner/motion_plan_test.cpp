@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tests/support/test_robot.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/planner/wbc_from_plan.h"
 #include "controllers/standing/standing_controller.h"
@@ -15,12 +16,7 @@
 namespace kuavo::planner {
 namespace {
 
-const model::Model& robot() {
-  static model::Model m;
-  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
-  EXPECT_TRUE(built);
-  return m;
-}
+const model::Model& robot() { return kuavo::test::s45_robot(); }
 
 MotionPlan& plan_storage() {
   static auto plan = std::make_unique<MotionPlan>();
@@ -123,9 +119,7 @@ TEST(MotionPlan, WindowAndReferenceAllocateNothingAndCarryTheWeight) {
 TEST(StepInPlace, StanceFeetStayPlantedSwingFeetLiftAndTheComIsOverTheStanceFoot) {
   const model::Model& m = robot();
   static dynamics::Data data;
-  dynamics::ConfigVector q0 = dynamics::neutral_configuration(m);
-  q0.tail<model::kNumJoints>() = control::centred_standing_pose(m, data, 0.78);
-  control::place_on_ground(m, data, q0);
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
   StepInPlaceConfig cfg;
   cfg.steps = 4;
   MotionPlan& plan = plan_storage();

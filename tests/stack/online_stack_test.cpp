@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tests/support/test_robot.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
 #include "sim/ideal_sensors.h"
@@ -18,12 +19,7 @@
 namespace kuavo::stack {
 namespace {
 
-const model::Model& robot() {
-  static model::Model m;
-  static bool built = model::build_model(model::Variant::kS45, 55.0, m) == model::ModelError::kOk;
-  EXPECT_TRUE(built);
-  return m;
-}
+const model::Model& robot() { return kuavo::test::s45_robot(); }
 
 TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
   const model::Model& m = robot();
@@ -32,9 +28,7 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
   static auto planner_ws = std::make_unique<PlannerWorkspace>();
   static auto pending = std::make_unique<planner::ReferencePlan>();
   static auto data = std::make_unique<dynamics::Data>();
-  dynamics::ConfigVector q0 = dynamics::neutral_configuration(m);
-  q0.tail<model::kNumJoints>() = control::centred_standing_pose(m, *data, 0.78);
-  control::place_on_ground(m, *data, q0);
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
   planner::StepInPlaceConfig gait;
   gait.steps = 124;
   gait.rate_hz = 50.0;  // 200 s within the plan's frame capacity
