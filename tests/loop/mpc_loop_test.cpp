@@ -111,6 +111,32 @@ TEST(MpcLoop, HorizonExperimentOnCarpetWithAPush) {
   EXPECT_LT(long_h.estimator_velocity_rms_m_s, 0.05);
 }
 
+// The whole online stack holding a standing pose for 30 s on the floor and on carpet.
+TEST(MpcLoop, StandsThirtySeconds) {
+  static auto plan = std::make_unique<planner::MotionPlan>();
+  plan->rate_hz = 50.0;
+  plan->frame_count = 1501;  // 30 s
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
+  for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = q0, plan->foot_contact[i] = {true, true};
+  ASSERT_EQ(planner::motion_plan_finish(*plan), nullptr);
+  for (const sim::GroundParams* ground : {&sim::kFloor, &sim::kCarpet}) {
+    sim::MotionRunConfig cfg;
+    cfg.stack.planner = stack::PlannerKind::kMpc;
+    cfg.run.ground = *ground;
+    const sim::MotionSummary s = sim::run_motion(robot(), *plan, cfg);
+    print(ground->name, s);
+    ASSERT_TRUE(s.run.ok) << s.run.error;
+    EXPECT_FALSE(s.run.fell) << ground->name;
+    EXPECT_GE(s.run.sim_time_s, 30.0);
+    EXPECT_LT(s.run.max_tilt_deg, 3.0) << ground->name;
+    // Measured 0.049 m (floor) and 0.051 m (carpet): the estimate drifts and the robot
+    // follows it (leg odometry), see the issue notes.
+    EXPECT_LT(s.com_err_m_max, 0.08) << ground->name;
+    EXPECT_EQ(s.mpc_failures, 0u);
+    EXPECT_EQ(s.wbc_not_ok_ticks, 0u);
+  }
+}
+
 TEST(MpcLoop, StepsInPlaceOnCarpet) {
   static auto plan = std::make_unique<planner::MotionPlan>();
   static dynamics::Data data;
