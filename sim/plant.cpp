@@ -144,20 +144,7 @@ struct Plant::Impl {
     SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
     robot.system().realizeTopology();
     state = robot.system().getDefaultState();
-    dynamics = std::make_unique<PlantDynamics>(m, layout_of(robot, state));
-  }
-
-  static SimbodyLayout layout_of(const SimbodyRobot& r, const SimTK::State& s) {
-    SimbodyLayout l;
-    l.num_q = s.getNQ();
-    l.num_u = s.getNU();
-    l.base_q = r.body(0).getFirstQIndex(s);
-    l.base_u = r.body(0).getFirstUIndex(s);
-    for (int j = 0; j < model::kNumJoints; ++j) {
-      l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
-      l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
-    }
-    return l;
+    dynamics = std::make_unique<PlantDynamics>(m, simbody_layout(robot, state));
   }
 
   ~Impl() {

@@ -77,4 +77,17 @@ void SimbodyRobot::get_state(const SimTK::State& state, dynamics::ConfigVector& 
   }
 }
 
+SimbodyLayout simbody_layout(const SimbodyRobot& r, const SimTK::State& s) {
+  SimbodyLayout l;
+  l.num_q = s.getNQ();
+  l.num_u = s.getNU();
+  l.base_q = r.body(0).getFirstQIndex(s);
+  l.base_u = r.body(0).getFirstUIndex(s);
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
+    l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
+  }
+  return l;
+}
+
 }  // namespace kuavo::sim

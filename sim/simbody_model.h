@@ -9,6 +9,7 @@
 
 #include "controllers/dynamics/data.h"
 #include "controllers/model/model.h"
+#include "sim/plant_dynamics.h"
 
 namespace kuavo::sim {
 
@@ -44,5 +45,9 @@ class SimbodyRobot {
   std::array<int, model::kNumJoints> joint_u_index_{};
   int base_u_index_ = 0;
 };
+
+// Where each body's coordinates sit in a state of this robot (PlantDynamics reads
+// Simbody's [q; u] through it). Needs realizeTopology().
+SimbodyLayout simbody_layout(const SimbodyRobot& robot, const SimTK::State& state);
 
 }  // namespace kuavo::sim

@@ -60,16 +60,7 @@ void derivative(benchmark::State& state, bool simbody) {
   dynamics::VelocityVector v = dynamics::VelocityVector::Constant(0.1);
   q[2] -= 0.002;  // every corner touching
   r.set_state(s, q, v);
-  sim::SimbodyLayout l;
-  l.num_q = s.getNQ();
-  l.num_u = s.getNU();
-  l.base_q = r.body(0).getFirstQIndex(s);
-  l.base_u = r.body(0).getFirstUIndex(s);
-  for (int j = 0; j < model::kNumJoints; ++j) {
-    l.joint_q[j] = r.body(j + 1).getFirstQIndex(s);
-    l.joint_u[j] = r.body(j + 1).getFirstUIndex(s);
-  }
-  sim::PlantDynamics dyn(robot(), l);
+  sim::PlantDynamics dyn(robot(), sim::simbody_layout(r, s));
   sim::PlantForceInputs in;
   for (auto& j : in.command.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
   std::vector<double> y(s.getNY()), ydot(s.getNY());
