@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 
 #include "controllers/hal/types.h"
-#include "controllers/planner/plan_knot.h"
+#include "controllers/planner/motion_plan.h"
 
 namespace kuavo::sim {
 
@@ -28,6 +28,24 @@ inline void ideal_sensor_frame(const planner::PlanKnot& knot, const Eigen::Vecto
   frame.imu.acceleration_m_s2 = {f.x(), f.y(), f.z()};
   frame.imu.stamp_ns = stamp_ns;
   frame.imu.valid = true;
+}
+
+// The frame ideal sensors give at t_ns while the robot follows the plan exactly; knot gets
+// the plan at t_ns (the oracle). The base acceleration is the central difference of the
+// plan's base velocity over ±1 ms.
+inline void ideal_sensor_frame_on_plan(const model::Model& model, dynamics::Data& data,
+                                       const planner::MotionPlan& plan, hal::TimeNs t_ns, planner::PlanKnot& knot,
+                                       hal::SensorFrame& frame) {
+  constexpr hal::TimeNs h_ns = 1'000'000;
+  auto world_velocity = [](const planner::PlanKnot& k) {
+    return Eigen::Quaterniond(k.q[6], k.q[3], k.q[4], k.q[5]) * k.v.head<3>();
+  };
+  planner::motion_plan_sample_rt(model, data, plan, t_ns - h_ns, knot);
+  const Eigen::Vector3d v_before = world_velocity(knot);
+  planner::motion_plan_sample_rt(model, data, plan, t_ns + h_ns, knot);
+  const Eigen::Vector3d accel = (world_velocity(knot) - v_before) / (2e-9 * h_ns);
+  planner::motion_plan_sample_rt(model, data, plan, t_ns, knot);
+  ideal_sensor_frame(knot, accel, t_ns, frame);
 }
 
 }  // namespace kuavo::sim

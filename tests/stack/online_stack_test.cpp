@@ -38,17 +38,6 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
   static hal::SensorFrame frame;
   static hal::CommandFrame command;
   static planner::PlanKnot truth;
-  static planner::PlanKnot before, after;
-  // Base acceleration by central difference of the plan's base velocity (world axes).
-  auto base_acceleration = [&](hal::TimeNs t) {
-    constexpr hal::TimeNs h = 1'000'000;
-    planner::motion_plan_sample_rt(m, *data, *plan, t - h, before);
-    planner::motion_plan_sample_rt(m, *data, *plan, t + h, after);
-    auto world_velocity = [](const planner::PlanKnot& k) {
-      return Eigen::Quaterniond(k.q[6], k.q[3], k.q[4], k.q[5]) * k.v.head<3>();
-    };
-    return Eigen::Vector3d((world_velocity(after) - world_velocity(before)) / (2e-9 * h));
-  };
   planner::motion_plan_sample_rt(m, *data, *plan, 0, truth);
   sim::ideal_sensor_frame(truth, Eigen::Vector3d::Zero(), 0, frame);
   ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
@@ -62,9 +51,7 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
     kuavo::test::AllocTrap trap;
     for (int tick = 0; tick < kTicks; ++tick) {
       const hal::TimeNs now = tick * kPeriod_ns;
-      const Eigen::Vector3d accel = base_acceleration(now);
-      planner::motion_plan_sample_rt(m, *data, *plan, now, truth);  // the test's oracle
-      sim::ideal_sensor_frame(truth, accel, now, frame);
+      sim::ideal_sensor_frame_on_plan(m, *data, *plan, now, truth, frame);  // truth: the test's oracle
       if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++not_ok;
       for (const auto& c : command.joints) {
         const bool finite = std::isfinite(c.torque_ff_Nm) && std::isfinite(c.position_ref_rad) &&

@@ -40,15 +40,8 @@ struct Fixture {
     planner::StepInPlaceConfig gait;
     gait.steps = 4;
     planner::make_step_in_place(robot, q0, gait, *plan);
-    planner::PlanKnot a, b, c;
-    for (int i = 0; i < kFrames; ++i) {
-      const hal::TimeNs t = i * 2'000'000LL;
-      planner::motion_plan_sample_rt(robot, data, *plan, t - 1'000'000, a);
-      planner::motion_plan_sample_rt(robot, data, *plan, t + 1'000'000, b);
-      planner::motion_plan_sample_rt(robot, data, *plan, t, c);
-      auto vw = [](const planner::PlanKnot& k) { return Eigen::Quaterniond(k.q[6], k.q[3], k.q[4], k.q[5]) * k.v.head<3>(); };
-      sim::ideal_sensor_frame(c, Eigen::Vector3d((vw(b) - vw(a)) / 2e-3), t, frames[i]);
-    }
+    planner::PlanKnot knot;
+    for (int i = 0; i < kFrames; ++i) sim::ideal_sensor_frame_on_plan(robot, data, *plan, i * 2'000'000LL, knot, frames[i]);
     stack::stack_start(robot, cfg, *control, *planner_ws, *plan, frames[0], 0);
   }
 };
