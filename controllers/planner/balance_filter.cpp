@@ -46,7 +46,7 @@ const char* balance_filter(const model::Model& model, const BalanceFilterConfig&
   const double g = model::kGravity_m_s2;
 
   // 1. Per frame: the motion's CoM, its support polygon and the ZMP reference.
-  static Frame f;  // start-up scratch
+  Frame f;
   for (int i = 0; i < n; ++i) {
     frame_geometry(model, ws.data, plan, i, f);
     ws.com[i] = f.com.head<2>();
@@ -73,7 +73,7 @@ const char* balance_filter(const model::Model& model, const BalanceFilterConfig&
   const Vec3 b(dt * dt * dt / 6.0, 0.5 * dt * dt, dt);
   const Row3 c_zmp(1.0, 0.0, -zc / g);
   const Row3 c_com(1.0, 0.0, 0.0);
-  static std::array<Eigen::Vector2d, kMaxMotionFrames> filtered;
+  auto& filtered = ws.filtered_com;
   for (int axis = 0; axis < 2; ++axis) {
     auto& gains = axis == 0 ? ws.gain_x : ws.gain_y;
     Mat3 p = Vec3(kTerminalPosition, kTerminalVelocity, kTerminalAcceleration).asDiagonal();

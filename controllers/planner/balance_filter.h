@@ -37,7 +37,7 @@ struct BalanceFilterReport {
 
 struct BalanceFilterWorkspace {
   std::array<std::array<double, 4>, kMaxMotionFrames> gain_x{}, gain_y{};  // [K (3), k] per frame
-  std::array<Eigen::Vector2d, kMaxMotionFrames> com{}, zmp_ref{};
+  std::array<Eigen::Vector2d, kMaxMotionFrames> com{}, zmp_ref{}, filtered_com{};
   std::array<bool, kMaxMotionFrames> has_support{};
   std::array<double, kMaxMotionFrames> com_height{};
   dynamics::Data data;

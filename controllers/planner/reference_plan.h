@@ -12,7 +12,6 @@
 namespace kuavo::planner {
 
 inline constexpr int kReferencePlanKnots = 10;  // 0.2 s at 50 Hz: covers latency plus the WBC's staleness limit
-                                                // (= mpc::kMpcPlanKnots)
 
 struct ReferencePlan {
   hal::TimeNs stamp_ns = 0;  // time of knots[0]

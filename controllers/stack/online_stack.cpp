@@ -1,9 +1,10 @@
 #include "controllers/stack/online_stack.h"
 
-#include <algorithm>
 #include <cstring>
 
 namespace kuavo::stack {
+
+static_assert(planner::kReferencePlanKnots == mpc::kMpcPlanKnots, "the MPC hands over exactly one ReferencePlan");
 
 const char* to_string(PlannerKind k) {
   switch (k) {
@@ -46,9 +47,9 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
     mpc::mpc_init(model, config.mpc, planner_ws.mpc);
     planner_ws.mpc_failures = 0;
   }
-  static planner::ReferencePlan first;  // start-up only
-  stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, first);
-  stack_apply_plan_rt(control, first);
+  // The first plan goes straight to the control side: nothing else is running yet.
+  stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, control.active);
+  control.plans_applied = 1;
   control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
   control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
   control.started = true;
@@ -84,7 +85,7 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
       out.stamp_ns = ws.mpc_plan.stamp_ns;
       out.dt_s = ws.mpc_plan.dt_s;
-      out.count = std::min(ws.mpc_plan.count, planner::kReferencePlanKnots);
+      out.count = ws.mpc_plan.count;
       for (int k = 0; k < out.count; ++k) out.knots[k] = ws.mpc_plan.knots[k];
       return;
     }
