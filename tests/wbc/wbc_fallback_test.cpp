@@ -75,20 +75,51 @@ TEST(WbcFallback, StaleReferenceHoldsLastCommandThenFallsBackThenRecovers) {
 }
 
 TEST(WbcFallback, InfeasibleQpIsReportedAndFallsBack) {
-  // Joints that may not accelerate and torque limits far below what gravity needs: no
-  // (q̈, f) satisfies both. (Weak torques alone are feasible: the robot may fall freely.)
+  // Joints that may not accelerate, torque limits of 0.5 N·m and the body spinning at
+  // 8 rad/s about the vertical. Holding the arms on a spinning body takes shoulder torques
+  // (centripetal loads) that no base acceleration can cancel for both arms at once, and the
+  // foot contact forces do not reach the arm joints. (Without the spin the problem is
+  // feasible: a free fall with locked joints needs no torque.)
   static model::Model weak;
   weak = wbc_robot();
   weak.limits.torque_Nm.setConstant(0.5);
   Rig& r = rig(weak);
   r.cfg.max_joint_acceleration_rad_s2 = 1e-9;
+  dynamics::VelocityVector v = r.v;
+  v[5] = 8.0;  // base angular velocity about z (linear part first)
   wbc::WbcWorkspace& ws = wbc_workspace();
-  const auto status = wbc::wbc_step_rt(weak, r.cfg, ws, r.q, r.v, r.ref, 0, r.command);
+  const auto status = wbc::wbc_step_rt(weak, r.cfg, ws, r.q, v, r.ref, 0, r.command);
+
+  // Independent certificate of infeasibility from the QP's own rows, not from its solver:
+  // an arm or head joint's torque row is C_b a_b + C_j q̈_j (+ no force columns) within
+  // [lo, hi]. With |q̈_j| ≤ 1e-9, the joint part is below `slack`. If even the best base
+  // acceleration (least squares to the middle of the boxes) leaves a 2-norm residual larger
+  // than √m·(half width + slack), some row is outside its box for every a_b.
+  constexpr int kNj = model::kNumJoints, kFirst = model::kLeftArmFirst, kRows = kNj - kFirst;
+  constexpr int kTorqueRow0 = wbc::kNumInequalities - kNj;  // the torque rows come last
+  const auto& C = ws.qp.C;
+  Eigen::Matrix<double, kRows, 6> Cb;
+  Eigen::Matrix<double, kRows, 1> mid, half;
+  double slack = 0.0;
+  for (int i = 0; i < kRows; ++i) {
+    const int row = kTorqueRow0 + kFirst + i;
+    Cb.row(i) = C.row(row).head<6>();
+    ASSERT_EQ(C.row(row).tail<wbc::kNumForces>().cwiseAbs().maxCoeff(), 0.0) << "forces reach joint " << kFirst + i;
+    mid(i) = 0.5 * (ws.qp.c_lower(row) + ws.qp.c_upper(row));
+    half(i) = 0.5 * (ws.qp.c_upper(row) - ws.qp.c_lower(row));
+    slack = std::max(slack, C.row(row).segment<kNj>(6).cwiseAbs().sum() * 1e-9);
+  }
+  ASSERT_NEAR(half.maxCoeff(), 0.5, 1e-12);  // the rows found are the torque rows
+  const Eigen::Matrix<double, 6, 1> a_b = Cb.colPivHouseholderQr().solve(mid);
+  const double residual = (Cb * a_b - mid).norm();
+  std::printf("infeasible QP: certificate residual %.2f N·m > bound %.2f; solver status %s after %d iterations\n",
+              residual, std::sqrt(double(kRows)) * (0.5 + slack), qp::to_string(ws.diagnostics.qp_status),
+              ws.diagnostics.qp_iterations);
+  ASSERT_GT(residual, std::sqrt(double(kRows)) * (0.5 + slack));
+
   EXPECT_EQ(status, wbc::WbcStatus::kFallbackPd);
   EXPECT_EQ(ws.diagnostics.failure, wbc::WbcFailure::kQpFailed);
-  EXPECT_NE(ws.diagnostics.qp_status, qp::QpStatus::kSolved);
-  std::printf("infeasible QP: status %s after %d iterations\n", qp::to_string(ws.diagnostics.qp_status),
-              ws.diagnostics.qp_iterations);
+  EXPECT_EQ(ws.diagnostics.qp_status, qp::QpStatus::kInfeasible);
   expect_finite(r.command);
   for (const auto& j : r.command.joints) EXPECT_LE(std::abs(j.torque_ff_Nm), 0.5 + 1e-12);
 }
