@@ -13,11 +13,6 @@
 #include "controllers/planner/balance_filter.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
-#include "tools/mocap/bvh.h"
-#include "tools/mocap/contacts.h"
-#include "tools/mocap/default_dance.h"
-#include "tools/mocap/human_targets.h"
-#include "tools/mocap/retarget.h"
 
 namespace kuavo::test {
 namespace {

@@ -13,11 +13,7 @@
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
 #include "sim/motion_loop.h"
-#include "tools/mocap/contacts.h"
-#include "tools/mocap/default_dance.h"
-#include "tools/mocap/human_targets.h"
-#include "tools/mocap/retarget.h"
-#include "tools/mocap/skeleton_map.h"
+#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::test {
 namespace {
@@ -29,22 +25,8 @@ planner::MotionPlan& dance_plan() {
   static auto plan = std::make_unique<planner::MotionPlan>();
   static bool made = false;
   if (made) return *plan;
-  const mocap::Bvh bvh = mocap::default_dance_bvh();
-  mocap::SkeletonMap map;
   std::string error;
-  EXPECT_TRUE(mocap::map_skeleton(bvh, map, error)) << error;
-  mocap::HumanTargets targets;
-  EXPECT_TRUE(mocap::make_targets(bvh, map, robot(), {}, targets, error)) << error;
-  const auto labels = mocap::detect_contacts(targets, robot());
-  mocap::RetargetResult result;
-  mocap::retarget_motion(robot(), targets, labels, mocap::RetargetOptions{}, result);
-  plan->rate_hz = targets.rate_hz;
-  plan->frame_count = static_cast<int>(result.q.size());
-  for (std::size_t i = 0; i < result.q.size(); ++i) {
-    plan->q[i] = result.q[i];
-    plan->foot_contact[i] = {mocap::left_in_contact(result.contacts[i]), mocap::right_in_contact(result.contacts[i])};
-  }
-  EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
+  EXPECT_TRUE(mocap::built_in_dance_plan(robot(), *plan, error)) << error;
   auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
   planner::BalanceFilterReport report;
   EXPECT_EQ(planner::balance_filter(robot(), planner::BalanceFilterConfig{}, *plan, *ws, report), nullptr);

@@ -23,6 +23,7 @@
 #include "sim/motion_loop.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
+#include "tools/mocap/motion_plan_io.h"
 #include "tools/cli/motion_report.h"
 #include "tools/report/svg_plot.h"
 
@@ -111,7 +112,7 @@ int run_demo(int argc, char** argv) {
   auto steps = std::make_unique<planner::MotionPlan>();
   std::string error;
   planner::BalanceFilterReport filter;
-  if (!load_motion_plan(out + "/dance.motion", *robot, *dance, error) || !filter_motion_plan(*robot, *dance, filter, error) ||
+  if (!mocap::load_motion_plan(out + "/dance.motion", *robot, *dance, error) || !filter_motion_plan(*robot, *dance, filter, error) ||
       !make_step_plan(*robot, 20, *steps, error)) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 1;

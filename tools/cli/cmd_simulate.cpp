@@ -17,6 +17,7 @@
 #include "sim/motion_loop.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
+#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
 namespace {
@@ -154,7 +155,7 @@ int run_simulate(int argc, char** argv) {
     auto plan = std::make_unique<planner::MotionPlan>();
     std::string error;
     const bool loaded = steps > 0 ? make_step_plan(*robot, steps, *plan, error)
-                                  : load_motion_plan(motion_path, *robot, *plan, error);
+                                  : mocap::load_motion_plan(motion_path, *robot, *plan, error);
     if (!loaded) {
       std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
       return 2;

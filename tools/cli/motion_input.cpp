@@ -5,33 +5,8 @@
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/planner/step_in_place.h"
 #include "controllers/standing/standing_controller.h"
-#include "tools/mocap/motion_file.h"
 
 namespace kuavo::cli {
-
-bool load_motion_plan(const std::string& path, const model::Model& robot, planner::MotionPlan& plan, std::string& error) {
-  mocap::MotionHeader header;
-  std::vector<dynamics::ConfigVector> q;
-  std::vector<mocap::ContactLabel> labels;
-  if (!mocap::load_motion_file(path, robot, header, q, labels, error)) return false;
-  if (q.size() > static_cast<std::size_t>(planner::kMaxMotionFrames)) {
-    error = path + ": " + std::to_string(q.size()) + " frames, more than the controller's capacity of " +
-            std::to_string(planner::kMaxMotionFrames);
-    return false;
-  }
-  plan.rate_hz = header.rate_hz;
-  plan.frame_count = static_cast<int>(q.size());
-  plan.start_ns = 0;
-  for (std::size_t i = 0; i < q.size(); ++i) {
-    plan.q[i] = q[i];
-    plan.foot_contact[i] = {mocap::left_in_contact(labels[i]), mocap::right_in_contact(labels[i])};
-  }
-  if (const char* why = planner::motion_plan_finish(plan)) {
-    error = path + ": " + why;
-    return false;
-  }
-  return true;
-}
 
 bool filter_motion_plan(const model::Model& robot, planner::MotionPlan& plan, planner::BalanceFilterReport& report,
                         std::string& error) {

@@ -1,4 +1,5 @@
-// What `kuavo simulate` and `kuavo demo` play: a motion file, or the built-in
+// What `kuavo simulate` and `kuavo demo` play besides a motion file (which
+// tools/mocap/motion_plan_io.h loads): the balance filter over it, or the built-in
 // step-in-place gait, as a planner::MotionPlan (allocated once, before the loop).
 #pragma once
 
@@ -9,10 +10,6 @@
 #include "controllers/planner/motion_plan.h"
 
 namespace kuavo::cli {
-
-// Reads and validates a motion file (variant, layout, checksums, frames) into plan.
-// false with a message naming the file and the problem.
-bool load_motion_plan(const std::string& path, const model::Model& robot, planner::MotionPlan& plan, std::string& error);
 
 // The balance filter (controllers/planner/balance_filter.h) over a loaded plan; prints
 // nothing, fills report. false with a message when the motion cannot be balanced.
