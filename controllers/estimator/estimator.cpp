@@ -192,6 +192,16 @@ EstimatorStatus estimator_reset(const model::Model& model, EstimatorState& state
   return EstimatorStatus::kOk;
 }
 
+void estimator_output(const EstimatorState& state, EstimateOutput& out) {
+  if (!state.initialized) {
+    out.status = EstimatorStatus::kNotInitialized;
+    return;
+  }
+  write_output(state, out);
+  out.status = EstimatorStatus::kOk;
+  out.innovation_norm = 0.0;
+}
+
 void estimator_step_rt(const model::Model& model, EstimatorState& s, const hal::SensorFrame& sensors,
                        const ContactFlags& contact, double dt_s, EstimateOutput& out) {
   const EstimatorConfig& c = s.config;

@@ -113,6 +113,11 @@ bool estimator_init(const EstimatorConfig& config, EstimatorState& state);
 EstimatorStatus estimator_reset(const model::Model& model, EstimatorState& state, const hal::SensorFrame& sensors,
                                 const Eigen::Vector2d& base_xy_m);
 
+// The filter's current estimate without a step (e.g. right after estimator_reset, so a
+// planner started before the first tick plans from the robot, not from a stale or zero
+// output). status kOk if initialized, else kNotInitialized with out unchanged.
+void estimator_output(const EstimatorState& state, EstimateOutput& out);
+
 // One tick. contact: the plan's contact flags per sole corner (frame order).
 // If no reset happened yet it resets at the origin first. Real-time safe: no
 // allocation, no exceptions, no I/O; output always finite.

@@ -42,6 +42,9 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
       estimator::EstimatorStatus::kOk) {
     return false;
   }
+  // The estimate is the robot as reset, not what the last run left: a planner that runs
+  // before the first control tick plans from it.
+  estimator::estimator_output(control.estimator, control.estimate);
   wbc::wbc_init(model, config.wbc, control.wbc);
   if (config.planner == PlannerKind::kMpc) {
     mpc::mpc_init(model, config.mpc, planner_ws.mpc);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <memory>
 
@@ -74,6 +75,51 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
   EXPECT_EQ(bad_commands, 0);
   EXPECT_LT(worst_position_error, 0.01);
   EXPECT_EQ(control->ticks, static_cast<std::uint64_t>(kTicks));
+}
+
+// stack_start is a fresh start: after running (warm MPC, WBC working set, estimator
+// history), a second start from the same inputs replays the first bit for bit. Without it
+// a run's result would depend on what ran before it in the same process.
+TEST(OnlineStack, StartIsAFreshStartWithTheMpc) {
+  const model::Model& m = robot();
+  static auto plan = std::make_unique<planner::MotionPlan>();
+  static auto control = std::make_unique<ControlWorkspace>();
+  static auto planner_ws = std::make_unique<PlannerWorkspace>();
+  static auto pending = std::make_unique<planner::ReferencePlan>();
+  static auto data = std::make_unique<dynamics::Data>();
+  planner::StepInPlaceConfig gait;
+  gait.steps = 2;
+  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  StackConfig cfg;
+  cfg.planner = std::getenv("KIN") ? PlannerKind::kKinematic : PlannerKind::kMpc;
+  constexpr int kTicks = 300;
+  static std::array<std::array<double, model::kNumJoints>, kTicks> first{};
+  int mismatches = 0, first_mismatch = -1;
+  for (int pass = 0; pass < 2; ++pass) {
+    static hal::SensorFrame frame;
+    static hal::CommandFrame command;
+    static planner::PlanKnot truth;
+    sim::ideal_sensor_frame_on_plan(m, *data, *plan, 0, truth, frame);
+    ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
+    for (int tick = 0; tick < kTicks; ++tick) {
+      const hal::TimeNs now = tick * 2'000'000LL;
+      sim::ideal_sensor_frame_on_plan(m, *data, *plan, now, truth, frame);
+      if (tick % 10 == 0) {
+        stack_plan_rt(m, cfg, *planner_ws, *plan, control->estimate.q, control->estimate.v, now, *pending);
+        stack_apply_plan_rt(*control, *pending);
+      }
+      stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command);
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        if (pass == 0) {
+          first[tick][j] = command.joints[j].torque_ff_Nm;
+        } else if (command.joints[j].torque_ff_Nm != first[tick][j]) {
+          ++mismatches;
+          if (first_mismatch < 0) first_mismatch = tick;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "first at tick " << first_mismatch;
 }
 
 TEST(OnlineStack, RefusesABadConfiguration) {
