@@ -18,7 +18,8 @@
 //
 // Warm start: the equalities and the previous working set are imposed as equalities (in one
 // block; one at a time, with the exact dependency test, if a pivot of the block says some are
-// nearly dependent), then members with a negative multiplier are dropped one at a time. The
+// nearly dependent), then members with a negative multiplier are dropped (all of them, then
+// re-solved, until none is negative). The
 // result is a valid GI starting point (the minimizer over a working set, dual feasible), so
 // correctness never depends on the guess; a good guess only removes the add/drop iterations.
 //
@@ -411,20 +412,21 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
     }
   }
 
-  // Restore dual feasibility: drop the most negative inequality multiplier, re-solve.
+  // Restore dual feasibility: drop every inequality with a negative multiplier, re-solve,
+  // until none is negative (each round shrinks the working set, so this ends). One re-solve
+  // per round instead of one per dropped constraint: after a jump in the reference most of
+  // the guess can be wrong at once (measured on the WBC: 10 of 14 rows).
   while (iterations < settings.max_iterations) {
-    int worst = -1;
-    double worst_u = 0.0;
-    for (int k = ws.num_eq_active; k < ws.q; ++k) {
-      if (ws.u(k) < worst_u) {
-        worst_u = ws.u(k);
-        worst = k;
+    int dropped = 0;
+    for (int k = ws.q - 1; k >= ws.num_eq_active; --k) {  // from the end: cheaper re-triangulation
+      if (ws.u(k) < 0.0) {
+        drop_from_working_set(ws, k);
+        ++dropped;
       }
     }
-    if (worst < 0) break;
-    drop_from_working_set(ws, worst);
+    if (dropped == 0) break;
     working_set_minimizer(qp, ws);
-    ++iterations;
+    iterations += dropped;
   }
 
   // Main GI loop: add the most violated inequality, dropping blocking ones on the way.
