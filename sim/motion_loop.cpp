@@ -146,8 +146,9 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   }
 
   const auto ticks = static_cast<std::size_t>(duration_s / config.stack.wbc.dt_s) + 2;
-  std::vector<double> wbc_us, plan_ms;
+  std::vector<double> wbc_us, plan_ms, qp_iterations;
   wbc_us.reserve(ticks);
+  qp_iterations.reserve(ticks);
   plan_ms.reserve(ticks / 5 + 2);
   std::vector<hal::CommandFrame> in_flight(static_cast<std::size_t>(std::max(0, config.run.command_latency_ticks)) + 1);
   std::size_t slot = 0;
@@ -179,6 +180,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
       last_status = stack::stack_control_tick_rt(model, config.stack, *control, frame, ev.time_ns, state, command);
       const double us = static_cast<double>(rtos::now_ns() - t0) * 1e-3;
       wbc_us.push_back(us);
+      qp_iterations.push_back(control->wbc.diagnostics.qp_iterations);
       if (us * 1e3 > static_cast<double>(period_ns)) ++out.deadline_misses;
       if (last_status != wbc::WbcStatus::kOk) ++out.wbc_not_ok_ticks;
       in_flight[slot] = command;
@@ -277,6 +279,7 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   }
   if (out.zmp_margin_m_min > 1e8) out.zmp_margin_m_min = 0.0;
   out.wbc_us = percentiles(wbc_us);
+  out.wbc_qp_iterations = percentiles(qp_iterations);
   out.mpc_ms = percentiles(plan_ms);
   out.plans_applied = sched.stats().plans_applied;
   out.plans_skipped = sched.stats().plans_skipped;
@@ -295,11 +298,13 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n  \"zmp_at_edge_s\": %.3f,\n"
                 "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
                 "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
+                "  \"wbc_qp_iterations\": {\"p50\": %.0f, \"p99\": %.0f, \"max\": %.0f},\n"
                 "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.zmp_margin_m_min, s.zmp_at_edge_s, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
+                s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
                 s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);

@@ -46,6 +46,8 @@ struct MotionSummary {
   double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
   Percentiles mpc_ms;                  // planner iteration compute time
   Percentiles wbc_us;                  // control tick (estimator + reference + WBC) compute time
+  Percentiles wbc_qp_iterations;       // the WBC QP's iterations per tick (warm-start guess size
+                                       // + drops + adds): the tick's work, free of the machine's noise
   std::uint64_t deadline_misses = 0;   // ticks over 2 ms plus planner iterations over their period
   std::uint64_t wbc_not_ok_ticks = 0;  // ticks whose WBC status was not kOk
   std::uint64_t plans_applied = 0, plans_skipped = 0;
