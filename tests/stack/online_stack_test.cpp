@@ -22,13 +22,23 @@ namespace {
 
 const model::Model& robot() { return kuavo::test::s45_robot(); }
 
+// The stack's workspaces and a motion, once per process (large: never on the stack).
+struct Rig {
+  std::unique_ptr<planner::MotionPlan> plan = std::make_unique<planner::MotionPlan>();
+  std::unique_ptr<ControlWorkspace> control = std::make_unique<ControlWorkspace>();
+  std::unique_ptr<PlannerWorkspace> planner_ws = std::make_unique<PlannerWorkspace>();
+  std::unique_ptr<planner::ReferencePlan> pending = std::make_unique<planner::ReferencePlan>();
+  std::unique_ptr<dynamics::Data> data = std::make_unique<dynamics::Data>();
+};
+Rig& the_rig() {
+  static Rig rig;
+  return rig;
+}
+
 TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
   const model::Model& m = robot();
-  static auto plan = std::make_unique<planner::MotionPlan>();
-  static auto control = std::make_unique<ControlWorkspace>();
-  static auto planner_ws = std::make_unique<PlannerWorkspace>();
-  static auto pending = std::make_unique<planner::ReferencePlan>();
-  static auto data = std::make_unique<dynamics::Data>();
+  Rig& rig = the_rig();
+  auto& [plan, control, planner_ws, pending, data] = rig;
   const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
   planner::StepInPlaceConfig gait;
   gait.steps = 124;
@@ -82,16 +92,13 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
 // a run's result would depend on what ran before it in the same process.
 TEST(OnlineStack, StartIsAFreshStartWithTheMpc) {
   const model::Model& m = robot();
-  static auto plan = std::make_unique<planner::MotionPlan>();
-  static auto control = std::make_unique<ControlWorkspace>();
-  static auto planner_ws = std::make_unique<PlannerWorkspace>();
-  static auto pending = std::make_unique<planner::ReferencePlan>();
-  static auto data = std::make_unique<dynamics::Data>();
+  Rig& rig = the_rig();
+  auto& [plan, control, planner_ws, pending, data] = rig;
   planner::StepInPlaceConfig gait;
   gait.steps = 2;
   ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
   StackConfig cfg;
-  cfg.planner = std::getenv("KIN") ? PlannerKind::kKinematic : PlannerKind::kMpc;
+  cfg.planner = PlannerKind::kMpc;
   constexpr int kTicks = 300;
   static std::array<std::array<double, model::kNumJoints>, kTicks> first{};
   int mismatches = 0, first_mismatch = -1;
