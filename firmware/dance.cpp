@@ -38,9 +38,9 @@ void publish_request_rt(DanceControl& d, std::uint32_t epoch, hal::TimeNs t_ns) 
   d.channels->request.publish_rt();
 }
 
-// out = (1 - a)·standing + a·wbc as torque laws: tau(q, v) of the result is the same blend
-// of the two laws' torques at every state. Anything but two PD-torque commands: the WBC's.
-void blend_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFrame& out) noexcept {
+}  // namespace
+
+void blend_torque_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFrame& out) noexcept {
   for (int j = 0; j < model::kNumJoints; ++j) {
     const hal::JointCommand& s = standing.joints[j];
     hal::JointCommand& w = out.joints[j];
@@ -54,6 +54,8 @@ void blend_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFram
     w.kd_Nm_s_per_rad = kd;
   }
 }
+
+namespace {
 
 // A joint reference a little past a stop is the motion's, not a fault: the retargeting
 // bounds its least squares by the limits (frames sit on a stop), the balance filter's leg
@@ -221,7 +223,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
   publish_request_rt(d, d.epoch, t_ns);
   if (t_ns < d.blend_ns) {
     control::standing_step_rt(*d.model, standing, sensors, d.standing_command);
-    blend_laws_rt(d.standing_command, static_cast<double>(t_ns) / static_cast<double>(d.blend_ns), out);
+    blend_torque_laws_rt(d.standing_command, static_cast<double>(t_ns) / static_cast<double>(d.blend_ns), out);
   }
   return true;
 }

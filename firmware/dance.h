@@ -167,6 +167,12 @@ void dance_stop_rt(DanceControl& d) noexcept;
 // velocity, the states the WBC uses) over the estimator's own trace limit.
 [[nodiscard]] bool estimator_diverged_rt(const DanceControl& d) noexcept;
 
+// The cross-fade: out = (1 - a)·standing + a·out as torque laws, joint by joint, so that
+// tau(q, v) of the result is that blend of the two laws' torques at every state (kp, kd
+// and tau_ff blend linearly, the references by their gains). A joint where either command
+// is not kPdTorque keeps out's. a in [0, 1].
+void blend_torque_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFrame& out) noexcept;
+
 // Every finite field of a plan; a plan that fails is never used.
 [[nodiscard]] bool reference_plan_finite(const planner::ReferencePlan& plan) noexcept;
 
