@@ -41,13 +41,9 @@
 
 namespace kuavo::firmware {
 
-// LatestValue copies its values in the real-time path and so wants a nothrow copy; Eigen's
-// fixed-size types do not allocate and cannot throw, but do not say so. The special
-// members below say it for them (a throw would terminate, which cannot happen here).
-#define KUAVO_NOTHROW_VALUE(Type)                                     \
-  Type() noexcept {}                                                  \
-  Type(const Type& o) noexcept { *this = o; }                         \
-  Type& operator=(const Type& o) noexcept { return assign(o), *this; }
+// LatestValue copies its values in the real-time path and so wants nothrow special
+// members; Eigen's fixed-size types do not allocate and cannot throw, but do not say so.
+// The two messages below say it for them (a throw would terminate; none can happen).
 
 // Control -> planner: the latest estimate. epoch 0: no dance running (the planner idles).
 struct PlanRequest {
@@ -57,10 +53,11 @@ struct PlanRequest {
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
 
-  KUAVO_NOTHROW_VALUE(PlanRequest)
- private:
-  void assign(const PlanRequest& o) {
+  PlanRequest() noexcept {}
+  PlanRequest(const PlanRequest& o) noexcept { *this = o; }
+  PlanRequest& operator=(const PlanRequest& o) noexcept {
     epoch = o.epoch, sequence = o.sequence, t_state_ns = o.t_state_ns, q = o.q, v = o.v;
+    return *this;
   }
 };
 
@@ -69,11 +66,13 @@ struct PlanMessage {
   std::uint32_t epoch = 0;
   planner::ReferencePlan plan{};
 
-  KUAVO_NOTHROW_VALUE(PlanMessage)
- private:
-  void assign(const PlanMessage& o) { epoch = o.epoch, plan = o.plan; }
+  PlanMessage() noexcept {}
+  PlanMessage(const PlanMessage& o) noexcept { *this = o; }
+  PlanMessage& operator=(const PlanMessage& o) noexcept {
+    epoch = o.epoch, plan = o.plan;
+    return *this;
+  }
 };
-#undef KUAVO_NOTHROW_VALUE
 
 // The two hand-overs. One writer and one reader each: the control task writes `request`
 // and reads `plan`; the planning task the reverse. Static storage (~25 KB).

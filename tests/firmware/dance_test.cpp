@@ -223,10 +223,11 @@ TEST(Dance, TwoThreadsHandOverWithoutAllocating) {
   planner_task.join();
   const DanceControl& d = control_side();
   std::printf("[ figures  ] two threads, 1 s: plans taken %llu, kinematic fallbacks %llu, MPC plans %llu, allocations %zu "
-              "(control) %zu (planner)\n",
+              "(control) %zu (planner); static state: DanceControl %zu KB, DancePlanner %zu KB, DanceChannels %zu KB\n",
               static_cast<unsigned long long>(d.counters.plans_taken),
               static_cast<unsigned long long>(d.counters.kinematic_fallbacks),
-              static_cast<unsigned long long>(planner_side().plans), control.allocations.load(), planner.allocations.load());
+              static_cast<unsigned long long>(planner_side().plans), control.allocations.load(), planner.allocations.load(),
+              sizeof(DanceControl) / 1024, sizeof(DancePlanner) / 1024, sizeof(DanceChannels) / 1024);
   EXPECT_FALSE(control.failed.load());
   EXPECT_TRUE(d.running);
   EXPECT_EQ(control.allocations.load(), 0u);

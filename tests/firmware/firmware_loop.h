@@ -27,6 +27,7 @@
 #include "firmware/control_cycle.h"
 #include "firmware/dance.h"
 #include "firmware/robot_io.h"
+#include "rtos_shim/clock.h"
 #include "sim/plant.h"
 #include "sim/sensor_model.h"
 #include "tests/firmware/firmware_test_support.h"
@@ -126,6 +127,8 @@ class FirmwareLoop {
     control::place_on_ground(m, fw().standing.data, q0);
     plant_->reset(q0, dynamics::VelocityVector::Zero());
     start_devices(*io_, now_);
+    cycle_us_.reserve(1 << 16);  // before the trapped ticks; pushes happen outside the trap
+    plan_ms_.reserve(1 << 12);
   }
 
   static Firmware& fw() {
@@ -172,6 +175,10 @@ class FirmwareLoop {
   // only the next one.
   void corrupt_plans(bool every) { corrupt_ = every ? 2 : 1; }
   std::size_t planner_allocations() const { return planner_allocations_; }
+  // Wall-clock compute times (this machine, not real time): the firmware's part of each
+  // tick in dance (receive, cycle with the stack's tick, send) and each planner iteration.
+  const std::vector<double>& dance_cycle_us() const { return cycle_us_; }
+  const std::vector<double>& plan_ms() const { return plan_ms_; }
   RobotIo& io() { return *io_; }
   emu::RuiwoEmulator* ruiwo(std::size_t b) { return ruiwo_[b].get(); }
   emu::Cia402Emulator* drives(std::size_t b) { return drives_[b].get(); }
@@ -231,6 +238,7 @@ class FirmwareLoop {
       channels().plan.publish_rt();
       publish_at_ns_ = -1;
     }
+    const rtos::TimeNs wall0_ns = rtos::now_ns();
     {
       kuavo::test::AllocTrap trap;
       robot_receive_rt(*io_, cycle_, now_, 0);
@@ -241,11 +249,20 @@ class FirmwareLoop {
       robot_send_rt(*io_, cycle_, out_, now_);
       allocations_ += trap.count();
     }
+    const rtos::TimeNs wall1_ns = rtos::now_ns();
+    if (FirmwareLoop::fw().mode.mode == Mode::kDance) cycle_us_.push_back(1e-3 * static_cast<double>(wall1_ns - wall0_ns));
     // The planning task, released on its period with the latest request.
     if (controller_.inner.dance != nullptr && !planner_stopped_ && now_ % fw().config.planner_period_ns == 0) {
-      kuavo::test::AllocTrap trap;
-      if (dance_plan_rt(planner(), channels())) publish_at_ns_ = now_ + plan_latency_ns_;
-      planner_allocations_ += trap.count();
+      bool planned = false;
+      {
+        kuavo::test::AllocTrap trap;
+        planned = dance_plan_rt(planner(), channels());
+        planner_allocations_ += trap.count();
+      }
+      if (planned) {
+        publish_at_ns_ = now_ + plan_latency_ns_;
+        plan_ms_.push_back(1e-6 * static_cast<double>(rtos::now_ns() - wall1_ns));
+      }
     }
     // Ruiwo boards answer this tick's commands (read next Ruiwo cycle).
     for (std::size_t b = 0; b < buses(); ++b) {
@@ -427,6 +444,7 @@ class FirmwareLoop {
   int corrupt_ = 0;
   bool leg_pd_in_drive_ = false;
   std::size_t planner_allocations_ = 0;
+  std::vector<double> cycle_us_, plan_ms_;
 };
 
 }  // namespace kuavo::firmware::test_support
