@@ -14,7 +14,8 @@ const char* dance_motion_start_standing(const model::Model& robot, dynamics::Dat
   dynamics::forward_kinematics(robot, data, plan.q[0]);
   for (int c = 0; c < model::kNumContactPoints; ++c) {
     if (std::abs(dynamics::frame_position(robot, data, c).z()) > kStartSoleHeight_m) {
-      return "the first frame does not stand (a sole corner more than 1 cm off the ground); the robot dances from standing";
+      return "the first frame does not stand (a sole corner more than 1 cm off the ground); the robot dances from "
+             "standing";
     }
   }
   plan.foot_contact[0] = {true, true};
@@ -51,7 +52,7 @@ bool load_dance_motion(const std::string& path, const model::Model& robot, plann
   }
   auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
   if (const char* why = planner::balance_filter(robot, planner::BalanceFilterConfig{}, plan, *ws, report)) {
-    error = path + ": balance filter: " + why;
+    error = path + ": " + why;  // the filter's messages name it
     return false;
   }
   return true;
