@@ -51,6 +51,7 @@ void firmware_init(Firmware& fw, const model::Model& model, const FirmwareConfig
 
 bool cycle_begin_rt(Firmware& fw, const hal::SensorFrame& sensors, const CycleInputs& in, hal::TimeNs now_ns) noexcept {
   ++fw.cycles;
+  fw.now_ns = now_ns;
   ModeInputs mi;
   mi.estop = in.estop;
   mi.request = in.request;
@@ -73,7 +74,12 @@ bool cycle_begin_rt(Firmware& fw, const hal::SensorFrame& sensors, const CycleIn
   if (changed) {
     log_mode(fw, now_ns);
     if (fw.mode.mode == Mode::kStandUp) {
-      for (int j = 0; j < model::kNumJoints; ++j) fw.ramp_from_rad[j] = sensors.joints[j].position_rad;
+      // From where the joints are, inside their stops: a joint resting on a stop may read a
+      // little past it (encoder quantum, the stop's give), and the ramp's reference must not.
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        fw.ramp_from_rad[j] = std::clamp(sensors.joints[j].position_rad, fw.model->limits.position_min_rad[j],
+                                         fw.model->limits.position_max_rad[j]);
+      }
       fw.standing.filter_started = false;  // no velocity history across a damping phase
     }
   }

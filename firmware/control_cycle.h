@@ -39,6 +39,7 @@ struct Firmware {
   WatchdogResult last_watchdog{};
   FilterResult last_filter{};
   double max_tilt_rad = 0.0;  // since the last status record
+  hal::TimeNs now_ns = 0;     // this cycle's time (for controllers that need it)
   std::uint64_t cycles = 0;
 };
 

@@ -23,9 +23,16 @@ struct FirmwareConfig {
   hal::TimeNs sensor_max_age_ns = 14'000'000;
   // MTi streams at 400 Hz (2.5 ms); 4 missed packets.
   hal::TimeNs imu_max_age_ns = 10'000'000;
-  // MPC at 50 Hz applies after at most one period (lockstep default delay): a
-  // result older than two periods means the planner stalled.
-  hal::TimeNs plan_max_age_ns = 40'000'000;
+  // MPC at 50 Hz: a plan's state is at most one period plus the iteration's latency old
+  // when the next arrives. One lost or late iteration is bridged (plan_stale_ns below: the
+  // motion's kinematic knots); a plan older than two periods plus 10 ms of latency means
+  // two were lost: the planner stalled.
+  hal::TimeNs plan_max_age_ns = 50'000'000;
+  // Dance: the planner's result is replaced by the motion's kinematic knots (the stack's
+  // fallback) once older than this: one planner period plus 10 ms of compute and hand-over
+  // (the MPC iteration: p50 6.4 ms, BENCHMARKS.md). A single lost, late or refused plan is
+  // so bridged without a fault; plan_max_age_ns above makes a stalled planner one.
+  hal::TimeNs plan_stale_ns = 30'000'000;
   // Issue 7 / sim fall criterion: 45 degrees of torso tilt.
   double max_tilt_rad = 0.7853981633974483;
   // Self-check: every sample valid and fresh; drives boot in ~0.1 s
@@ -45,9 +52,23 @@ struct FirmwareConfig {
   hal::TimeNs stand_up_duration_ns = 2'000'000'000;  // gains ramp 0 -> 1
   hal::TimeNs finish_duration_ns = 1'000'000'000;    // gains ramp 1 -> 0
 
+  // --- Dance (firmware/dance.h) ---
+  // The planning task's period: 50 Hz, the MPC's rate (ARCHITECTURE.md rates); must equal
+  // the stack's plan period.
+  hal::TimeNs planner_period_ns = 20'000'000;
+  // Entering dance, the command cross-fades from the standing PD law to the WBC's over
+  // this long: many drive PD time constants (~10 ms), short against the motion's features.
+  hal::TimeNs dance_blend_ns = 200'000'000;
+  // After the motion's last frame the reference holds it this long before finish.
+  hal::TimeNs dance_settle_ns = 500'000'000;
+
   // --- Real time (rtos_shim) ---
   int fifo_priority = 80;
   int cpu = -1;  // -1: no pinning
+  // The planning task: below the control task, so a long MPC iteration can never delay a
+  // control tick on a shared core; on its own core when planner_cpu is set.
+  int planner_fifo_priority = 70;
+  int planner_cpu = -1;  // -1: no pinning
 };
 
 // Checks ranges and consistency; false with a message naming the field.

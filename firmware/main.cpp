@@ -3,7 +3,11 @@
 // the cycle itself lives in the kuavo_firmware library so the tests run it.
 //
 // Exit codes: 0 ok; 1 runtime failure (CAN/serial cannot be opened, real time
-// refused under --require-rt); 2 bad usage or configuration (nothing sent).
+// refused under --require-rt); 2 bad usage, configuration or motion file (nothing sent).
+//
+// Threads: the 500 Hz control task (drivers, cycle, dance control side) and, with
+// --dance, the 50 Hz planning task (MPC) at a lower priority; they meet only in the two
+// LatestValue buffers of firmware/dance.h. Both are allocation-free once started.
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -16,6 +20,8 @@
 #include "drivers/config/drivers_config_json.h"
 #include "drivers/imu/serial_port.h"
 #include "firmware/control_cycle.h"
+#include "firmware/dance.h"
+#include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
 #include "rtos_shim/periodic_task.h"
 
@@ -27,12 +33,16 @@ namespace rtos = kuavo::rtos;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: kuavo_fw [--config FILE] [--check] [--require-rt] [--stand]\n"
-    "  --config FILE  drivers configuration (JSON overlay on the built-in defaults)\n"
-    "  --check        validate the configuration, print the bus plan and loads, exit\n"
-    "  --require-rt   refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
-    "  --stand        request stand-up once the self-check has passed\n"
-    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage or configuration\n"
+    "usage: kuavo_fw [--config FILE] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
+    "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
+    "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
+    "                       and loads, exit\n"
+    "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
+    "  --stand              request stand-up once the self-check has passed\n"
+    "  --dance MOTION_FILE  a robot motion file from `kuavo retarget` (this robot's variant): stand up\n"
+    "                       to its first frame, dance it with the online stack (estimator, MPC 50 Hz,\n"
+    "                       WBC 500 Hz), finish, and exit 0 after 0.5 s of damping\n"
+    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file\n"
     "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
 
 std::atomic<bool> g_estop{false};
@@ -53,12 +63,15 @@ void print_plan(const d::DriversConfig& c, const d::BusLoadReport& r) {
   std::printf("imu: %s at %d baud\n", c.imu_device.c_str(), c.imu_baud);
 }
 
-// The periodic body: drivers receive -> firmware cycle -> drivers send.
+// The control task's body: drivers receive -> dance hand-over -> firmware cycle -> drivers send.
 struct FirmwareTask {
   fw::Firmware* firmware;
   fw::RobotIo* io;
+  fw::DanceControl* dance = nullptr;  // nullptr without --dance
   bool stand = false;
+  bool dance_pending = false;  // ask for the dance once ready
   hal::TimeNs estop_since_ns = -1;
+  hal::TimeNs danced_until_ns = -1;  // the dance's finish ended (damping, no fault)
   std::atomic<bool>* done;
   hal::CommandFrame command{};
 
@@ -70,23 +83,44 @@ struct FirmwareTask {
     fw::CycleInputs in;
     in.estop = g_estop.load(std::memory_order_relaxed);
     in.watch.bus = io->status;
-    if (stand && firmware->mode.mode == fw::Mode::kDamping && firmware->mode.latched == fw::Fault::kNone) {
+    const fw::Mode mode = firmware->mode.mode;
+    if (stand && mode == fw::Mode::kDamping && firmware->mode.latched == fw::Fault::kNone) {
       in.request = fw::Request::kStandUp;
       stand = false;
     }
-    fw::StandingController controller{firmware};
+    if (dance_pending && mode == fw::Mode::kReady) {
+      in.request = fw::Request::kDance;
+      dance_pending = false;
+    }
+    if (dance != nullptr) fw::dance_before_cycle_rt(*dance, *firmware, now, in);
+    fw::CycleController controller{firmware, dance};
     fw::firmware_cycle_rt(*firmware, io->sensors, in, now, controller, command);
     fw::robot_send_rt(*io, info.cycle, command, now);
     if (in.estop && estop_since_ns < 0) estop_since_ns = now;
-    // Keep sending damping for 0.5 s after the e-stop, then let main exit.
+    if (mode == fw::Mode::kFinish && firmware->mode.mode == fw::Mode::kDamping && !dance_pending && dance != nullptr &&
+        firmware->mode.latched == fw::Fault::kNone) {
+      danced_until_ns = now;
+    }
+    // Keep sending damping for 0.5 s after the e-stop or the dance, then let main exit.
+    // After a fault the robot stays in damping until the operator's SIGINT.
     if (estop_since_ns >= 0 && now - estop_since_ns > 500'000'000) done->store(true);
+    if (danced_until_ns >= 0 && now - danced_until_ns > 500'000'000) done->store(true);
+  }
+};
+
+// The planning task's body: the latest estimate -> one MPC iteration -> the plan, published.
+struct PlannerTask {
+  fw::DancePlanner* planner;
+  fw::DanceChannels* channels;
+  void operator()(const rtos::CycleInfo&) noexcept {
+    if (fw::dance_plan_rt(*planner, *channels)) channels->plan.publish_rt();
   }
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config_path;
+  std::string config_path, dance_path;
   bool check = false, require_rt = false, stand = false;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
@@ -98,6 +132,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(a, "--check")) check = true;
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
+    else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
     else {
       std::fprintf(stderr, "kuavo_fw: unknown argument '%s'\n%s", a, kUsage);
       return 2;
@@ -126,6 +161,28 @@ int main(int argc, char** argv) {
   if (!fw::validate_firmware_config(fw_config, msg)) {
     std::fprintf(stderr, "kuavo_fw: firmware settings: %s\n", msg.c_str());
     return 2;
+  }
+  // The dance: loaded, validated and balance-filtered before anything is sent.
+  static kuavo::planner::MotionPlan motion;  // ~6.6 MB, read-only once loaded
+  kuavo::stack::StackConfig stack_config;
+  stack_config.planner = kuavo::stack::PlannerKind::kMpc;
+  static fw::DanceChannels channels;
+  static fw::DanceControl dance;
+  static fw::DancePlanner planner;  // the MPC workspace, ~15 MB
+  if (!dance_path.empty()) {
+    kuavo::planner::BalanceFilterReport report;
+    if (!fw::load_dance_motion(dance_path, model, motion, report, msg)) {
+      std::fprintf(stderr, "kuavo_fw: --dance: %s\n", msg.c_str());
+      return 2;
+    }
+    const char* why = nullptr;
+    if (!fw::dance_init(dance, planner, channels, model, stack_config, fw_config, motion, why)) {
+      std::fprintf(stderr, "kuavo_fw: --dance: %s\n", why);
+      return 2;
+    }
+    std::printf("dance: %s, %d frames at %.0f Hz (%.2f s); balance filter moved the CoM by up to %.3f m\n",
+                dance_path.c_str(), motion.frame_count, motion.rate_hz, kuavo::planner::motion_plan_duration_s(motion),
+                report.max_correction_m);
   }
   if (check) {
     print_plan(drivers, loads);
@@ -172,12 +229,31 @@ int main(int argc, char** argv) {
   static fw::LogSink log;
   static fw::Firmware firmware;
   fw::firmware_init(firmware, model, fw_config, &log);
+  const bool dancing = !dance_path.empty();
+  if (dancing) fw::dance_standing_pose(firmware, motion);  // stand up to the dance's first frame
   fw::LogWriter writer;
   writer.start(log, stderr);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::atomic<bool> done{false};
-  static FirmwareTask task{&firmware, &io, stand, -1, &done};
+  static FirmwareTask task{&firmware, &io, dancing ? &dance : nullptr, stand || dancing, dancing, -1, -1, &done};
+  static PlannerTask planner_body{&planner, &channels};
+  rtos::PeriodicTask planner_task;
+  if (dancing) {
+    rtos::PeriodicConfig ppc;
+    ppc.period_ns = fw_config.planner_period_ns;
+    ppc.rt = rt;
+    ppc.rt.fifo_priority = fw_config.planner_fifo_priority;
+    ppc.rt.cpu = fw_config.planner_cpu;
+    const rtos::RtStatus ps = planner_task.start(ppc, planner_body);
+    if (!ps.ok()) {
+      std::fprintf(stderr, "kuavo_fw: planning task: %s\n", ps.describe().c_str());
+      if (require_rt) {
+        d::close_buses(ports);
+        return 1;
+      }
+    }
+  }
   fw::start_devices(io, rtos::now_ns());
   rtos::PeriodicTask periodic;
   rtos::PeriodicConfig pc;
@@ -192,6 +268,8 @@ int main(int argc, char** argv) {
   while (!done.load() && !periodic.finished()) rtos::sleep_until_ns_rt(rtos::now_ns() + 50'000'000);
   periodic.request_stop();
   periodic.join();
+  planner_task.request_stop();
+  planner_task.join();
   writer.stop();
   d::close_buses(ports);
   return 0;

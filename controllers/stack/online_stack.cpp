@@ -99,6 +99,45 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
   planner::kinematic_reference_plan_rt(model, ws.data, motion, t_state_ns, config.plan_period_s, ws.window, out);
 }
 
+bool stack_prepare(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                   PlannerWorkspace& planner_ws) {
+  if (stack_validate_config(config) != nullptr) return false;
+  if (!estimator::estimator_init(config.estimator, control.estimator)) return false;
+  wbc::wbc_init(model, config.wbc, control.wbc);
+  if (config.planner == PlannerKind::kMpc) {
+    mpc::mpc_init(model, config.mpc, planner_ws.mpc);
+    planner_ws.mpc_failures = 0;
+  }
+  control.started = false;
+  return true;
+}
+
+bool stack_begin_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                    const planner::MotionPlan& motion, const planner::ReferencePlan& first,
+                    const hal::SensorFrame& sensors, hal::TimeNs now_ns) {
+  control.started = false;
+  if (motion.frame_count <= 0 || first.count <= 0) return false;
+  // A clean filter (estimator_init only clears state) and a WBC without a held command.
+  if (!estimator::estimator_init(config.estimator, control.estimator)) return false;
+  const dynamics::ConfigVector& q0 = motion.q[0];
+  if (estimator::estimator_reset(model, control.estimator, sensors, Eigen::Vector2d(q0[0], q0[1])) !=
+      estimator::EstimatorStatus::kOk) {
+    return false;
+  }
+  wbc::wbc_init(model, config.wbc, control.wbc);
+  control.active = first;
+  control.plans_applied = 1;
+  control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
+  control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
+  control.started = true;
+  control.ticks = 0;
+  return true;
+}
+
+void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws) {
+  if (config.planner == PlannerKind::kMpc) mpc::mpc_reset(ws.mpc);
+}
+
 void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan) {
   ws.active = plan;
   ++ws.plans_applied;

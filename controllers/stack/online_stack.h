@@ -94,6 +94,26 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
                  PlannerWorkspace& planner_ws, const planner::MotionPlan& motion, const hal::SensorFrame& sensors,
                  hal::TimeNs now_ns);
 
+// stack_start in two halves, for a binding whose tasks run on two threads and that starts
+// the motion at a moment it does not choose (the firmware entering dance mode):
+//
+//   stack_prepare   start-up, before real time: validates, initialises the estimator, the
+//                   WBC and (MPC) the planner workspace. false if the config is bad.
+//   stack_begin_rt  the control task, at the motion's time 0 (`now_ns`, in the stack's
+//                   time base): resets the estimator from the standing robot (base xy from
+//                   the motion's first frame), clears the WBC's fallback state and activates
+//                   `first`, a plan the caller made without the planner workspace (the
+//                   kinematic planner does). The planner task forgets its warm start itself
+//                   (mpc_reset) before its first plan of the new run. Allocation-free;
+//                   false if the sensors are unusable (nothing started).
+//
+// stack_start is stack_prepare + the first plan + the same resets, in one thread.
+bool stack_prepare(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                   PlannerWorkspace& planner_ws);
+bool stack_begin_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
+                    const planner::MotionPlan& motion, const planner::ReferencePlan& first,
+                    const hal::SensorFrame& sensors, hal::TimeNs now_ns);
+
 // 500 Hz. now_ns: this tick's sensor time. Real-time safe.
 wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
                                      const hal::SensorFrame& sensors, hal::TimeNs now_ns, const StateOverride& state,
@@ -106,6 +126,10 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
 void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
                    const planner::MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                    hal::TimeNs t_state_ns, planner::ReferencePlan& out);
+
+// The planning task before its first plan of a new run: forgets the MPC's warm start
+// (nothing for the kinematic planner). Real-time safe.
+void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws);
 
 void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan);
 

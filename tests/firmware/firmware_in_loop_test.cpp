@@ -169,8 +169,8 @@ TEST(FirmwareInLoop, ImuStreamStops) {
   expect_clean_wire(loop);
 }
 
-// The estimator and MPC watchdogs take their inputs from those modules; until
-// they run in the firmware the inputs are driven here.
+// The estimator and MPC watchdogs with their inputs driven directly (the dance
+// tests, firmware_dance_test.cpp, drive them from the running stack).
 TEST(FirmwareInLoop, EstimatorDivergenceAndStalePlan) {
   for (int which = 0; which < 2; ++which) {
     FirmwareLoop loop;
@@ -185,7 +185,7 @@ TEST(FirmwareInLoop, EstimatorDivergenceAndStalePlan) {
     const hal::TimeNs t = loop.ticks_to_damping(kWatch_ns, in);
     report(which == 0 ? "estimator diverged" : "MPC result stale", loop, t);
     EXPECT_GE(t, 0);
-    // Divergence: the cycle that sees it. Plan: 40 ms age threshold (2 MPC periods).
+    // Divergence: the cycle that sees it. Plan: its age threshold (2 MPC periods + 10 ms).
     EXPECT_LE(t, which == 0 ? 0 : FirmwareConfig{}.plan_max_age_ns + 2'000'000);
     EXPECT_EQ(FirmwareLoop::fw().mode.latched, which == 0 ? Fault::kEstimatorDiverged : Fault::kPlanStale);
     expect_clean_wire(loop);

@@ -4,11 +4,17 @@
 // tick. The plant is held (robot on its gantry) until the firmware reaches
 // ready, then integrated. After every emulator pass the rig inspects what the
 // emulated motors and drives decoded from the wire: every frame they received.
+//
+// With enable_dance() the firmware's dance mode runs the online stack; the planning
+// task is called in the same virtual time: released every planner period (on the
+// firmware clock), its plan published a fixed modelled latency later -- the lockstep
+// scheduler's rule in sim/ -- so runs are deterministic.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <sys/socket.h>
@@ -19,7 +25,9 @@
 #include "drivers/emulator/bus_fault.h"
 #include "drivers/emulator/plant_binding.h"
 #include "firmware/control_cycle.h"
+#include "firmware/dance.h"
 #include "firmware/robot_io.h"
+#include "rtos_shim/clock.h"
 #include "sim/plant.h"
 #include "sim/sensor_model.h"
 #include "tests/firmware/firmware_test_support.h"
@@ -49,10 +57,10 @@ struct Wire {
   }
 };
 
-// The controller the firmware runs: standing, with an optional corruption of
-// one field of one joint from a given time on (a buggy controller).
+// The controller the firmware runs (standing, or the dance once enabled), with an
+// optional corruption of one field of one joint from a given time on (a buggy controller).
 struct InjectingController {
-  StandingController inner;
+  CycleController inner;
   int joint = -1;
   double hal::JointCommand::*field = nullptr;
   double value = 0.0;
@@ -110,6 +118,7 @@ class FirmwareLoop {
     log_ = std::make_unique<LogSink>();
     firmware_init(fw(), m, fw_config, log_.get());
     controller_.inner.fw = &fw();
+    controller_.inner.dance = nullptr;
     sim::PlantConfig pc;
     pc.integrator = sim::Integrator::kCvodeBdf;  // error-controlled reference integrator
     plant_ = std::make_unique<sim::Plant>(m, pc);
@@ -118,12 +127,58 @@ class FirmwareLoop {
     control::place_on_ground(m, fw().standing.data, q0);
     plant_->reset(q0, dynamics::VelocityVector::Zero());
     start_devices(*io_, now_);
+    cycle_us_.reserve(1 << 16);  // before the trapped ticks; pushes happen outside the trap
+    plan_ms_.reserve(1 << 12);
   }
 
   static Firmware& fw() {
     static Firmware f;  // the controller workspace: static, as on the robot
     return f;
   }
+  // The dance's state, static as on the robot (the planner's MPC workspace is ~15 MB).
+  static DanceControl& dance() {
+    static DanceControl d;
+    return d;
+  }
+  static DancePlanner& planner() {
+    static DancePlanner p;
+    return p;
+  }
+  static DanceChannels& channels() {
+    static DanceChannels c;
+    return c;
+  }
+
+  // Loads the motion into the firmware's dance mode (before bring-up): the standing pose
+  // becomes the motion's first frame and the robot on the gantry starts there.
+  bool enable_dance(const planner::MotionPlan& motion, const stack::StackConfig& config,
+                    hal::TimeNs plan_latency_ns = 4'000'000) {
+    const model::Model& m = test_model();
+    const char* error = nullptr;
+    if (!dance_init(dance(), planner(), channels(), m, config, fw().config, motion, error)) {
+      ADD_FAILURE() << error;
+      return false;
+    }
+    dance_standing_pose(fw(), motion);
+    controller_.inner.dance = &dance();
+    plan_latency_ns_ = plan_latency_ns;
+    dynamics::ConfigVector q0 = motion.q[0];
+    control::place_on_ground(m, fw().standing.data, q0);
+    plant_->reset(q0, dynamics::VelocityVector::Zero());
+    return true;
+  }
+  void stop_planner(bool stopped = true) { planner_stopped_ = stopped; }
+  // A binding the drivers do not offer yet (see advance_plant): legs driven by a PD law the
+  // drive runs itself rather than by the firmware's 500 Hz CST torque.
+  void set_leg_pd_in_drive(bool on) { leg_pd_in_drive_ = on; }
+  // From now on every plan published carries a NaN (in one knot's joint reference); once:
+  // only the next one.
+  void corrupt_plans(bool every) { corrupt_ = every ? 2 : 1; }
+  std::size_t planner_allocations() const { return planner_allocations_; }
+  // Wall-clock compute times (this machine, not real time): the firmware's part of each
+  // tick in dance (receive, cycle with the stack's tick, send) and each planner iteration.
+  const std::vector<double>& dance_cycle_us() const { return cycle_us_; }
+  const std::vector<double>& plan_ms() const { return plan_ms_; }
   RobotIo& io() { return *io_; }
   emu::RuiwoEmulator* ruiwo(std::size_t b) { return ruiwo_[b].get(); }
   emu::Cia402Emulator* drives(std::size_t b) { return drives_[b].get(); }
@@ -173,14 +228,41 @@ class FirmwareLoop {
     }
     // The firmware: receive, cycle, send -- the real-time part, counted by the trap.
     imu_.sample(truth, now_, imu_frame_);
+    // The planning task's result lands its latency after the state it used.
+    if (publish_at_ns_ >= 0 && now_ >= publish_at_ns_) {
+      if (corrupt_ > 0) {
+        PlanMessage& m = channels().plan.back_rt();
+        m.plan.knots[m.plan.count / 2].joint_position_rad[3] = std::numeric_limits<double>::quiet_NaN();
+        if (corrupt_ == 1) corrupt_ = 0;
+      }
+      channels().plan.publish_rt();
+      publish_at_ns_ = -1;
+    }
+    const rtos::TimeNs wall0_ns = rtos::now_ns();
     {
       kuavo::test::AllocTrap trap;
       robot_receive_rt(*io_, cycle_, now_, 0);
       if (!imu_stopped_) io_->sensors.imu = imu_frame_.imu;  // no MTi emulator: the sensor model's IMU
       in.watch.bus = io_->status;
+      if (controller_.inner.dance != nullptr) dance_before_cycle_rt(dance(), fw(), now_, in);
       firmware_cycle_rt(fw(), io_->sensors, in, now_, controller_, out_);
       robot_send_rt(*io_, cycle_, out_, now_);
       allocations_ += trap.count();
+    }
+    const rtos::TimeNs wall1_ns = rtos::now_ns();
+    if (FirmwareLoop::fw().mode.mode == Mode::kDance) cycle_us_.push_back(1e-3 * static_cast<double>(wall1_ns - wall0_ns));
+    // The planning task, released on its period with the latest request.
+    if (controller_.inner.dance != nullptr && !planner_stopped_ && now_ % fw().config.planner_period_ns == 0) {
+      bool planned = false;
+      {
+        kuavo::test::AllocTrap trap;
+        planned = dance_plan_rt(planner(), channels());
+        planner_allocations_ += trap.count();
+      }
+      if (planned) {
+        publish_at_ns_ = now_ + plan_latency_ns_;
+        plan_ms_.push_back(1e-6 * static_cast<double>(rtos::now_ns() - wall1_ns));
+      }
     }
     // Ruiwo boards answer this tick's commands (read next Ruiwo cycle).
     for (std::size_t b = 0; b < buses(); ++b) {
@@ -276,6 +358,12 @@ class FirmwareLoop {
         }
       }
     }
+    if (leg_pd_in_drive_) {
+      // The leg drives as impedance drives: the firmware's joint PD law, run continuously by
+      // the drive (as the sim's drive model does), instead of the CST torque the firmware
+      // evaluated from last tick's sample. Not on the wire yet: the drivers speak CST only.
+      for (int j = 0; j < 2 * model::kLegJoints; ++j) applied.joints[j] = out_.joints[j];
+    }
     plant_->set_command(applied);
     if (plant_->advance(1e-9 * static_cast<double>(kTick_ns)) != sim::PlantError::kOk) plant_failed_ = true;
   }
@@ -338,7 +426,7 @@ class FirmwareLoop {
   std::unique_ptr<sim::Plant> plant_;
   sim::SensorModel imu_{7};
   hal::SensorFrame imu_frame_{};
-  InjectingController controller_{StandingController{nullptr}};
+  InjectingController controller_{CycleController{nullptr, nullptr}};
   hal::CommandFrame out_{};
   WireCheck check_{};
   hal::TimeNs now_ = 0;
@@ -350,6 +438,13 @@ class FirmwareLoop {
   hal::TimeNs ready_at_ns_ = -1;
   std::uint64_t binding_failures_ = 0;
   bool imu_stopped_ = false;
+  hal::TimeNs plan_latency_ns_ = 4'000'000;
+  hal::TimeNs publish_at_ns_ = -1;
+  bool planner_stopped_ = false;
+  int corrupt_ = 0;
+  bool leg_pd_in_drive_ = false;
+  std::size_t planner_allocations_ = 0;
+  std::vector<double> cycle_us_, plan_ms_;
 };
 
 }  // namespace kuavo::firmware::test_support

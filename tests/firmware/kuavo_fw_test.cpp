@@ -1,5 +1,5 @@
-// The image's command line: --help, --check on good and bad configurations,
-// and the normal run, which on a kernel without CAN must fail cleanly
+// The image's command line: --help, --check on good and bad configurations and
+// motion files, and the normal run, which on a kernel without CAN must fail cleanly
 // (exit 1, one clear message) before anything is sent.
 #include <gtest/gtest.h>
 
@@ -10,6 +10,9 @@
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "tests/support/test_robot.h"
+#include "tools/mocap/motion_file.h"
 
 namespace {
 
@@ -61,6 +64,40 @@ TEST(KuavoFw, BadConfigurationExits2WithTheReason) {
   EXPECT_NE(r.output.find("cannot read"), std::string::npos) << r.output;
   r = run_fw("--frobnicate");
   EXPECT_EQ(r.exit_code, 2);
+}
+
+// A 2 s standing motion file for the given variant (double support throughout).
+std::string write_standing_motion(const char* name, kuavo::model::Variant variant) {
+  using namespace kuavo;
+  model::Model robot;
+  EXPECT_EQ(model::build_model(variant, model::kDefaultTotalMass_kg, robot), model::ModelError::kOk);
+  const std::vector<dynamics::ConfigVector> q(201, test::standing_configuration());
+  const std::vector<mocap::ContactLabel> labels(q.size(), mocap::ContactLabel::kDoubleSupport);
+  const std::string path = testing::TempDir() + name;
+  std::string error;
+  EXPECT_TRUE(mocap::write_motion_file(path, mocap::encode_motion(robot, 100.0, q, labels), error)) << error;
+  return path;
+}
+
+TEST(KuavoFw, DanceMotionIsCheckedAtStartUp) {
+  FwRun r = run_fw("--check --dance " + write_standing_motion("fw_stand_s45.motion", kuavo::model::Variant::kS45));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("dance: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("201 frames"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("configuration ok"), std::string::npos) << r.output;
+  // Wrong variant, not a motion file, missing file: exit 2 before any bus is opened.
+  r = run_fw("--dance " + write_standing_motion("fw_stand_s42.motion", kuavo::model::Variant::kS42));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("other robot variant"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("can0"), std::string::npos) << r.output;
+  r = run_fw("--dance " + write_temp("fw_not_motion.motion", "KUAVOMOT but not really"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--dance"), std::string::npos) << r.output;
+  r = run_fw("--dance /nonexistent/dance.motion");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/nonexistent/dance.motion"), std::string::npos) << r.output;
+  r = run_fw("--dance");  // the file is missing
+  EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
 TEST(KuavoFw, RunWithoutCanFailsCleanly) {

@@ -1,0 +1,193 @@
+// Dance mode: the online stack (controllers/stack) in the firmware, split over the two
+// tasks the simulator also runs -- the 500 Hz control task (estimator -> reference -> WBC)
+// and the 50 Hz planning task (centroidal MPC) -- with one LatestValue in each direction:
+//
+//   control task  --PlanRequest (epoch, estimate q v, its time)-->  planning task
+//   control task  <--PlanMessage (epoch, ReferencePlan)------------  planning task
+//
+// Time: the stack runs in motion time, 0 at the cycle that entered dance (DanceControl::
+// start_ns); the watchdog sees the plan's stamp back in firmware time.
+//
+// Hand-over from ready: stand-up takes the robot to the motion's first frame
+// (dance_standing_pose, start-up), so on entering dance the stack starts (stack_begin_rt)
+// where the robot already stands: the estimator is reset from the sensors, the first plan
+// is the motion's own knots (kinematic, made on the control task) until the planner's first
+// MPC plan arrives, and the command cross-fades from the standing controller's PD law to
+// the WBC's over FirmwareConfig::dance_blend_ns (exact blend of the two torque laws, so the
+// torque at any state moves continuously from one to the other).
+//
+// Estimator: fault 17 from estimator_diverged_rt (below).
+//
+// Planner trouble, in order (ages of the last plan the planner delivered, from the state it
+// used): older than plan_stale_ns -> the control task replaces it once with the motion's
+// kinematic knots (the stack's own fallback when an MPC iteration fails); older than
+// plan_max_age_ns -> fault 16 (watchdog) -> damping. A plan with a non-finite value is
+// dropped on arrival (counted) and so counts as not delivered. The WBC's own fallbacks
+// (hold, stiff PD) and the safety filter stay behind that.
+//
+// After the motion's end the reference holds its last frame; dance_settle_ns later
+// dance_done asks the mode machine for finish, where the same controller keeps running
+// while the cycle fades its gains out.
+#pragma once
+
+#include <cstdint>
+
+#include "controllers/planner/motion_plan.h"
+#include "controllers/planner/reference_plan.h"
+#include "controllers/stack/online_stack.h"
+#include "controllers/standing/standing_controller.h"
+#include "firmware/control_cycle.h"
+#include "rtos_shim/latest_value.h"
+
+namespace kuavo::firmware {
+
+// LatestValue copies its values in the real-time path and so wants nothrow special
+// members; Eigen's fixed-size types do not allocate and cannot throw, but do not say so.
+// The two messages below say it for them (a throw would terminate; none can happen).
+
+// Control -> planner: the latest estimate. epoch 0: no dance running (the planner idles).
+struct PlanRequest {
+  std::uint32_t epoch = 0;
+  std::uint64_t sequence = 0;  // one per control tick; the planner plans each request once
+  hal::TimeNs t_state_ns = 0;  // motion time of the estimate
+  dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+
+  PlanRequest() noexcept {}
+  PlanRequest(const PlanRequest& o) noexcept { *this = o; }
+  PlanRequest& operator=(const PlanRequest& o) noexcept {
+    epoch = o.epoch, sequence = o.sequence, t_state_ns = o.t_state_ns, q = o.q, v = o.v;
+    return *this;
+  }
+};
+
+// Planner -> control: a plan for one epoch (plans of an earlier dance are dropped).
+struct PlanMessage {
+  std::uint32_t epoch = 0;
+  planner::ReferencePlan plan{};
+
+  PlanMessage() noexcept {}
+  PlanMessage(const PlanMessage& o) noexcept { *this = o; }
+  PlanMessage& operator=(const PlanMessage& o) noexcept {
+    epoch = o.epoch, plan = o.plan;
+    return *this;
+  }
+};
+
+// The two hand-overs. One writer and one reader each: the control task writes `request`
+// and reads `plan`; the planning task the reverse. Static storage (~25 KB).
+struct DanceChannels {
+  rtos::LatestValue<PlanRequest> request;
+  rtos::LatestValue<PlanMessage> plan;
+};
+
+// The planning task's state. The MPC workspace is ~15 MB: static storage.
+struct DancePlanner {
+  const model::Model* model = nullptr;
+  const stack::StackConfig* config = nullptr;
+  const planner::MotionPlan* motion = nullptr;
+  stack::PlannerWorkspace ws;
+  std::uint32_t epoch = 0;          // of the last request planned
+  std::uint64_t last_sequence = 0;  // of the last request planned
+  std::uint64_t plans = 0;
+};
+
+struct DanceCounters {
+  std::uint64_t plans_taken = 0;     // planner plans that became active
+  std::uint64_t plans_rejected = 0;  // non-finite plans dropped on arrival
+  std::uint64_t plans_old_epoch = 0; // plans of an earlier dance, dropped
+  std::uint64_t kinematic_fallbacks = 0;
+  std::uint64_t wbc_not_ok_ticks = 0;
+  std::uint64_t begin_failures = 0;  // stack_begin_rt refused the sensors
+  std::uint64_t references_limited = 0;  // joint references put back on a stop (dance.cpp)
+  std::uint64_t torques_saturated = 0;   // joint torques clipped at the peak, as a drive does
+  double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
+};
+
+// The control task's state. ~0.4 MB (the stack's control workspace): static storage.
+struct DanceControl {
+  const model::Model* model = nullptr;
+  stack::StackConfig config{};
+  const planner::MotionPlan* motion = nullptr;
+  DanceChannels* channels = nullptr;
+  stack::ControlWorkspace stack;
+  // Scratch of the control task's own kinematic plans (first plan, stale fallback).
+  dynamics::Data data;
+  planner::PlanWindow window;
+  planner::ReferencePlan scratch_plan;
+  hal::CommandFrame standing_command{};  // the cross-fade's other law
+  hal::TimeNs blend_ns = 0, settle_ns = 0, stale_ns = 0;  // from FirmwareConfig
+  hal::TimeNs duration_ns = 0;                            // the motion's
+  bool running = false;
+  std::uint32_t epoch = 0;            // of the current (or last) dance
+  hal::TimeNs start_ns = 0;           // firmware time of motion time 0
+  hal::TimeNs plan_stamp_ns = 0;      // firmware time of the last delivered plan's state
+  bool on_kinematic_fallback = false; // the active plan is the control task's stale fallback
+  std::uint64_t sequence = 0;
+  wbc::WbcStatus last_wbc = wbc::WbcStatus::kOk;
+  DanceCounters counters{};
+};
+
+// --- Start-up (not real-time) ---
+
+// Binds the motion (finished and, if wanted, balance-filtered; read-only from here on) and
+// the channels, prepares both workspaces. The config's planner is normally kMpc. false with
+// a message if the stack's configuration or the motion is unusable.
+bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& channels, const model::Model& model,
+                const stack::StackConfig& config, const FirmwareConfig& fw_config,
+                const planner::MotionPlan& motion, const char*& error);
+
+// Makes the standing controller stand at the motion's first frame: its joint pose, and
+// its CoM target where that pose puts the CoM over the feet. Start-up; after firmware_init.
+void dance_standing_pose(Firmware& fw, const planner::MotionPlan& motion);
+
+// --- Control task (real-time) ---
+
+// Before each firmware cycle: takes a newly delivered plan (checks it), falls back to the
+// motion's knots if the plan has gone stale, and fills the inputs the dance owns: the plan
+// age and estimator watchdogs and dance_done. Stops the dance once the mode left dance and
+// finish (a fault, the e-stop): one cycle late, which only costs the planner one request.
+void dance_before_cycle_rt(DanceControl& d, const Firmware& fw, hal::TimeNs now_ns, CycleInputs& in) noexcept;
+
+// The dance controller's command for this tick (starts the stack on the first call of a
+// dance). `standing` is the standing controller's state (the cross-fade's other law).
+// false if the stack could not start: `out` is then left alone and the caller's cycle
+// sends damping in its place (no fault is needed: nothing reached a motor).
+bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal::SensorFrame& sensors,
+                   hal::TimeNs now_ns, hal::CommandFrame& out) noexcept;
+
+// Leaves the dance (mode left dance/finish): the planner idles from its next request on.
+void dance_stop_rt(DanceControl& d) noexcept;
+
+// Fault 17's input. The estimator reports kDiverged for a non-finite state (it re-seeds)
+// and for trace(P) over its limit -- but the swing corners' ×1000 process noise adds
+// ~1.8 m² per corner coordinate per tick, so the whole trace passes any limit in the first
+// tick of every step. Diverged here: the re-seed, or the base block of P (position and
+// velocity, the states the WBC uses) over the estimator's own trace limit.
+[[nodiscard]] bool estimator_diverged_rt(const DanceControl& d) noexcept;
+
+// The cross-fade: out = (1 - a)·standing + a·out as torque laws, joint by joint, so that
+// tau(q, v) of the result is that blend of the two laws' torques at every state (kp, kd
+// and tau_ff blend linearly, the references by their gains). A joint where either command
+// is not kPdTorque keeps out's. a in [0, 1].
+void blend_torque_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFrame& out) noexcept;
+
+// Every finite field of a plan; a plan that fails is never used.
+[[nodiscard]] bool reference_plan_finite(const planner::ReferencePlan& plan) noexcept;
+
+// --- Planning task (real-time, lower priority) ---
+
+// Takes the latest request; if it is new and a dance runs, plans into the channel's back
+// slot and returns true (the caller then publishes: channels.plan.publish_rt(), at once on
+// the robot, after the modelled latency in the lockstep tests). false: nothing to publish.
+bool dance_plan_rt(DancePlanner& p, DanceChannels& channels) noexcept;
+
+// The firmware's controller: standing in stand-up and ready, the dance in dance and in
+// the finish after a dance. A template argument of firmware_cycle_rt (no virtual call).
+struct CycleController {
+  Firmware* fw = nullptr;
+  DanceControl* dance = nullptr;  // nullptr: no motion loaded, standing only
+  void operator()(const hal::SensorFrame& sensors, hal::CommandFrame& out) const noexcept;
+};
+
+}  // namespace kuavo::firmware
