@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <memory>
-#include <vector>
 
 #include "controllers/dynamics/rigid_body.h"
-#include "tools/mocap/motion_file.h"
+#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::firmware {
 
@@ -24,29 +23,10 @@ const char* dance_motion_start_standing(const model::Model& robot, dynamics::Dat
 
 bool load_dance_motion(const std::string& path, const model::Model& robot, planner::MotionPlan& plan,
                        planner::BalanceFilterReport& report, std::string& error) {
-  // mocap's loader checks magic, version, both checksums, variant, layout and labels.
-  mocap::MotionHeader header;
-  std::vector<dynamics::ConfigVector> q;
-  std::vector<mocap::ContactLabel> labels;
-  if (!mocap::load_motion_file(path, robot, header, q, labels, error)) return false;
-  if (q.size() < 2 || q.size() > static_cast<std::size_t>(planner::kMaxMotionFrames)) {
-    error = path + ": " + std::to_string(q.size()) + " frames; the dance needs 2 to " +
-            std::to_string(planner::kMaxMotionFrames);
-    return false;
-  }
-  plan.rate_hz = header.rate_hz;
-  plan.frame_count = static_cast<int>(q.size());
-  plan.start_ns = 0;
-  for (std::size_t i = 0; i < q.size(); ++i) {
-    plan.q[i] = q[i];
-    plan.foot_contact[i] = {mocap::left_in_contact(labels[i]), mocap::right_in_contact(labels[i])};
-  }
+  // mocap's loader checks magic, version, both checksums, variant, layout, labels, length.
+  if (!mocap::load_motion_plan(path, robot, plan, error)) return false;
   auto data = std::make_unique<dynamics::Data>();
   if (const char* why = dance_motion_start_standing(robot, *data, plan)) {
-    error = path + ": " + why;
-    return false;
-  }
-  if (const char* why = planner::motion_plan_finish(plan)) {
     error = path + ": " + why;
     return false;
   }

@@ -1,7 +1,7 @@
 // The dance the firmware plays: a robot motion file (tools/mocap/motion_reader.h format,
 // as `kuavo retarget` writes it) read, validated against this robot's variant and layout,
 // turned into a planner::MotionPlan and balance-filtered -- the same pipeline as
-// `kuavo simulate MOTION` (tools/cli/motion_input). Start-up only, before anything is
+// `kuavo simulate MOTION` (tools/mocap/motion_plan_io.h). Start-up only, before anything is
 // sent: it allocates (the file's bytes, the filter's workspace) and may take seconds.
 #pragma once
 
@@ -23,7 +23,8 @@ bool load_dance_motion(const std::string& path, const model::Model& robot, plann
 // within kStartSoleHeight_m of the ground (forward kinematics of the frame), and is then
 // labelled double support whatever the file says (the contact detector labels the
 // built-in dance's frame 0 "flight": it has no speed history there). nullptr, or what is
-// wrong. Start-up; data is scratch. Before motion_plan_finish and the balance filter.
+// wrong. Start-up; data is scratch. Before the balance filter (motion_plan_finish does not
+// read the contact labels).
 inline constexpr double kStartSoleHeight_m = 0.01;
 const char* dance_motion_start_standing(const model::Model& robot, dynamics::Data& data, planner::MotionPlan& plan);
 

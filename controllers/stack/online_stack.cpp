@@ -35,29 +35,12 @@ const char* stack_validate_config(const StackConfig& config) {
 bool stack_start(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
                  PlannerWorkspace& planner_ws, const planner::MotionPlan& motion, const hal::SensorFrame& sensors,
                  hal::TimeNs now_ns) {
-  if (stack_validate_config(config) != nullptr) return false;
-  if (!estimator::estimator_init(config.estimator, control.estimator)) return false;
+  if (motion.frame_count <= 0 || !stack_prepare(model, config, control, planner_ws)) return false;
+  // The first plan goes straight to the control side: nothing else is running yet. It is
+  // made from the motion's first frame at rest (the estimator has not run yet).
   const dynamics::ConfigVector& q0 = motion.q[0];
-  if (estimator::estimator_reset(model, control.estimator, sensors, Eigen::Vector2d(q0[0], q0[1])) !=
-      estimator::EstimatorStatus::kOk) {
-    return false;
-  }
-  // The estimate is the robot as reset, not what the last run left: a planner that runs
-  // before the first control tick plans from it.
-  estimator::estimator_output(control.estimator, control.estimate);
-  wbc::wbc_init(model, config.wbc, control.wbc);
-  if (config.planner == PlannerKind::kMpc) {
-    mpc::mpc_init(model, config.mpc, planner_ws.mpc);
-    planner_ws.mpc_failures = 0;
-  }
-  // The first plan goes straight to the control side: nothing else is running yet.
   stack_plan_rt(model, config, planner_ws, motion, q0, dynamics::VelocityVector::Zero(), now_ns, control.active);
-  control.plans_applied = 1;
-  control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
-  control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
-  control.started = true;
-  control.ticks = 0;
-  return true;
+  return stack_begin_rt(model, config, control, motion, control.active, sensors, now_ns);
 }
 
 wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
@@ -124,8 +107,11 @@ bool stack_begin_rt(const model::Model& model, const StackConfig& config, Contro
       estimator::EstimatorStatus::kOk) {
     return false;
   }
+  // The estimate is the robot as reset, not what the last run left: a planner that runs
+  // before the first control tick plans from it.
+  estimator::estimator_output(control.estimator, control.estimate);
   wbc::wbc_init(model, config.wbc, control.wbc);
-  control.active = first;
+  if (&first != &control.active) control.active = first;
   control.plans_applied = 1;
   control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
   control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long

@@ -107,7 +107,8 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
 //                   (mpc_reset) before its first plan of the new run. Allocation-free;
 //                   false if the sensors are unusable (nothing started).
 //
-// stack_start is stack_prepare + the first plan + the same resets, in one thread.
+// stack_start is stack_prepare + the first plan (from the motion's first frame at rest)
+// + stack_begin_rt, in one thread.
 bool stack_prepare(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
                    PlannerWorkspace& planner_ws);
 bool stack_begin_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& control,

@@ -31,11 +31,7 @@
 #include "controllers/planner/balance_filter.h"
 #include "firmware/dance_motion.h"
 #include "tests/firmware/firmware_loop.h"
-#include "tools/mocap/contacts.h"
-#include "tools/mocap/default_dance.h"
-#include "tools/mocap/human_targets.h"
-#include "tools/mocap/retarget.h"
-#include "tools/mocap/skeleton_map.h"
+#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::firmware {
 namespace {
@@ -52,25 +48,10 @@ constexpr double kWithSideSteps_s = 5.95;
 planner::MotionPlan* make_dance_prefix(double seconds) {
   auto* plan = new planner::MotionPlan;  // ~6.6 MB, kept for the process (static below)
   const model::Model& robot = test_support::test_model();
-  const mocap::Bvh bvh = mocap::default_dance_bvh();
-  mocap::SkeletonMap map;
   std::string error;
-  EXPECT_TRUE(mocap::map_skeleton(bvh, map, error)) << error;
-  mocap::HumanTargets targets;
-  EXPECT_TRUE(mocap::make_targets(bvh, map, robot, {}, targets, error)) << error;
-  targets.frames.resize(static_cast<std::size_t>(std::llround(seconds * targets.rate_hz)) + 1);
-  const auto labels = mocap::detect_contacts(targets, robot);
-  mocap::RetargetResult result;
-  mocap::retarget_motion(robot, targets, labels, mocap::RetargetOptions{}, result);
-  plan->rate_hz = targets.rate_hz;
-  plan->frame_count = static_cast<int>(result.q.size());
-  for (std::size_t i = 0; i < result.q.size(); ++i) {
-    plan->q[i] = result.q[i];
-    plan->foot_contact[i] = {mocap::left_in_contact(result.contacts[i]), mocap::right_in_contact(result.contacts[i])};
-  }
+  EXPECT_TRUE(mocap::built_in_dance_plan(robot, *plan, error, seconds)) << error;
   static dynamics::Data data;
   EXPECT_EQ(dance_motion_start_standing(robot, data, *plan), nullptr);
-  EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
   auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
   planner::BalanceFilterReport report;
   EXPECT_EQ(planner::balance_filter(robot, planner::BalanceFilterConfig{}, *plan, *ws, report), nullptr);

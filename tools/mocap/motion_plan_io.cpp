@@ -1,5 +1,7 @@
 #include "tools/mocap/motion_plan_io.h"
 
+#include <cmath>
+
 #include "tools/mocap/contacts.h"
 #include "tools/mocap/default_dance.h"
 #include "tools/mocap/human_targets.h"
@@ -42,12 +44,16 @@ bool load_motion_plan(const std::string& path, const model::Model& robot, planne
   return motion_plan_from_frames(q, labels, header.rate_hz, path, plan, error);
 }
 
-bool built_in_dance_plan(const model::Model& robot, planner::MotionPlan& plan, std::string& error) {
+bool built_in_dance_plan(const model::Model& robot, planner::MotionPlan& plan, std::string& error, double first_s) {
   const Bvh bvh = default_dance_bvh();
   SkeletonMap map;
   if (!map_skeleton(bvh, map, error)) return false;
   HumanTargets targets;
   if (!make_targets(bvh, map, robot, {}, targets, error)) return false;
+  if (first_s > 0.0) {
+    const auto frames = static_cast<std::size_t>(std::llround(first_s * targets.rate_hz)) + 1;
+    if (frames < targets.frames.size()) targets.frames.resize(frames);
+  }
   const std::vector<ContactLabel> labels = detect_contacts(targets, robot);
   RetargetResult result;
   retarget_motion(robot, targets, labels, RetargetOptions{}, result);

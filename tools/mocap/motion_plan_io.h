@@ -22,7 +22,9 @@ bool motion_plan_from_frames(const std::vector<dynamics::ConfigVector>& q, const
 bool load_motion_plan(const std::string& path, const model::Model& robot, planner::MotionPlan& plan, std::string& error);
 
 // The built-in dance (default_dance.h) retargeted with the default options, exactly as
-// `kuavo retarget` without an input file makes it (no balance filter).
-bool built_in_dance_plan(const model::Model& robot, planner::MotionPlan& plan, std::string& error);
+// `kuavo retarget` without an input file makes it (no balance filter). first_s > 0: only
+// the dance's first first_s seconds (retargeted alone: a shorter test motion).
+bool built_in_dance_plan(const model::Model& robot, planner::MotionPlan& plan, std::string& error,
+                         double first_s = 0.0);
 
 }  // namespace kuavo::mocap
