@@ -53,6 +53,12 @@ struct RiccatiStage {
   // Lower triangle of L (see above), column-major, kLd × kLd. The x block holds Pₖ, both
   // triangles (the next stage's products read it in full).
   alignas(64) std::array<double, Layout::kLd * Layout::kLd> L{};
+  // Pₖ = Lp·Lpᵀ when Pₖ is numerically positive definite (p_factored), kXp × kXp with an
+  // identity in the padding and zeros above the diagonal: the previous stage then forms
+  // [B A]ᵀPₖ[B A] as ZᵀZ, Z = Lpᵀ[B A] (a triangular product and a symmetric one, ~40% fewer
+  // flops than two general products). A semidefinite Pₖ (singular Q) takes the general path.
+  alignas(64) std::array<double, Layout::kXp * Layout::kXp> Lp{};
+  bool p_factored = false;
   Eigen::Matrix<double, NX, 1> p = Eigen::Matrix<double, NX, 1>::Zero();
   Eigen::Matrix<double, NU, 1> k0 = Eigen::Matrix<double, NU, 1>::Zero();   // Lu⁻¹ qu
   Eigen::Matrix<double, NC, 1> gm = Eigen::Matrix<double, NC, 1>::Zero();   // Lm⁻¹γ
@@ -89,7 +95,8 @@ template <int NX, int NU, int N, int NC, int NG>
 struct RiccatiWorkspace {
   using Layout = RiccatiLayout<NX, NU, NC>;
   std::array<RiccatiStage<NX, NU, NC, NG>, N + 1> stage{};
-  // [B A]ᵀ in the stage layout (ν rows and padding rows stay zero), and Yt = [B A]ᵀPₖ₊₁.
+  // [B A]ᵀ in the stage layout (ν rows and padding rows stay zero), and Yt = [B A]ᵀPₖ₊₁
+  // (or Zᵀ = [B A]ᵀLp when Pₖ₊₁ is factored).
   alignas(64) std::array<double, Layout::kLd * NX> BAt{};
   alignas(64) std::array<double, Layout::kLd * NX> Yt{};
   Eigen::Matrix<double, NG, NU> GuW = Eigen::Matrix<double, NG, NU>::Zero();  // √W Gu
@@ -146,7 +153,7 @@ void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, 
     K.template block<kUp - NU, kUp - NU>(NU, NU).setIdentity();
     K.template block<Layout::kLd - kUp, kUp - NU>(kUp, NU).setZero();
   }
-  K.template block<NX, NU>(kXo, 0) = s.S.transpose();
+  kernels::transpose(NU, NX, s.S.data(), NU, K.data() + kXo, Layout::kLd);
   K.template block<NX, NX>(kXo, kXo) = s.Q;
   if constexpr (kXp > NX) K.template block<kXp - NX, Layout::kLd>(kXo + NX, 0).setZero();
   if constexpr (NC > 0) {
@@ -157,7 +164,7 @@ void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, 
     K.block(kUp, kUp, ne_padded, ne_padded).setZero();
     for (int i = ne; i < ne_padded; ++i) K(kUp + i, kUp + i) = -1.0;
     K.block(kXo, kUp, NX, ne_padded).setZero();
-    K.block(kXo, kUp, NX, ne) = s.C.topRows(ne).transpose();
+    kernels::transpose(ne, NX, s.C.data(), NC, K.data() + kXo + kUp * Layout::kLd, Layout::kLd);
   }
 }
 
@@ -206,6 +213,26 @@ QpStatus factor_stage(double* L, int ne, int ne_padded) {
   return QpStatus::kSolved;
 }
 
+// Tries Pₖ = Lp·Lpᵀ (P in the x block of w.L, both triangles); sets w.p_factored.
+template <int NX, int NU, int NC, int NG>
+void factor_cost_to_go(RiccatiStage<NX, NU, NC, NG>& w) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kXp = Layout::kXp, kXo = Layout::kXo;
+  Eigen::Map<Eigen::Matrix<double, kXp, kXp>> Lp(w.Lp.data());
+  Lp.template topLeftCorner<NX, NX>() = ConstFactorMap<NX, NU, NC>(w.L.data()).template block<NX, NX>(kXo, kXo);
+  if constexpr (kXp > NX) {
+    Lp.template bottomRows<kXp - NX>().setZero();
+    Lp.template bottomRightCorner<kXp - NX, kXp - NX>().setIdentity();
+  }
+  w.p_factored = kernels::cholesky(w.Lp.data(), kXp, kXp);
+  if (!w.p_factored) return;
+  for (int j = 0; j < kXp; j += 4) {  // zeros above the diagonal where the triangular product reads
+    for (int c = j + 1; c < j + 4; ++c) {
+      for (int r = j; r < c; ++r) Lp(r, c) = 0.0;
+    }
+  }
+}
+
 }  // namespace riccati_detail
 
 // Matrix pass over stages T … 0. Reads the barrier weights ws.stage[k].w. Returns kSolved,
@@ -227,30 +254,42 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     auto P = K.template block<NX, NX>(kXo, kXo);
     P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
     if constexpr (kXp > NX) K.template block<kXp - NX, kLd>(kXo + NX, 0).setZero();
+    riccati_detail::factor_cost_to_go(wT);
   }
-  Eigen::Map<Eigen::Matrix<double, kLd, NX>> BAt(ws.BAt.data());
   for (int k = T - 1; k >= 0; --k) {
     const auto& s = qp.stages[k];
     auto& w = ws.stage[k];
     double* L = w.L.data();
-    const double* P_next = ws.stage[k + 1].L.data() + kXo * (kLd + 1);
     const int ne = NC > 0 ? s.num_eq : 0;
     const int ne_padded = kernels::round_up4(ne);
     riccati_detail::FactorMap<NX, NU, NC> K(L);
     riccati_detail::load_stage(s, ne_padded, K);
 
-    // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
-    BAt.template topRows<NU>() = s.B.transpose();
-    BAt.template middleRows<NX>(kXo) = s.A.transpose();
-    gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, ws.Yt.data(), kLd);
-    gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, ws.Yt.data() + kXo, kLd);
-    gemm<false, Update::kAdd, true>(kUp, NU, NX, ws.Yt.data(), kLd, s.B.data(), NX, L, kLd);
-    gemm<false, Update::kAdd>(kXp, NU, NX, ws.Yt.data() + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
-    gemm<false, Update::kAdd, true>(kXp, NX, NX, ws.Yt.data() + kXo, kLd, s.A.data(), NX, L + kXo * (kLd + 1), kLd);
+    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd);
+    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd);
+    double* Yt = ws.Yt.data();
+    const auto& next = ws.stage[k + 1];
+    if (next.p_factored) {
+      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ.
+      kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, next.Lp.data(), kXp, Yt, kLd);
+      kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, next.Lp.data(), kXp, Yt + kXo, kLd);
+      gemm<true, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd);
+      gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
+      gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
+    } else {
+      // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
+      const double* P_next = next.L.data() + kXo * (kLd + 1);
+      gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
+      gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
+      gemm<false, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd);
+      gemm<false, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
+      gemm<false, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, s.A.data(), NX, L + kXo * (kLd + 1), kLd);
+    }
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false);
 
     const QpStatus f = riccati_detail::factor_stage<NX, NU, NC>(L, ne, ne_padded);
     if (f != QpStatus::kSolved) return f;
+    if (k > 0) riccati_detail::factor_cost_to_go(w);
   }
   return QpStatus::kSolved;
 }

@@ -108,6 +108,42 @@ inline void gemm(int m, int n, int k, const double* A, int lda, const double* B,
   }
 }
 
+// C[m×n] = A[m×n'] · L with L lower triangular n×n (its strict upper part inside the 4×4
+// diagonal chunks must be zero; the rest of the upper part is not read). m % 4 == 0.
+inline void trmm_right_lower(int m, int n, const double* A, int lda, const double* L, int ldl, double* C, int ldc) {
+  for (int j = 0; j < n; j += 4) {
+    gemm<false, Update::kSet>(m, std::min(4, n - j), n - j, A + j * lda, lda, L + j + j * ldl, ldl, C + j * ldc, ldc);
+  }
+}
+
+// dst(j, i) = src(i, j) for an m×n column-major src.
+inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd) {
+  int i = 0;
+#ifdef KUAVO_QP_KERNELS_SIMD
+  for (; i + 4 <= m; i += 4) {
+    int j = 0;
+    for (; j + 4 <= n; j += 4) {
+      const __m256d a0 = _mm256_loadu_pd(src + i + j * lds);
+      const __m256d a1 = _mm256_loadu_pd(src + i + (j + 1) * lds);
+      const __m256d a2 = _mm256_loadu_pd(src + i + (j + 2) * lds);
+      const __m256d a3 = _mm256_loadu_pd(src + i + (j + 3) * lds);
+      const __m256d t0 = _mm256_unpacklo_pd(a0, a1), t1 = _mm256_unpackhi_pd(a0, a1);
+      const __m256d t2 = _mm256_unpacklo_pd(a2, a3), t3 = _mm256_unpackhi_pd(a2, a3);
+      _mm256_storeu_pd(dst + j + i * ldd, _mm256_permute2f128_pd(t0, t2, 0x20));
+      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_permute2f128_pd(t1, t3, 0x20));
+      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_permute2f128_pd(t0, t2, 0x31));
+      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_permute2f128_pd(t1, t3, 0x31));
+    }
+    for (; j < n; ++j) {
+      for (int r = i; r < i + 4; ++r) dst[j + r * ldd] = src[r + j * lds];
+    }
+  }
+#endif
+  for (; i < m; ++i) {
+    for (int j = 0; j < n; ++j) dst[j + i * ldd] = src[i + j * lds];
+  }
+}
+
 // Factors the four columns [j, j+4) of a symmetric matrix S = L·diag(d)·Lᵀ in place (lower,
 // column-major, leading dimension ld), d = ±1 for all four. The panel's rows are
 // [j, row_end) ∪ [row2_begin, row2_end) (two ranges, so a block of unused rows can sit between
@@ -130,6 +166,16 @@ inline bool factor_panel4(double* L, int ld, int j, int row_end, int row2_begin,
       for (int r = c2; r < row_end; ++r) L2[r] -= f * Lc[r];
       for (int r = row2_begin; r < row2_end; ++r) L2[r] -= f * Lc[r];
     }
+  }
+  return true;
+}
+
+// In-place Cholesky S = L·Lᵀ of an n×n matrix, n % 4 == 0 (lower triangle read and written),
+// left-looking over 4-column panels. Returns false if S is not numerically positive definite.
+inline bool cholesky(double* L, int ld, int n) {
+  for (int j = 0; j < n; j += 4) {
+    gemm<true, Update::kSub>(n - j, 4, j, L + j, ld, L + j, ld, L + j + j * ld, ld);
+    if (!factor_panel4(L, ld, j, n, n, n, 1.0)) return false;
   }
   return true;
 }
