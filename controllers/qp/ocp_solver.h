@@ -191,10 +191,10 @@ QpStatus solve_ocp_qp(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpSettings& set
       sol.lambda[k].setZero();
       ws.slack[k].setZero();
     }
-    copy_vectors(qp, ws.vec);
-    const QpStatus f = riccati_factor(qp, ws.riccati, &ws.vec);
+    const QpStatus f = riccati_factor(qp, ws.riccati);
     if (f != QpStatus::kSolved) return finish(f);
-    riccati_rollout(qp, ws.riccati, ws.vec, sol);
+    copy_vectors(qp, ws.vec);
+    riccati_solve(qp, ws.riccati, ws.vec, sol);
     sol.residual = linearize(qp, ws, sol);
     if (!std::isfinite(sol.residual)) return finish(QpStatus::kBadInput);
     return finish(QpStatus::kSolved);

@@ -15,14 +15,17 @@
 // signed Cholesky sweep with one set of kernels instead of a chain of small Eigen products.
 // Rank test on the ν pivots as before (kRankDeficient), a non-positive u pivot is kNotConvex.
 //
-// Speed (riccati_kernels.h): [B A]ᵀPₖ₊₁ as one product (Yt) against a transposed copy of [B A],
-// then only the lower triangle of Yt·[B A]; a left-looking blocked Cholesky over 4-column
-// panels whose updates are the same 8×4 FMA tiles; the x block's Schur complement is one
-// lower-triangular product. Storage is padded to multiples of 4 rows (u padding carries an
-// identity pivot, ν padding a −1 pivot, x padding zeros), so every tile is whole.
-// Classical rather than square-root Riccati: Pₖ need not be definite (singular Q, barrier
-// weights spread over 15 decades in the interior point), and the square-root form would need
-// a fallback for exactly those cases; the classical form has only the Quu and M pivots.
+// Speed (riccati_kernels.h): [B A]ᵀPₖ₊₁[B A] is formed as ZᵀZ with Z = Lpᵀ[B A], Pₖ₊₁ = Lp·Lpᵀ
+// (a triangular product at half the flops of P·[B A], then the lower triangle of a symmetric
+// product); a left-looking blocked Cholesky over 4-column panels whose updates are the same
+// 8×4 FMA tiles; the x block's Schur complement is one lower-triangular product. Storage is
+// padded to multiples of 4 rows (u padding carries an identity pivot, ν padding a −1 pivot,
+// x padding zeros), so every tile is whole.
+// Classical recursion, square-root product: Pₖ is computed as the Schur complement (as the
+// classical Riccati does) and only then factored. Pₖ need not be definite (singular Q; barrier
+// weights spread over 15 decades in the interior point): if its Cholesky fails, stage k−1 uses
+// Yt = [B A]ᵀPₖ and Yt·[B A] instead, so the statuses keep their classical meaning (only the
+// Quu and M pivots can fail) and the full square-root method's failure mode does not exist.
 #pragma once
 
 #include <Eigen/Core>
@@ -55,8 +58,8 @@ struct RiccatiStage {
   alignas(64) std::array<double, Layout::kLd * Layout::kLd> L{};
   // Pₖ = Lp·Lpᵀ when Pₖ is numerically positive definite (p_factored), kXp × kXp with an
   // identity in the padding and zeros above the diagonal: the previous stage then forms
-  // [B A]ᵀPₖ[B A] as ZᵀZ, Z = Lpᵀ[B A] (a triangular product and a symmetric one, ~40% fewer
-  // flops than two general products). A semidefinite Pₖ (singular Q) takes the general path.
+  // [B A]ᵀPₖ[B A] as ZᵀZ, Z = Lpᵀ[B A] (the triangular product costs half of P·[B A]).
+  // A semidefinite Pₖ (singular Q) takes the general path.
   alignas(64) std::array<double, Layout::kXp * Layout::kXp> Lp{};
   bool p_factored = false;
   Eigen::Matrix<double, NX, 1> p = Eigen::Matrix<double, NX, 1>::Zero();
@@ -233,70 +236,13 @@ void factor_cost_to_go(RiccatiStage<NX, NU, NC, NG>& w) {
   }
 }
 
-// Vector recursion at the terminal stage and at stage k < T (needs stage k+1's p).
-template <int NX, int NU, int N, int NC, int NG>
-void backward_terminal(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                       const RiccatiVectors<NX, NU, N, NC>& vec) {
-  const int T = qp.horizon;
-  const auto& s = qp.stages[T];
-  auto& w = ws.stage[T];
-  w.p = vec.q[T];
-  if constexpr (NG > 0) {
-    if (s.num_ineq > 0) w.p.noalias() += s.Gx.topRows(s.num_ineq).transpose() * w.rho.head(s.num_ineq);
-  }
-}
-
-template <int NX, int NU, int N, int NC, int NG>
-void backward_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                    const RiccatiVectors<NX, NU, N, NC>& vec, int k) {
-  using Layout = RiccatiLayout<NX, NU, NC>;
-  using Map = ConstFactorMap<NX, NU, NC>;
-  constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
-  const auto& s = qp.stages[k];
-  auto& w = ws.stage[k];
-  const auto& next = ws.stage[k + 1];
-  const Map K(w.L.data());
-  const Map K_next(next.L.data());
-  const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
-  const auto X = K.template block<NX, NU>(kXo, 0);
-  ws.v = next.p;
-  ws.v.noalias() += K_next.template block<NX, NX>(kXo, kXo) * vec.b[k];
-  ws.qu = vec.r[k];
-  ws.qu.noalias() += s.B.transpose() * ws.v;
-  w.p = vec.q[k];
-  w.p.noalias() += s.A.transpose() * ws.v;
-  if constexpr (NG > 0) {
-    const int m = s.num_ineq;
-    if (m > 0) {
-      ws.qu.noalias() += s.Gu.topRows(m).transpose() * w.rho.head(m);
-      w.p.noalias() += s.Gx.topRows(m).transpose() * w.rho.head(m);
-    }
-  }
-  w.k0 = ws.qu;
-  Lu.solveInPlace(w.k0);
-  w.p.noalias() -= X * w.k0;
-  if constexpr (NC > 0) {
-    const int ne = s.num_eq;
-    if (ne > 0) {
-      auto gm = w.gm.head(ne);
-      gm = -vec.e[k].head(ne);
-      gm.noalias() -= K.block(kUp, 0, ne, NU) * w.k0;  // − Yᵀk0
-      K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().solveInPlace(gm);
-      w.p.noalias() -= K.block(kXo, kUp, NX, ne) * gm;  // + (Lm⁻¹G)ᵀ gm
-    }
-  }
-}
-
 }  // namespace riccati_detail
 
 // Matrix pass over stages T … 0. Reads the barrier weights ws.stage[k].w. Returns kSolved,
 // kNotConvex (a Quu not positive definite) or kRankDeficient (a Dₖ). Pₖ itself may be
-// semidefinite (then it is used unfactored). Given vec, it also runs riccati_solve's vector
-// recursion stage by stage while the stage's factor is still in cache (one pass over the
-// horizon's ~10 MB instead of two); then riccati_rollout completes the solve.
+// semidefinite (it is never factored).
 template <int NX, int NU, int N, int NC, int NG>
-QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                        const RiccatiVectors<NX, NU, N, NC>* vec = nullptr) {
+QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws) {
   using riccati_detail::add_barrier_hessian;
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
@@ -312,7 +258,6 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
     if constexpr (kXp > NX) K.template block<kXp - NX, kLd>(kXo + NX, 0).setZero();
     riccati_detail::factor_cost_to_go(wT);
-    if (vec != nullptr) riccati_detail::backward_terminal(qp, ws, *vec);
   }
   for (int k = T - 1; k >= 0; --k) {
     const auto& s = qp.stages[k];
@@ -348,21 +293,62 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     const QpStatus f = riccati_detail::factor_stage<NX, NU, NC>(L, ne, ne_padded);
     if (f != QpStatus::kSolved) return f;
     if (k > 0) riccati_detail::factor_cost_to_go(w);
-    if (vec != nullptr) riccati_detail::backward_stage(qp, ws, *vec, k);
   }
   return QpStatus::kSolved;
 }
 
-
-// Forward rollout and costates after the vector recursion (riccati_solve, or riccati_factor
-// given the vectors): writes x, u, costate, nu of sol.
+// Vector pass and forward rollout: writes x, u, costate, nu of sol for the factorization in ws,
+// the vectors vec and the barrier linear terms Gᵀρ (ρ in ws.stage[k].rho).
 template <int NX, int NU, int N, int NC, int NG>
-void riccati_rollout(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                     const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                   const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using Map = riccati_detail::ConstFactorMap<NX, NU, NC>;
   constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
   const int T = qp.horizon;
+  {
+    const auto& s = qp.stages[T];
+    auto& w = ws.stage[T];
+    w.p = vec.q[T];
+    if constexpr (NG > 0) {
+      if (s.num_ineq > 0) w.p.noalias() += s.Gx.topRows(s.num_ineq).transpose() * w.rho.head(s.num_ineq);
+    }
+  }
+  for (int k = T - 1; k >= 0; --k) {
+    const auto& s = qp.stages[k];
+    auto& w = ws.stage[k];
+    const auto& next = ws.stage[k + 1];
+    const Map K(w.L.data());
+    const Map K_next(next.L.data());
+    const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
+    const auto X = K.template block<NX, NU>(kXo, 0);
+    ws.v = next.p;
+    ws.v.noalias() += K_next.template block<NX, NX>(kXo, kXo) * vec.b[k];
+    ws.qu = vec.r[k];
+    ws.qu.noalias() += s.B.transpose() * ws.v;
+    w.p = vec.q[k];
+    w.p.noalias() += s.A.transpose() * ws.v;
+    if constexpr (NG > 0) {
+      const int m = s.num_ineq;
+      if (m > 0) {
+        ws.qu.noalias() += s.Gu.topRows(m).transpose() * w.rho.head(m);
+        w.p.noalias() += s.Gx.topRows(m).transpose() * w.rho.head(m);
+      }
+    }
+    w.k0 = ws.qu;
+    Lu.solveInPlace(w.k0);
+    w.p.noalias() -= X * w.k0;
+    if constexpr (NC > 0) {
+      const int ne = s.num_eq;
+      if (ne > 0) {
+        auto gm = w.gm.head(ne);
+        gm = -vec.e[k].head(ne);
+        gm.noalias() -= K.block(kUp, 0, ne, NU) * w.k0;  // − Yᵀk0
+        K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().solveInPlace(gm);
+        w.p.noalias() -= K.block(kXo, kUp, NX, ne) * gm;  // + (Lm⁻¹G)ᵀ gm
+      }
+    }
+  }
   sol.x[0] = vec.x_initial;
   for (int k = 0; k < T; ++k) {
     const auto& s = qp.stages[k];
@@ -396,16 +382,6 @@ void riccati_rollout(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
   }
   if constexpr (NC > 0) sol.nu[T].setZero();
   sol.u[T].setZero();
-}
-
-// Vector pass and forward rollout: writes x, u, costate, nu of sol for the factorization in ws,
-// the vectors vec and the barrier linear terms Gᵀρ (ρ in ws.stage[k].rho).
-template <int NX, int NU, int N, int NC, int NG>
-void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                   const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
-  riccati_detail::backward_terminal(qp, ws, vec);
-  for (int k = qp.horizon - 1; k >= 0; --k) riccati_detail::backward_stage(qp, ws, vec, k);
-  riccati_rollout(qp, ws, vec, sol);
 }
 
 }  // namespace kuavo::qp
