@@ -97,10 +97,11 @@ double linearize(const OcpQp<NX, NU, N, NC, NG>& qp, OcpWorkspace<NX, NU, N, NC,
       const int ne = s.num_eq;
       v.e[k].setZero();
       if (!terminal && ne > 0) {
-        ws.re.noalias() = s.C * sol.x[k];  // full fixed size: rows ≥ ne are ignored
-        ws.re.noalias() += s.D * sol.u[k];
-        ws.re -= s.e;
-        v.e[k].head(ne) = -ws.re.head(ne);
+        auto re = ws.re.head(ne);  // only the used rows (the MPC's capacity is 30, ~12 used)
+        re.noalias() = s.C.topRows(ne) * sol.x[k];
+        re.noalias() += s.D.topRows(ne) * sol.u[k];
+        re -= s.e.head(ne);
+        v.e[k].head(ne) = -re;
         res = std::max(res, ws.re.head(ne).cwiseAbs().maxCoeff());
         ws.rx.noalias() += s.C.topRows(ne).transpose() * sol.nu[k].head(ne);
         ws.ru.noalias() += s.D.topRows(ne).transpose() * sol.nu[k].head(ne);

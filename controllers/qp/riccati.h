@@ -2,43 +2,69 @@
 // a matrix pass (riccati_factor, O(T·(NX+NU)³)) and a vector pass (riccati_solve, O(T·(NX+NU)²))
 // so the interior-point method can solve twice per factorization.
 //
-// Per stage, with Pₖ₊₁ the cost-to-go Hessian, the stage block
-//   [Quu Qux; Qxu Qxx] = [R S; Sᵀ Q] + [B A]ᵀ Pₖ₊₁ [B A]      (+ Gᵀ W G from the barrier)
-// is factored in place: Quu = Lu Luᵀ, X = Qxu Lu⁻ᵀ, so that Qxx − X Xᵀ is the unconstrained
-// cost-to-go. An equality D u = e − C x is eliminated in the range space of Quu:
-// Y = Lu⁻¹ Dᵀ, M = YᵀY = Lm Lmᵀ, G = C − YᵀXᵀ, and the cost-to-go gains (Lm⁻¹G)ᵀ(Lm⁻¹G).
-// This keeps every matrix at its fixed size (no per-stage nullspace basis of varying width),
-// and costs only O(NU²·NC) more per constrained stage.
+// Per stage, with Pₖ₊₁ the cost-to-go Hessian, the stage's KKT block in the order [u; ν; x]
+//   K = [ H_uu   Dᵀ   H_ux ]      H = [R S; Sᵀ Q] + [B A]ᵀ Pₖ₊₁ [B A]   (+ Gᵀ W G, barrier)
+//       [ D      0    C    ]
+//       [ H_xu   Cᵀ   H_xx ]
+// is factored K = L·diag(+I, −I, ·)·Lᵀ over its u and ν columns only, in place:
+//   u columns (Cholesky, d = +1): L_uu = Lu (H_uu = Lu Luᵀ), L_νu = Yᵀ = D Lu⁻ᵀ, L_xu = X = H_xu Lu⁻ᵀ;
+//   ν columns (d = −1, the pivot block is −M, M = YᵀY = Lm Lmᵀ): L_νν = Lm, L_xν = −(Lm⁻¹G)ᵀ
+//   with G = C − YᵀXᵀ; and the x block left over is the Schur complement
+//   Pₖ = H_xx − X Xᵀ + (Lm⁻¹G)ᵀ(Lm⁻¹G),
+// the same quantities as the classical range-space elimination (Y, M, G), but computed by one
+// signed Cholesky sweep with one set of kernels instead of a chain of small Eigen products.
+// Rank test on the ν pivots as before (kRankDeficient), a non-positive u pivot is kNotConvex.
 //
-// Speed: P[B A] is one product, [B A]ᵀ(P[B A]) one product for only the lower triangle of
-// the whole block, the Cholesky and the triangular solve run in place on the block, Qxx − XXᵀ
-// is a symmetric rank update — no temporaries, every product noalias.
+// Speed (riccati_kernels.h): [B A]ᵀPₖ₊₁[B A] is formed as ZᵀZ with Z = Lpᵀ[B A], Pₖ₊₁ = Lp·Lpᵀ
+// (a triangular product at half the flops of P·[B A], then the lower triangle of a symmetric
+// product); a left-looking blocked Cholesky over 4-column panels whose updates are the same
+// 8×4 FMA tiles; the x block's Schur complement is one lower-triangular product. Storage is
+// padded to multiples of 4 rows (u padding carries an identity pivot, ν padding a −1 pivot,
+// x padding zeros), so every tile is whole.
+// Classical recursion, square-root product: Pₖ is computed as the Schur complement (as the
+// classical Riccati does) and only then factored. Pₖ need not be definite (singular Q; barrier
+// weights spread over 15 decades in the interior point): if its Cholesky fails, stage k−1 uses
+// Yt = [B A]ᵀPₖ and Yt·[B A] instead, so the statuses keep their classical meaning (only the
+// Quu and M pivots can fail) and the full square-root method's failure mode does not exist.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
 #include "controllers/qp/ocp_qp.h"
+#include "controllers/qp/riccati_kernels.h"
 
 namespace kuavo::qp {
 
+// Row/column layout of a stage's factor storage: [u (NU, padded) ; ν (NC, padded) ; x (NX, padded)].
+template <int NX, int NU, int NC>
+struct RiccatiLayout {
+  static constexpr int kUp = kernels::round_up4(NU);
+  static constexpr int kNu = kUp;                        // first ν row
+  static constexpr int kCp = kernels::round_up4(NC);
+  static constexpr int kXo = kUp + kCp;                  // first x row
+  static constexpr int kXp = kernels::round_up4(NX);
+  static constexpr int kLd = kXo + kXp;                  // leading dimension (rows)
+};
+
 template <int NX, int NU, int NC, int NG>
 struct RiccatiStage {
-  static constexpr int NZ = NU + NX;
-  // Lower triangle: [Lu ·; X Qxx−XXᵀ]. Only Lu and X are used after the factorization.
-  Eigen::Matrix<double, NZ, NZ> block = Eigen::Matrix<double, NZ, NZ>::Zero();
-  Eigen::Matrix<double, NX, NX> P = Eigen::Matrix<double, NX, NX>::Zero();  // full, symmetric
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  // Lower triangle of L (see above), column-major, kLd × kLd. The x block holds Pₖ, both
+  // triangles (the next stage's products read it in full).
+  alignas(64) std::array<double, Layout::kLd * Layout::kLd> L{};
+  // Pₖ = Lp·Lpᵀ when Pₖ is numerically positive definite (p_factored), kXp × kXp with an
+  // identity in the padding and zeros above the diagonal: the previous stage then forms
+  // [B A]ᵀPₖ[B A] as ZᵀZ, Z = Lpᵀ[B A] (the triangular product costs half of P·[B A]).
+  // A semidefinite Pₖ (singular Q) takes the general path.
+  alignas(64) std::array<double, Layout::kXp * Layout::kXp> Lp{};
+  bool p_factored = false;
   Eigen::Matrix<double, NX, 1> p = Eigen::Matrix<double, NX, 1>::Zero();
   Eigen::Matrix<double, NU, 1> k0 = Eigen::Matrix<double, NU, 1>::Zero();   // Lu⁻¹ qu
-  // Equality elimination (rows ≥ num_eq padded: Y, Gmᵀ columns zero, Lm identity).
-  Eigen::Matrix<double, NU, NC> Y = Eigen::Matrix<double, NU, NC>::Zero();
-  Eigen::LLT<Eigen::Matrix<double, NC, NC>, Eigen::Lower> m_llt;
-  Eigen::Matrix<double, NX, NC> GmT = Eigen::Matrix<double, NX, NC>::Zero();  // (Lm⁻¹G)ᵀ
-  Eigen::Matrix<double, NC, 1> gm = Eigen::Matrix<double, NC, 1>::Zero();     // Lm⁻¹γ
+  Eigen::Matrix<double, NC, 1> gm = Eigen::Matrix<double, NC, 1>::Zero();   // Lm⁻¹γ
   // Barrier terms set by the caller: Hessian weight W = diag(w) and linear term Gᵀρ.
   Eigen::Matrix<double, NG, 1> w = Eigen::Matrix<double, NG, 1>::Zero();
   Eigen::Matrix<double, NG, 1> rho = Eigen::Matrix<double, NG, 1>::Zero();
@@ -70,13 +96,14 @@ void copy_vectors(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiVectors<NX, NU, N, 
 
 template <int NX, int NU, int N, int NC, int NG>
 struct RiccatiWorkspace {
-  static constexpr int NZ = NU + NX;
+  using Layout = RiccatiLayout<NX, NU, NC>;
   std::array<RiccatiStage<NX, NU, NC, NG>, N + 1> stage{};
-  Eigen::Matrix<double, NX, NZ> BA = Eigen::Matrix<double, NX, NZ>::Zero();   // [B A]
-  Eigen::Matrix<double, NX, NZ> PBA = Eigen::Matrix<double, NX, NZ>::Zero();  // Pₖ₊₁[B A]
+  // [B A]ᵀ in the stage layout (ν rows and padding rows stay zero), and Yt = [B A]ᵀPₖ₊₁
+  // (or Zᵀ = [B A]ᵀLp when Pₖ₊₁ is factored).
+  alignas(64) std::array<double, Layout::kLd * NX> BAt{};
+  alignas(64) std::array<double, Layout::kLd * NX> Yt{};
   Eigen::Matrix<double, NG, NU> GuW = Eigen::Matrix<double, NG, NU>::Zero();  // √W Gu
   Eigen::Matrix<double, NG, NX> GxW = Eigen::Matrix<double, NG, NX>::Zero();  // √W Gx
-  Eigen::Matrix<double, NC, NC> M = Eigen::Matrix<double, NC, NC>::Zero();
   Eigen::Matrix<double, NX, 1> v = Eigen::Matrix<double, NX, 1>::Zero();
   Eigen::Matrix<double, NU, 1> qu = Eigen::Matrix<double, NU, 1>::Zero();
   Eigen::Matrix<double, NU, 1> t = Eigen::Matrix<double, NU, 1>::Zero();
@@ -89,11 +116,18 @@ namespace riccati_detail {
 // (condition number of M beyond 1e14, about 1/ε) are treated as dependent.
 inline constexpr double kRankPivotRatio = 1e-7;
 
+template <int NX, int NU, int NC>
+using FactorMap = Eigen::Map<Eigen::Matrix<double, RiccatiLayout<NX, NU, NC>::kLd, RiccatiLayout<NX, NU, NC>::kLd>>;
+template <int NX, int NU, int NC>
+using ConstFactorMap =
+    Eigen::Map<const Eigen::Matrix<double, RiccatiLayout<NX, NU, NC>::kLd, RiccatiLayout<NX, NU, NC>::kLd>>;
+
 template <int NX, int NU, int NC, int NG>
 void add_barrier_hessian(const OcpStage<NX, NU, NC, NG>& s, RiccatiStage<NX, NU, NC, NG>& w,
                          Eigen::Matrix<double, NG, NU>& GuW, Eigen::Matrix<double, NG, NX>& GxW,
                          bool terminal) {
   if constexpr (NG > 0) {
+    using Layout = RiccatiLayout<NX, NU, NC>;
     const int m = s.num_ineq;
     if (m == 0) return;
     for (int i = 0; i < m; ++i) {
@@ -101,83 +135,164 @@ void add_barrier_hessian(const OcpStage<NX, NU, NC, NG>& s, RiccatiStage<NX, NU,
       GxW.row(i) = sw * s.Gx.row(i);
       if (!terminal) GuW.row(i) = sw * s.Gu.row(i);
     }
-    auto Qxx = w.block.template bottomRightCorner<NX, NX>();
+    FactorMap<NX, NU, NC> K(w.L.data());
+    auto Qxx = K.template block<NX, NX>(Layout::kXo, Layout::kXo);
     Qxx.template selfadjointView<Eigen::Lower>().rankUpdate(GxW.topRows(m).transpose());
     if (terminal) return;
-    w.block.template topLeftCorner<NU, NU>().template selfadjointView<Eigen::Lower>().rankUpdate(
+    K.template topLeftCorner<NU, NU>().template selfadjointView<Eigen::Lower>().rankUpdate(
         GuW.topRows(m).transpose());
-    w.block.template bottomLeftCorner<NX, NU>().noalias() += GxW.topRows(m).transpose() * GuW.topRows(m);
+    K.template block<NX, NU>(Layout::kXo, 0).noalias() += GxW.topRows(m).transpose() * GuW.topRows(m);
+  }
+}
+
+// The stage's own blocks [R ·; D 0 ·; Sᵀ Cᵀ Q] into the lower triangle, with the padding.
+template <int NX, int NU, int NC, int NG>
+void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, NU, NC>& K) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
+  K.template topLeftCorner<NU, NU>() = s.R;
+  if constexpr (kUp > NU) {
+    K.template block<kUp - NU, NU>(NU, 0).setZero();
+    K.template block<kUp - NU, kUp - NU>(NU, NU).setIdentity();
+    K.template block<Layout::kLd - kUp, kUp - NU>(kUp, NU).setZero();
+  }
+  kernels::transpose(NU, NX, s.S.data(), NU, K.data() + kXo, Layout::kLd);
+  K.template block<NX, NX>(kXo, kXo) = s.Q;
+  if constexpr (kXp > NX) K.template block<kXp - NX, Layout::kLd>(kXo + NX, 0).setZero();
+  if constexpr (NC > 0) {
+    const int ne = s.num_eq;
+    if (ne_padded == 0) return;
+    K.block(kUp, 0, ne_padded, NU).setZero();
+    K.block(kUp, 0, ne, NU) = s.D.topRows(ne);
+    K.block(kUp, kUp, ne_padded, ne_padded).setZero();
+    for (int i = ne; i < ne_padded; ++i) K(kUp + i, kUp + i) = -1.0;
+    K.block(kXo, kUp, NX, ne_padded).setZero();
+    kernels::transpose(ne, NX, s.C.data(), NC, K.data() + kXo + kUp * Layout::kLd, Layout::kLd);
+  }
+}
+
+// Signed left-looking Cholesky of the u and ν columns (see the file comment), then the x
+// block's Schur complement, symmetrized. Returns kNotConvex / kRankDeficient / kSolved.
+template <int NX, int NU, int NC>
+QpStatus factor_stage(double* L, int ne, int ne_padded) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  using kernels::gemm;
+  using kernels::Update;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
+  const int row_end = kUp + ne_padded;  // u and used ν rows; then the x rows [kXo, kLd)
+  for (int j = 0; j < row_end; j += 4) {
+    const int ku = std::min(j, kUp), kc = j - ku;
+    // Panel rows [j, row_end) and the x rows: − Σ_u L Lᵀ, + Σ_ν L Lᵀ of the columns before j.
+    double* Pj = L + j * kLd;
+    gemm<true, Update::kSub>(row_end - j, 4, ku, L + j, kLd, L + j, kLd, Pj + j, kLd);
+    gemm<true, Update::kSub>(kXp, 4, ku, L + kXo, kLd, L + j, kLd, Pj + kXo, kLd);
+    if (kc > 0) {
+      gemm<true, Update::kAdd>(row_end - j, 4, kc, L + j + kUp * kLd, kLd, L + j + kUp * kLd, kLd, Pj + j, kLd);
+      gemm<true, Update::kAdd>(kXp, 4, kc, L + kXo + kUp * kLd, kLd, L + j + kUp * kLd, kLd, Pj + kXo, kLd);
+    }
+    const bool input = j < kUp;
+    if (!kernels::factor_panel4(L, kLd, j, row_end, kXo, kLd, input ? 1.0 : -1.0)) {
+      return input ? QpStatus::kNotConvex : QpStatus::kRankDeficient;
+    }
+  }
+  if (ne > 0) {
+    // Relative pivot test: D rows (nearly) dependent in the Quu⁻¹ metric.
+    double min_pivot = std::numeric_limits<double>::infinity(), max_pivot = 0.0;
+    for (int i = 0; i < ne; ++i) {
+      const double d = L[(kUp + i) * (kLd + 1)];
+      min_pivot = std::min(min_pivot, d);
+      max_pivot = std::max(max_pivot, d);
+    }
+    if (!(min_pivot > kRankPivotRatio * max_pivot)) return QpStatus::kRankDeficient;
+  }
+  double* P = L + kXo * (kLd + 1);
+  gemm<true, Update::kSub, true>(kXp, NX, kUp, L + kXo, kLd, L + kXo, kLd, P, kLd);
+  if (ne_padded > 0) {
+    gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
+  }
+  for (int j = 1; j < NX; ++j) {
+    for (int i = 0; i < j; ++i) P[i + j * kLd] = P[j + i * kLd];
+  }
+  return QpStatus::kSolved;
+}
+
+// Tries Pₖ = Lp·Lpᵀ (P in the x block of w.L, both triangles); sets w.p_factored.
+template <int NX, int NU, int NC, int NG>
+void factor_cost_to_go(RiccatiStage<NX, NU, NC, NG>& w) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kXp = Layout::kXp, kXo = Layout::kXo;
+  Eigen::Map<Eigen::Matrix<double, kXp, kXp>> Lp(w.Lp.data());
+  Lp.template topLeftCorner<NX, NX>() = ConstFactorMap<NX, NU, NC>(w.L.data()).template block<NX, NX>(kXo, kXo);
+  if constexpr (kXp > NX) {
+    Lp.template bottomRows<kXp - NX>().setZero();
+    Lp.template bottomRightCorner<kXp - NX, kXp - NX>().setIdentity();
+  }
+  w.p_factored = kernels::cholesky(w.Lp.data(), kXp, kXp);
+  if (!w.p_factored) return;
+  for (int j = 0; j < kXp; j += 4) {  // zeros above the diagonal where the triangular product reads
+    for (int c = j + 1; c < j + 4; ++c) {
+      for (int r = j; r < c; ++r) Lp(r, c) = 0.0;
+    }
   }
 }
 
 }  // namespace riccati_detail
 
 // Matrix pass over stages T … 0. Reads the barrier weights ws.stage[k].w. Returns kSolved,
-// kNotConvex (a Quu, or the terminal P, not positive definite) or kRankDeficient (a Dₖ).
+// kNotConvex (a Quu not positive definite) or kRankDeficient (a Dₖ). Pₖ itself may be
+// semidefinite (it is never factored).
 template <int NX, int NU, int N, int NC, int NG>
 QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws) {
   using riccati_detail::add_barrier_hessian;
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  using kernels::gemm;
+  using kernels::Update;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
   const int T = qp.horizon;
   {
     auto& wT = ws.stage[T];
-    wT.block.template bottomRightCorner<NX, NX>() = qp.stages[T].Q;
+    riccati_detail::FactorMap<NX, NU, NC> K(wT.L.data());
+    K.template block<NX, NX>(kXo, kXo) = qp.stages[T].Q;
     add_barrier_hessian(qp.stages[T], wT, ws.GuW, ws.GxW, true);
-    wT.P = wT.block.template bottomRightCorner<NX, NX>().template selfadjointView<Eigen::Lower>();
+    auto P = K.template block<NX, NX>(kXo, kXo);
+    P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
+    if constexpr (kXp > NX) K.template block<kXp - NX, kLd>(kXo + NX, 0).setZero();
+    riccati_detail::factor_cost_to_go(wT);
   }
   for (int k = T - 1; k >= 0; --k) {
     const auto& s = qp.stages[k];
     auto& w = ws.stage[k];
-    const auto& P_next = ws.stage[k + 1].P;
-    auto Quu = w.block.template topLeftCorner<NU, NU>();
-    auto X = w.block.template bottomLeftCorner<NX, NU>();  // Qxu, then Qxu Lu⁻ᵀ
-    auto Qxx = w.block.template bottomRightCorner<NX, NX>();
+    double* L = w.L.data();
+    const int ne = NC > 0 ? s.num_eq : 0;
+    const int ne_padded = kernels::round_up4(ne);
+    riccati_detail::FactorMap<NX, NU, NC> K(L);
+    riccati_detail::load_stage(s, ne_padded, K);
 
-    // One product for P[B A] and one lower-triangular product for the whole block
-    // [B A]ᵀ(P[B A]): each operand is packed once, not once per sub-block.
-    ws.BA.template leftCols<NU>() = s.B;
-    ws.BA.template rightCols<NX>() = s.A;
-    ws.PBA.noalias() = P_next * ws.BA;
-    Quu = s.R;
-    X = s.S.transpose();
-    Qxx = s.Q;
-    w.block.template triangularView<Eigen::Lower>() += ws.BA.transpose() * ws.PBA;
+    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd);
+    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd);
+    double* Yt = ws.Yt.data();
+    const auto& next = ws.stage[k + 1];
+    if (next.p_factored) {
+      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ.
+      kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, next.Lp.data(), kXp, Yt, kLd);
+      kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, next.Lp.data(), kXp, Yt + kXo, kLd);
+      gemm<true, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd);
+      gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
+      gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
+    } else {
+      // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
+      const double* P_next = next.L.data() + kXo * (kLd + 1);
+      gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
+      gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
+      gemm<false, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd);
+      gemm<false, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
+      gemm<false, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, s.A.data(), NX, L + kXo * (kLd + 1), kLd);
+    }
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false);
 
-    Eigen::LLT<Eigen::Ref<Eigen::Matrix<double, NU, NU>>, Eigen::Lower> llt(Quu);
-    if (llt.info() != Eigen::Success) return QpStatus::kNotConvex;
-    Quu.template triangularView<Eigen::Lower>().transpose().template solveInPlace<Eigen::OnTheRight>(X);
-    Qxx.template selfadjointView<Eigen::Lower>().rankUpdate(X, -1.0);
-
-    if constexpr (NC > 0) {
-      const int ne = s.num_eq;
-      if (ne > 0) {
-        w.Y.setZero();
-        w.Y.leftCols(ne) = s.D.topRows(ne).transpose();
-        Quu.template triangularView<Eigen::Lower>().solveInPlace(w.Y);
-        ws.M.setIdentity();
-        ws.M.topLeftCorner(ne, ne).noalias() = w.Y.leftCols(ne).transpose() * w.Y.leftCols(ne);
-        w.m_llt.compute(ws.M);
-        // Relative pivot test: D rows (nearly) dependent in the Quu⁻¹ metric.
-        const auto& Lm = w.m_llt.matrixLLT();
-        double min_pivot = std::numeric_limits<double>::infinity(), max_pivot = 0.0;
-        for (int i = 0; i < ne; ++i) {
-          min_pivot = std::min(min_pivot, std::abs(Lm(i, i)));
-          max_pivot = std::max(max_pivot, std::abs(Lm(i, i)));
-        }
-        if (w.m_llt.info() != Eigen::Success || !(min_pivot > riccati_detail::kRankPivotRatio * max_pivot)) {
-          return QpStatus::kRankDeficient;
-        }
-        w.GmT.setZero();
-        w.GmT.leftCols(ne) = s.C.topRows(ne).transpose();
-        w.GmT.noalias() -= X * w.Y;
-        w.m_llt.matrixU().template solveInPlace<Eigen::OnTheRight>(w.GmT);
-        Qxx.template selfadjointView<Eigen::Lower>().rankUpdate(w.GmT);
-      } else {
-        w.Y.setZero();
-        w.GmT.setZero();
-      }
-    }
-    w.P = Qxx.template selfadjointView<Eigen::Lower>();
+    const QpStatus f = riccati_detail::factor_stage<NX, NU, NC>(L, ne, ne_padded);
+    if (f != QpStatus::kSolved) return f;
+    if (k > 0) riccati_detail::factor_cost_to_go(w);
   }
   return QpStatus::kSolved;
 }
@@ -187,6 +302,9 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
 template <int NX, int NU, int N, int NC, int NG>
 void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
                    const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  using Map = riccati_detail::ConstFactorMap<NX, NU, NC>;
+  constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
   const int T = qp.horizon;
   {
     const auto& s = qp.stages[T];
@@ -200,10 +318,12 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
     const auto& s = qp.stages[k];
     auto& w = ws.stage[k];
     const auto& next = ws.stage[k + 1];
-    const auto Lu = w.block.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
-    const auto X = w.block.template bottomLeftCorner<NX, NU>();
+    const Map K(w.L.data());
+    const Map K_next(next.L.data());
+    const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
+    const auto X = K.template block<NX, NU>(kXo, 0);
     ws.v = next.p;
-    ws.v.noalias() += next.P * vec.b[k];
+    ws.v.noalias() += K_next.template block<NX, NX>(kXo, kXo) * vec.b[k];
     ws.qu = vec.r[k];
     ws.qu.noalias() += s.B.transpose() * ws.v;
     w.p = vec.q[k];
@@ -219,13 +339,13 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
     Lu.solveInPlace(w.k0);
     w.p.noalias() -= X * w.k0;
     if constexpr (NC > 0) {
-      if (s.num_eq > 0) {
-        ws.gamma.setZero();
-        ws.gamma.head(s.num_eq) = -vec.e[k].head(s.num_eq);
-        ws.gamma.noalias() -= w.Y.transpose() * w.k0;
-        w.gm = ws.gamma;
-        w.m_llt.matrixL().solveInPlace(w.gm);
-        w.p.noalias() += w.GmT * w.gm;
+      const int ne = s.num_eq;
+      if (ne > 0) {
+        auto gm = w.gm.head(ne);
+        gm = -vec.e[k].head(ne);
+        gm.noalias() -= K.block(kUp, 0, ne, NU) * w.k0;  // − Yᵀk0
+        K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().solveInPlace(gm);
+        w.p.noalias() -= K.block(kXo, kUp, NX, ne) * gm;  // + (Lm⁻¹G)ᵀ gm
       }
     }
   }
@@ -233,17 +353,20 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
   for (int k = 0; k < T; ++k) {
     const auto& s = qp.stages[k];
     const auto& w = ws.stage[k];
-    const auto Lu = w.block.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
-    const auto X = w.block.template bottomLeftCorner<NX, NU>();
+    const Map K(w.L.data());
+    const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
+    const auto X = K.template block<NX, NU>(kXo, 0);
     ws.t = w.k0;
     ws.t.noalias() += X.transpose() * sol.x[k];
     if constexpr (NC > 0) {
       sol.nu[k].setZero();
-      if (s.num_eq > 0) {
-        sol.nu[k] = w.gm;
-        sol.nu[k].noalias() += w.GmT.transpose() * sol.x[k];
-        w.m_llt.matrixU().solveInPlace(sol.nu[k]);
-        ws.t.noalias() += w.Y * sol.nu[k];
+      const int ne = s.num_eq;
+      if (ne > 0) {
+        auto nu = sol.nu[k].head(ne);
+        nu = w.gm.head(ne);
+        nu.noalias() -= K.block(kXo, kUp, NX, ne).transpose() * sol.x[k];
+        K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().transpose().solveInPlace(nu);
+        ws.t.noalias() += K.block(kUp, 0, ne, NU).transpose() * nu;
       }
     }
     sol.u[k] = -ws.t;
@@ -253,8 +376,9 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
     sol.x[k + 1].noalias() += s.B * sol.u[k];
   }
   for (int k = 0; k <= T; ++k) {
+    const Map K(ws.stage[k].L.data());
     sol.costate[k] = ws.stage[k].p;
-    sol.costate[k].noalias() += ws.stage[k].P * sol.x[k];
+    sol.costate[k].noalias() += K.template block<NX, NX>(kXo, kXo) * sol.x[k];
   }
   if constexpr (NC > 0) sol.nu[T].setZero();
   sol.u[T].setZero();

@@ -168,6 +168,35 @@ TEST(OcpQp, IllConditionedCostMatchesDense) {
   }
 }
 
+// No state cost: the cost-to-go Pₖ is singular (P_T = 0 exactly, the others of low rank), so
+// the square-root product is refused and the general product [B A]ᵀPₖ₊₁[B A] is used. The
+// dense solver needs a definite Hessian, so the oracle is the KKT certificate (sufficient for
+// a convex QP).
+TEST(OcpQp, SemidefiniteCostToGoSatisfiesKkt) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
+  std::mt19937_64 rng(32);
+  for (int n = 0; n < 10; ++n) {
+    make_random_ocp(f->qp, rng, 5);
+    for (int k = 0; k <= 5; ++k) {
+      f->qp.stages[k].Q.setZero();
+      f->qp.stages[k].S.setZero();
+    }
+    if (n % 2 == 1) f->qp.stages[5].Q(0, 0) = 1.0;  // rank one terminal cost
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-8);
+    // Equality-only: one factorization, exact.
+    auto g = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+    make_random_ocp(g->qp, rng, 5);
+    for (int k = 0; k <= 5; ++k) {
+      g->qp.stages[k].Q.setZero();
+      g->qp.stages[k].S.setZero();
+    }
+    ASSERT_EQ(solve_ocp_qp(g->qp, OcpSettings{}, g->ws, g->sol), QpStatus::kSolved);
+    EXPECT_FALSE(g->ws.riccati.stage[5].p_factored);  // P_T = 0: stage T−1 takes the general path
+    expect_kkt(g->qp, ocp_kkt(g->qp, g->sol), 1e-10);
+  }
+}
+
 TEST(OcpQp, IterationCapIsHonoured) {
   auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
   std::mt19937_64 rng(29);

@@ -1,0 +1,183 @@
+// Register-blocked FMA kernels for the Riccati recursion's matrix pass (riccati.h).
+//
+// Why our own: at the Riccati's sizes (inner dimensions 38–90, blocks ≤ ~130 rows) Eigen's
+// generic GEMM and LLT spend their time packing operands and reach 6–25 Gflop/s. Here an 8×4
+// (or 4×4) tile of C lives in 8 AVX2 registers for the whole inner loop, A's columns stream
+// from L1/L2 and B's entries are broadcast: two loads and four broadcasts feed eight FMAs, so
+// the loop is FMA-bound. Everything is in place, no packing, no heap.
+//
+// Layout: column-major with the caller's leading dimensions. Row extents m must be multiples
+// of 4 (the caller pads its storage with zero rows); column extents n and inner extents k are
+// arbitrary. Without AVX2/FMA (another -march) the same functions run as plain loops.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#define KUAVO_QP_KERNELS_SIMD 1
+#endif
+
+namespace kuavo::qp::kernels {
+
+// What a product does with C.
+enum class Update { kSet, kAdd, kSub };
+
+constexpr int round_up4(int n) { return (n + 3) / 4 * 4; }
+
+// op(B)(p, j) for an NN product (B is k×n) or an NT product (B is n×k, C ±= A·Bᵀ).
+template <bool kTransB>
+inline const double* b_entry(const double* B, int ldb, int p, int j) {
+  return kTransB ? B + j + p * ldb : B + p + j * ldb;
+}
+
+// One MR×NR tile of C (MR = 4 or 8, NR = 1…4) over the inner extent k.
+template <int MR, int NR, bool kTransB, Update kUpdate>
+inline void tile(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
+  static_assert(MR == 4 || MR == 8, "tile rows");
+  static_assert(NR >= 1 && NR <= 4, "tile columns");
+#ifdef KUAVO_QP_KERNELS_SIMD
+  constexpr int MV = MR / 4;
+  __m256d acc[MV][NR];
+  for (int v = 0; v < MV; ++v) {
+    for (int j = 0; j < NR; ++j) acc[v][j] = _mm256_setzero_pd();
+  }
+  for (int p = 0; p < k; ++p) {
+    __m256d a[MV];
+    for (int v = 0; v < MV; ++v) a[v] = _mm256_loadu_pd(A + p * lda + 4 * v);
+    for (int j = 0; j < NR; ++j) {
+      const __m256d b = _mm256_broadcast_sd(b_entry<kTransB>(B, ldb, p, j));
+      for (int v = 0; v < MV; ++v) acc[v][j] = _mm256_fmadd_pd(a[v], b, acc[v][j]);
+    }
+  }
+  for (int j = 0; j < NR; ++j) {
+    for (int v = 0; v < MV; ++v) {
+      double* c = C + j * ldc + 4 * v;
+      if constexpr (kUpdate == Update::kSet) {
+        _mm256_storeu_pd(c, acc[v][j]);
+      } else if constexpr (kUpdate == Update::kAdd) {
+        _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), acc[v][j]));
+      } else {
+        _mm256_storeu_pd(c, _mm256_sub_pd(_mm256_loadu_pd(c), acc[v][j]));
+      }
+    }
+  }
+#else
+  double acc[MR][NR] = {};
+  for (int p = 0; p < k; ++p) {
+    for (int j = 0; j < NR; ++j) {
+      const double b = *b_entry<kTransB>(B, ldb, p, j);
+      for (int i = 0; i < MR; ++i) acc[i][j] += A[p * lda + i] * b;
+    }
+  }
+  for (int j = 0; j < NR; ++j) {
+    for (int i = 0; i < MR; ++i) {
+      double& c = C[j * ldc + i];
+      if constexpr (kUpdate == Update::kSet) c = acc[i][j];
+      else if constexpr (kUpdate == Update::kAdd) c += acc[i][j];
+      else c -= acc[i][j];
+    }
+  }
+#endif
+}
+
+template <int NR, bool kTransB, Update kUpdate>
+inline void tile_column(int i, int m, int k, const double* A, int lda, const double* B, int ldb, double* C,
+                        int ldc) {
+  for (; i + 8 <= m; i += 8) tile<8, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc);
+  if (i < m) tile<4, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc);
+}
+
+// C[m×n] (=, +=, −=) A[m×k] · op(B), op(B) = B (NN) or Bᵀ (kTransB). m % 4 == 0.
+// kLower: C's (0,0) lies on a symmetric matrix's diagonal and only its lower triangle is
+// wanted: rows above each 4-column strip are skipped (tiles that straddle the diagonal are
+// computed whole, so a few entries above it are written too).
+template <bool kTransB, Update kUpdate, bool kLower = false>
+inline void gemm(int m, int n, int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
+  for (int j = 0; j < n; j += 4) {
+    const int i = kLower ? j : 0;
+    const double* Bj = b_entry<kTransB>(B, ldb, 0, j);
+    double* Cj = C + j * ldc;
+    switch (std::min(4, n - j)) {
+      case 4: tile_column<4, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
+      case 3: tile_column<3, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
+      case 2: tile_column<2, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
+      default: tile_column<1, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
+    }
+  }
+}
+
+// C[m×n] = A[m×n'] · L with L lower triangular n×n (its strict upper part inside the 4×4
+// diagonal chunks must be zero; the rest of the upper part is not read). m % 4 == 0.
+inline void trmm_right_lower(int m, int n, const double* A, int lda, const double* L, int ldl, double* C, int ldc) {
+  for (int j = 0; j < n; j += 4) {
+    gemm<false, Update::kSet>(m, std::min(4, n - j), n - j, A + j * lda, lda, L + j + j * ldl, ldl, C + j * ldc, ldc);
+  }
+}
+
+// dst(j, i) = src(i, j) for an m×n column-major src.
+inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd) {
+  int i = 0;
+#ifdef KUAVO_QP_KERNELS_SIMD
+  for (; i + 4 <= m; i += 4) {
+    int j = 0;
+    for (; j + 4 <= n; j += 4) {
+      const __m256d a0 = _mm256_loadu_pd(src + i + j * lds);
+      const __m256d a1 = _mm256_loadu_pd(src + i + (j + 1) * lds);
+      const __m256d a2 = _mm256_loadu_pd(src + i + (j + 2) * lds);
+      const __m256d a3 = _mm256_loadu_pd(src + i + (j + 3) * lds);
+      const __m256d t0 = _mm256_unpacklo_pd(a0, a1), t1 = _mm256_unpackhi_pd(a0, a1);
+      const __m256d t2 = _mm256_unpacklo_pd(a2, a3), t3 = _mm256_unpackhi_pd(a2, a3);
+      _mm256_storeu_pd(dst + j + i * ldd, _mm256_permute2f128_pd(t0, t2, 0x20));
+      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_permute2f128_pd(t1, t3, 0x20));
+      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_permute2f128_pd(t0, t2, 0x31));
+      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_permute2f128_pd(t1, t3, 0x31));
+    }
+    for (; j < n; ++j) {
+      for (int r = i; r < i + 4; ++r) dst[j + r * ldd] = src[r + j * lds];
+    }
+  }
+#endif
+  for (; i < m; ++i) {
+    for (int j = 0; j < n; ++j) dst[j + i * ldd] = src[i + j * lds];
+  }
+}
+
+// Factors the four columns [j, j+4) of a symmetric matrix S = L·diag(d)·Lᵀ in place (lower,
+// column-major, leading dimension ld), d = ±1 for all four. The panel's rows are
+// [j, row_end) ∪ [row2_begin, row2_end) (two ranges, so a block of unused rows can sit between
+// them), and must already carry the updates of every column before j. On return the panel
+// holds L: L(c,c) = √(d·a_c), L(r,c) = a_rc / (d·L(c,c)). Returns false at a pivot with
+// d·a ≤ 0 or NaN (not definite with the expected sign).
+inline bool factor_panel4(double* L, int ld, int j, int row_end, int row2_begin, int row2_end, double d) {
+  for (int c = j; c < j + 4; ++c) {
+    double* Lc = L + c * ld;
+    const double a = d * Lc[c];
+    if (!(a > 0.0)) return false;
+    const double l = std::sqrt(a);
+    Lc[c] = l;
+    const double inv = 1.0 / (d * l);
+    for (int r = c + 1; r < row_end; ++r) Lc[r] *= inv;
+    for (int r = row2_begin; r < row2_end; ++r) Lc[r] *= inv;
+    for (int c2 = c + 1; c2 < j + 4; ++c2) {
+      double* L2 = L + c2 * ld;
+      const double f = d * Lc[c2];
+      for (int r = c2; r < row_end; ++r) L2[r] -= f * Lc[r];
+      for (int r = row2_begin; r < row2_end; ++r) L2[r] -= f * Lc[r];
+    }
+  }
+  return true;
+}
+
+// In-place Cholesky S = L·Lᵀ of an n×n matrix, n % 4 == 0 (lower triangle read and written),
+// left-looking over 4-column panels. Returns false if S is not numerically positive definite.
+inline bool cholesky(double* L, int ld, int n) {
+  for (int j = 0; j < n; j += 4) {
+    gemm<true, Update::kSub>(n - j, 4, j, L + j, ld, L + j, ld, L + j + j * ld, ld);
+    if (!factor_panel4(L, ld, j, n, n, n, 1.0)) return false;
+  }
+  return true;
+}
+
+}  // namespace kuavo::qp::kernels

@@ -1,0 +1,185 @@
+// The Riccati's FMA kernels (riccati_kernels.h) and its per-stage signed factorization against
+// plain Eigen products and factorizations, at the sizes of interest (MPC stage blocks, padded
+// remainders, empty inner dimensions).
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <memory>
+#include <random>
+
+#include "controllers/qp/riccati.h"
+#include "controllers/qp/riccati_kernels.h"
+#include "tests/qp/dense_qp_fixtures.h"
+
+namespace kuavo::qp::test {
+namespace {
+
+using Eigen::MatrixXd;
+using kernels::Update;
+
+// Relative to the operands' scale: the kernels and Eigen sum in different orders.
+constexpr double kTolerance = 1e-13;
+
+MatrixXd random_matrix(int rows, int cols, std::mt19937_64& rng) {
+  MatrixXd m(rows, cols);
+  fill_gaussian(m, rng);
+  return m;
+}
+
+template <bool kTransB, Update kUpdate, bool kLower>
+void check_gemm(int m, int n, int k, std::mt19937_64& rng) {
+  const int ld = m + 4;  // leading dimensions larger than the extents, as in the stage blocks
+  const MatrixXd A = random_matrix(ld, k, rng);
+  const MatrixXd B = kTransB ? random_matrix(n + 3, k, rng) : random_matrix(k + 3, n, rng);
+  const MatrixXd C0 = random_matrix(ld, n, rng);
+  MatrixXd C = C0;
+  kernels::gemm<kTransB, kUpdate, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
+                                          static_cast<int>(B.rows()), C.data(), static_cast<int>(C.rows()));
+  MatrixXd product = kTransB ? MatrixXd(A.topRows(m) * B.topRows(n).transpose())
+                             : MatrixXd(A.topRows(m) * B.topRows(k));
+  MatrixXd expected = C0.topRows(m);
+  if (kUpdate == Update::kSet) expected = product;
+  if (kUpdate == Update::kAdd) expected += product;
+  if (kUpdate == Update::kSub) expected -= product;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < ld; ++i) {
+      if (i >= m || (kLower && i < j / 4 * 4)) {
+        EXPECT_EQ(C(i, j), C0(i, j)) << "outside the product: " << i << "," << j;  // untouched
+      } else if (!kLower || i >= j) {
+        EXPECT_NEAR(C(i, j), expected(i, j), kTolerance * (1.0 + k) * 10.0) << m << "x" << n << "x" << k << " at " << i << "," << j;
+      }
+    }
+  }
+}
+
+TEST(RiccatiKernels, ProductsMatchEigen) {
+  std::mt19937_64 rng(101);
+  for (const int m : {4, 8, 12, 40, 52, 92}) {
+    for (const int n : {1, 2, 3, 4, 5, 38, 50}) {
+      for (const int k : {0, 1, 3, 38, 52}) {
+        check_gemm<false, Update::kSet, false>(m, n, k, rng);
+        check_gemm<false, Update::kAdd, false>(m, n, k, rng);
+        check_gemm<true, Update::kSub, false>(m, n, k, rng);
+        check_gemm<true, Update::kAdd, true>(m, n, k, rng);
+        check_gemm<false, Update::kAdd, true>(m, n, k, rng);
+      }
+    }
+  }
+}
+
+TEST(RiccatiKernels, TransposeAndTriangularProductMatchEigen) {
+  std::mt19937_64 rng(102);
+  for (const int m : {1, 3, 4, 38, 50}) {
+    for (const int n : {1, 5, 38, 50}) {
+      const MatrixXd src = random_matrix(m + 2, n, rng);
+      MatrixXd dst = MatrixXd::Zero(n + 1, m);
+      kernels::transpose(m, n, src.data(), m + 2, dst.data(), n + 1);
+      EXPECT_EQ(dst.topRows(n), src.topRows(m).transpose());
+      EXPECT_EQ(dst.row(n).norm(), 0.0);
+    }
+  }
+  for (const int m : {4, 40, 52}) {
+    for (const int n : {1, 4, 6, 38}) {
+      const MatrixXd A = random_matrix(m, n, rng);
+      MatrixXd L = random_matrix(n + 2, n, rng);
+      // Zeros above the diagonal inside the 4×4 diagonal chunks, garbage elsewhere above it.
+      for (int j = 0; j < n; ++j) {
+        for (int i = j / 4 * 4; i < j; ++i) L(i, j) = 0.0;
+      }
+      MatrixXd C = MatrixXd::Constant(m, n, 7.0);
+      kernels::trmm_right_lower(m, n, A.data(), m, L.data(), n + 2, C.data(), m);
+      const MatrixXd expected = A * L.topRows(n).triangularView<Eigen::Lower>();
+      EXPECT_LE((C - expected).cwiseAbs().maxCoeff(), kTolerance * 10.0 * (1.0 + n)) << m << "x" << n;
+    }
+  }
+}
+
+TEST(RiccatiKernels, CholeskyMatchesEigenAndRefusesIndefinite) {
+  std::mt19937_64 rng(103);
+  for (const int n : {4, 8, 40, 52}) {
+    const MatrixXd M = random_matrix(n + 3, n, rng);
+    const MatrixXd S = M.transpose() * M + 0.1 * MatrixXd::Identity(n, n);
+    MatrixXd L = S;
+    ASSERT_TRUE(kernels::cholesky(L.data(), n, n));
+    const MatrixXd expected = S.llt().matrixL();
+    const MatrixXd mine = L.triangularView<Eigen::Lower>();
+    EXPECT_LE((mine - expected).cwiseAbs().maxCoeff(), 1e-11) << n;
+    MatrixXd indefinite = S;
+    indefinite(n - 1, n - 1) = -1.0;
+    EXPECT_FALSE(kernels::cholesky(indefinite.data(), n, n));
+  }
+}
+
+// One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go P against the
+// classical range-space formulas with Eigen's LLT, with padding in every block.
+template <int NX, int NU, int NC>
+void check_stage(int ne, std::mt19937_64& rng) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo;
+  const MatrixXd M = random_matrix(NX + NU + 3, NX + NU, rng);
+  const MatrixXd H = M.transpose() * M / double(NX + NU) + 0.05 * MatrixXd::Identity(NX + NU, NX + NU);
+  auto stage = std::make_unique<OcpStage<NX, NU, NC, 0>>();
+  auto& s = *stage;
+  s.R = H.topLeftCorner(NU, NU);
+  s.S = H.block(0, NU, NU, NX);
+  s.Q = H.bottomRightCorner(NX, NX);
+  fill_gaussian(s.C, rng);
+  fill_gaussian(s.D, rng);
+  s.num_eq = ne;
+  auto w = std::make_unique<RiccatiStage<NX, NU, NC, 0>>();
+  w->L.fill(3.0);  // stale data from an earlier problem must not matter
+  riccati_detail::FactorMap<NX, NU, NC> K(w->L.data());
+  const int ne_padded = kernels::round_up4(ne);
+  riccati_detail::load_stage(s, ne_padded, K);
+  ASSERT_EQ((riccati_detail::factor_stage<NX, NU, NC>(w->L.data(), ne, ne_padded)), QpStatus::kSolved);
+
+  const Eigen::LLT<MatrixXd> llt(MatrixXd(s.R));
+  const MatrixXd Lu = llt.matrixL();
+  const MatrixXd X = llt.matrixL().solve(MatrixXd(s.S)).transpose();
+  MatrixXd P = MatrixXd(s.Q) - X * X.transpose();
+  const double tol = 1e-11;
+  EXPECT_LE((MatrixXd(K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>()) - Lu).cwiseAbs().maxCoeff(), tol);
+  EXPECT_LE((K.template block<NX, NU>(kXo, 0) - X).cwiseAbs().maxCoeff(), tol);
+  if (ne > 0) {
+    const MatrixXd Y = llt.matrixL().solve(MatrixXd(s.D.topRows(ne).transpose()));
+    const Eigen::LLT<MatrixXd> m_llt(Y.transpose() * Y);
+    const MatrixXd G = MatrixXd(s.C.topRows(ne)) - Y.transpose() * X.transpose();
+    const MatrixXd GmT = m_llt.matrixL().solve(G).transpose();
+    P += GmT * GmT.transpose();
+    EXPECT_LE((K.block(kUp, 0, ne, NU) - Y.transpose()).cwiseAbs().maxCoeff(), tol);
+    EXPECT_LE((MatrixXd(K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>()) - MatrixXd(m_llt.matrixL())).cwiseAbs().maxCoeff(), tol);
+    EXPECT_LE((K.block(kXo, kUp, NX, ne) + GmT).cwiseAbs().maxCoeff(), tol);
+  }
+  EXPECT_LE((K.template block<NX, NX>(kXo, kXo) - P).cwiseAbs().maxCoeff(), tol) << "P, ne = " << ne;
+  (void)kLd;
+}
+
+TEST(RiccatiKernels, StageFactorizationMatchesRangeSpaceFormulas) {
+  std::mt19937_64 rng(104);
+  for (int ne = 0; ne <= 3; ++ne) check_stage<5, 6, 3>(ne, rng);
+  for (const int ne : {0, 6, 12}) check_stage<38, 50, 12>(ne, rng);
+  check_stage<38, 50, 30>(15, rng);
+}
+
+TEST(RiccatiKernels, StageFactorizationReportsStatuses) {
+  std::mt19937_64 rng(105);
+  using Layout = RiccatiLayout<5, 6, 3>;
+  OcpStage<5, 6, 3, 0> s;
+  fill_gaussian(s.C, rng);
+  fill_gaussian(s.D, rng);
+  auto w = std::make_unique<RiccatiStage<5, 6, 3, 0>>();
+  riccati_detail::FactorMap<5, 6, 3> K(w->L.data());
+  s.R(2, 2) = -1.0;  // indefinite Quu
+  riccati_detail::load_stage(s, 0, K);
+  EXPECT_EQ((riccati_detail::factor_stage<5, 6, 3>(w->L.data(), 0, 0)), QpStatus::kNotConvex);
+  s.R(2, 2) = 1.0;
+  s.num_eq = 2;
+  s.D.row(1) = 2.0 * s.D.row(0);  // dependent equalities
+  riccati_detail::load_stage(s, 4, K);
+  EXPECT_EQ((riccati_detail::factor_stage<5, 6, 3>(w->L.data(), 2, 4)), QpStatus::kRankDeficient);
+  static_assert(Layout::kLd == 8 + 4 + 8);
+}
+
+}  // namespace
+}  // namespace kuavo::qp::test
