@@ -25,6 +25,7 @@ const char* stack_validate_config(const StackConfig& config) {
     return "estimator touchdown delay outside 0..0.2 s";
   }
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
+  if (!(config.plan_blend_s >= 0.0 && config.plan_blend_s <= config.plan_period_s)) return "plan blend outside [0, plan period]";
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
     if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
@@ -48,6 +49,23 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
                                      hal::CommandFrame& command) {
   // The reference first: its contact flags are the estimator's contact schedule.
   planner::reference_plan_at_rt(ws.active, now_ns, ws.reference);
+  if (ws.blend_pending) {
+    ws.blend_pending = false;
+    ws.blending = config.plan_blend_s > 0.0 && ws.previous.count > 0;
+    ws.blend_start_ns = now_ns;
+  }
+  if (ws.blending) {
+    // alpha reaches 1 at blend_start + plan_blend_s, the first blended tick already moves.
+    const double alpha =
+        (static_cast<double>(now_ns - ws.blend_start_ns) * 1e-9 + config.wbc.dt_s) / (config.plan_blend_s + config.wbc.dt_s);
+    if (alpha >= 1.0) {
+      ws.blending = false;
+    } else {
+      planner::reference_plan_at_rt(ws.previous, now_ns, ws.previous_reference);
+      // The new plan's contact flags (the estimator's schedule, the WBC's constraints).
+      wbc::wbc_interpolate_reference(ws.reference, ws.previous_reference, 1.0 - alpha, ws.reference);
+    }
+  }
   const double dt_s = static_cast<double>(now_ns - ws.last_tick_ns) * 1e-9;
   ws.last_tick_ns = now_ns;
   for (int c = 0; c < model::kNumContactPoints; ++c) {
@@ -112,6 +130,8 @@ bool stack_begin_rt(const model::Model& model, const StackConfig& config, Contro
   estimator::estimator_output(control.estimator, control.estimate);
   wbc::wbc_init(model, config.wbc, control.wbc);
   if (&first != &control.active) control.active = first;
+  control.previous.count = 0;  // nothing to blend from
+  control.blend_pending = control.blending = false;
   control.plans_applied = 1;
   control.last_tick_ns = now_ns - static_cast<hal::TimeNs>(config.wbc.dt_s * 1e9);
   control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
@@ -125,7 +145,9 @@ void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws) {
 }
 
 void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan) {
+  ws.previous = ws.active;
   ws.active = plan;
+  ws.blend_pending = true;
   ++ws.plans_applied;
 }
 

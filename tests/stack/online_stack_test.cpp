@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -129,9 +130,61 @@ TEST(OnlineStack, StartIsAFreshStartWithTheMpc) {
   EXPECT_EQ(mismatches, 0) << "first at tick " << first_mismatch;
 }
 
+// A new plan takes over linearly over plan_blend_s: the reference at the k-th tick after
+// the hand-over is the blend (k+1)/(blend/dt + 1) of the new plan with the old; the new
+// plan's contact flags hold from the first tick; after the blend, the new plan alone.
+TEST(OnlineStack, ANewPlanTakesOverLinearlyOverTheBlendTime) {
+  const model::Model& m = robot();
+  Rig& rig = the_rig();
+  auto& [plan, control, planner_ws, pending, data] = rig;
+  planner::StepInPlaceConfig gait;
+  gait.steps = 1;
+  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  StackConfig cfg;  // kinematic planner
+  cfg.plan_blend_s = 0.02;
+  static hal::SensorFrame frame;
+  static hal::CommandFrame command;
+  static planner::PlanKnot truth;
+  sim::ideal_sensor_frame_on_plan(m, *data, *plan, 0, truth, frame);
+  ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
+  constexpr hal::TimeNs kDt = 2'000'000;
+  stack_control_tick_rt(m, cfg, *control, frame, 0, StateOverride{}, command);
+  // The new plan: the old one with every joint reference 0.1 rad higher, one point lifted.
+  static planner::ReferencePlan old_plan, new_plan;
+  old_plan = control->active;
+  new_plan = old_plan;
+  for (int k = 0; k < new_plan.count; ++k) {
+    new_plan.knots[k].joint_position_rad.array() += 0.1;
+    new_plan.knots[k].in_contact[0] = false;
+  }
+  stack_apply_plan_rt(*control, new_plan);
+  const int blend_ticks = static_cast<int>(std::lround(cfg.plan_blend_s / cfg.wbc.dt_s));
+  static wbc::WbcReference old_ref;
+  for (int k = 0; k <= blend_ticks + 2; ++k) {
+    const hal::TimeNs now = (k + 1) * kDt;
+    stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command);
+    ASSERT_TRUE(planner::reference_plan_at_rt(old_plan, now, old_ref));
+    const double expected = std::min(1.0, double(k + 1) / double(blend_ticks + 1));
+    const Eigen::VectorXd moved = control->reference.joint_position_rad - old_ref.joint_position_rad;
+    EXPECT_NEAR(moved.minCoeff(), 0.1 * expected, 1e-12) << "tick " << k;
+    EXPECT_NEAR(moved.maxCoeff(), 0.1 * expected, 1e-12) << "tick " << k;
+    EXPECT_FALSE(control->reference.in_contact[0]) << "tick " << k;
+  }
+  // Blend off: the switch is immediate.
+  StackConfig at_once;
+  at_once.plan_blend_s = 0.0;
+  stack_apply_plan_rt(*control, old_plan);
+  stack_control_tick_rt(m, at_once, *control, frame, 20 * kDt, StateOverride{}, command);
+  ASSERT_TRUE(planner::reference_plan_at_rt(old_plan, 20 * kDt, old_ref));
+  EXPECT_EQ((control->reference.joint_position_rad - old_ref.joint_position_rad).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(OnlineStack, RefusesABadConfiguration) {
   StackConfig cfg;
   cfg.plan_period_s = 0.0;
+  EXPECT_NE(stack_validate_config(cfg), nullptr);
+  cfg = StackConfig{};
+  cfg.plan_blend_s = 0.03;  // longer than the plan period
   EXPECT_NE(stack_validate_config(cfg), nullptr);
   cfg = StackConfig{};
   EXPECT_EQ(stack_validate_config(cfg), nullptr);

@@ -5,7 +5,8 @@
 // reported as counters (the goal: ≤ 100 µs max). The 50 Hz planner (kinematic
 // here; the MPC has its own benchmark, mpc_bench) runs between ticks, untimed.
 //
-// Two motions: stepping in place (kinematic planner) and the built-in dance (MPC planner).
+// Two motions: stepping in place (kinematic planner) and the built-in dance (MPC planner,
+// plans switched at once, and blended over 20 ms: StackConfig::plan_blend_s).
 // Each motion's ticks are replayed identically several times (stack_start restarts the
 // same state), so every tick index has several timings of the same computation:
 //   max_us          the worst single tick: computation + whatever the platform added
@@ -70,8 +71,9 @@ struct Fixture {
   }
   // The built-in dance (retargeted, balance-filtered, 31 s) with the MPC planner, as the
   // main job runs it.
-  static Fixture& dance() {
-    static Fixture s;
+  static Fixture& dance(double plan_blend_s) {
+    static Fixture blended, switched;
+    Fixture& s = plan_blend_s > 0.0 ? blended : switched;
     if (!s.made) {
       s.made = true;
       s.load_robot();
@@ -81,6 +83,7 @@ struct Fixture {
       s.ok = mocap::built_in_dance_plan(s.robot, *s.plan, error) &&
              planner::balance_filter(s.robot, planner::BalanceFilterConfig{}, *s.plan, *filter, report) == nullptr;
       s.cfg.planner = stack::PlannerKind::kMpc;
+      s.cfg.plan_blend_s = plan_blend_s;
       if (s.ok) s.start(static_cast<int>(planner::motion_plan_duration_s(*s.plan) / 0.002));
     }
     return s;
@@ -181,12 +184,16 @@ void time_ticks(benchmark::State& state, Fixture& f) {
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   Fixture& steps = Fixture::steps();
-  Fixture& dance = Fixture::dance();
+  Fixture& dance = Fixture::dance(0.0);
+  Fixture& dance_blend = Fixture::dance(0.02);
   benchmark::RegisterBenchmark("BM_ControlTick_Steps", [&](benchmark::State& s) { time_ticks(s, steps); })
       ->Iterations(5 * static_cast<benchmark::IterationCount>(std::max<std::size_t>(1, steps.frames.size())))
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_ControlTick_DanceMpc", [&](benchmark::State& s) { time_ticks(s, dance); })
       ->Iterations(3 * static_cast<benchmark::IterationCount>(std::max<std::size_t>(1, dance.frames.size())))
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("BM_ControlTick_DanceMpc_Blend20ms", [&](benchmark::State& s) { time_ticks(s, dance_blend); })
+      ->Iterations(3 * static_cast<benchmark::IterationCount>(std::max<std::size_t>(1, dance_blend.frames.size())))
       ->Unit(benchmark::kMicrosecond);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
