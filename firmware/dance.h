@@ -27,7 +27,10 @@
 //
 // After the motion's end the reference holds its last frame; dance_settle_ns later
 // dance_done asks the mode machine for finish, where the same controller keeps running
-// while the cycle fades its gains out.
+// while the cycle fades its gains out (it keeps the robot up longer than a held command:
+// held, the sagging robot pressed a joint past its stop, fault 21, in the firmware-in-the-
+// loop dance). The robot sags as the gains fade and the controller's references may then
+// run past a stop: in finish they are put on it whatever the excess (counted apart).
 #pragma once
 
 #include <cstdint>
@@ -100,6 +103,7 @@ struct DanceCounters {
   std::uint64_t wbc_not_ok_ticks = 0;
   std::uint64_t begin_failures = 0;  // stack_begin_rt refused the sensors
   std::uint64_t references_limited = 0;  // joint references put back on a stop (dance.cpp)
+  std::uint64_t finish_references_limited = 0;  // the same in finish, where any excess is (gains fading)
   std::uint64_t torques_saturated = 0;   // joint torques clipped at the peak, as a drive does
   double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
 };
@@ -119,6 +123,7 @@ struct DanceControl {
   hal::TimeNs blend_ns = 0, settle_ns = 0, stale_ns = 0;  // from FirmwareConfig
   hal::TimeNs duration_ns = 0;                            // the motion's
   bool running = false;
+  bool finishing = false;             // the mode is finish (set by CycleController)
   std::uint32_t epoch = 0;            // of the current (or last) dance
   hal::TimeNs start_ns = 0;           // firmware time of motion time 0
   hal::TimeNs plan_stamp_ns = 0;      // firmware time of the last delivered plan's state
@@ -171,6 +176,12 @@ void dance_stop_rt(DanceControl& d) noexcept;
 // and tau_ff blend linearly, the references by their gains). A joint where either command
 // is not kPdTorque keeps out's. a in [0, 1].
 void blend_torque_laws_rt(const hal::CommandFrame& standing, double a, hal::CommandFrame& out) noexcept;
+
+// The output stage's reference limit: a joint reference at most slack_rad past a stop is put
+// on the stop (counted in `limited`); one further out is left for the safety filter (fault
+// 31). Dance: 0.05 rad (dance.cpp says why); finish: any excess (infinite slack).
+void limit_references_rt(const model::Model& m, double slack_rad, hal::CommandFrame& out,
+                         std::uint64_t& limited) noexcept;
 
 // Every finite field of a plan; a plan that fails is never used.
 [[nodiscard]] bool reference_plan_finite(const planner::ReferencePlan& plan) noexcept;

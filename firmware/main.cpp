@@ -276,10 +276,11 @@ int main(int argc, char** argv) {
     // After real time: what the dance's output stage changed or refused is reported, never silent.
     const fw::DanceCounters& c = dance.counters;
     std::printf("dance: %llu plans taken, %llu rejected (non-finite), %llu kinematic fallbacks, %llu WBC ticks not ok, "
-                "%llu joint references put on a stop, %llu torques clipped at peak (largest demand %.2f x peak)\n",
+                "%llu joint references put on a stop (%llu more in finish), %llu torques clipped at peak (largest demand %.2f x peak)\n",
                 static_cast<unsigned long long>(c.plans_taken), static_cast<unsigned long long>(c.plans_rejected),
                 static_cast<unsigned long long>(c.kinematic_fallbacks), static_cast<unsigned long long>(c.wbc_not_ok_ticks),
-                static_cast<unsigned long long>(c.references_limited), static_cast<unsigned long long>(c.torques_saturated),
+                static_cast<unsigned long long>(c.references_limited),
+                static_cast<unsigned long long>(c.finish_references_limited), static_cast<unsigned long long>(c.torques_saturated),
                 c.max_torque_demand_x);
   }
   return 0;

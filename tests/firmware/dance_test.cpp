@@ -278,5 +278,43 @@ TEST(Dance, PlansOfAnEarlierDanceAreDropped) {
   EXPECT_FALSE(in.watch.estimator_diverged);
 }
 
+// The output stage's reference limit: within the slack a reference past a stop is put on it
+// and counted; beyond it the reference is left for the safety filter (dance), unless the
+// slack is infinite (finish, gains fading): then every excess goes on the stop, counted.
+TEST(Dance, ReferencesPastAStopArePutOnItWithinTheSlackAndCounted) {
+  const model::Model& m = test_model();
+  const int ankle = 4;
+  const double lo = m.limits.position_min_rad[ankle], hi = m.limits.position_max_rad[ankle];
+  hal::CommandFrame out;
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    out.joints[j].position_ref_rad = 0.5 * (m.limits.position_min_rad[j] + m.limits.position_max_rad[j]);
+  }
+  const hal::CommandFrame inside = out;
+  std::uint64_t limited = 0;
+  limit_references_rt(m, 0.05, out, limited);  // nothing past a stop: nothing changes
+  for (int j = 0; j < model::kNumJoints; ++j) EXPECT_EQ(out.joints[j].position_ref_rad, inside.joints[j].position_ref_rad);
+  EXPECT_EQ(limited, 0u);
+
+  out.joints[ankle].position_ref_rad = lo - 0.03;
+  out.joints[ankle + 1].position_ref_rad = m.limits.position_max_rad[ankle + 1] + 0.01;
+  limit_references_rt(m, 0.05, out, limited);
+  EXPECT_EQ(out.joints[ankle].position_ref_rad, lo);
+  EXPECT_EQ(out.joints[ankle + 1].position_ref_rad, m.limits.position_max_rad[ankle + 1]);
+  EXPECT_EQ(limited, 2u);
+
+  out.joints[ankle].position_ref_rad = lo - 0.052;  // the finish case of the FIL dance
+  limit_references_rt(m, 0.05, out, limited);
+  EXPECT_EQ(out.joints[ankle].position_ref_rad, lo - 0.052);  // garbage for the safety filter
+  EXPECT_EQ(limited, 2u);
+  std::uint64_t finishing = 0;
+  limit_references_rt(m, std::numeric_limits<double>::infinity(), out, finishing);
+  EXPECT_EQ(out.joints[ankle].position_ref_rad, lo);
+  EXPECT_EQ(finishing, 1u);
+  out.joints[ankle].position_ref_rad = hi + 1.0;
+  limit_references_rt(m, std::numeric_limits<double>::infinity(), out, finishing);
+  EXPECT_EQ(out.joints[ankle].position_ref_rad, hi);
+  EXPECT_EQ(finishing, 2u);
+}
+
 }  // namespace
 }  // namespace kuavo::firmware

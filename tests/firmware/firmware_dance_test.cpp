@@ -211,6 +211,8 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
   for (int i = 0; i < 600 && FirmwareLoop::fw().mode.mode == Mode::kFinish; ++i) loop.tick();
   EXPECT_EQ(FirmwareLoop::fw().mode.mode, Mode::kDamping);
   loop.tick();
+  std::printf("[ figures  ] %s, finish: references put on a stop %llu\n", name,
+              static_cast<unsigned long long>(d.counters.finish_references_limited));
   EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kNone);
   EXPECT_FALSE(FirmwareLoop::dance().running);
   expect_clean_wire(loop);
