@@ -36,6 +36,13 @@ void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) 
   }
 }
 
+// The knot values the reference state and inputs are made of (reference_forces and
+// state_from_configuration): equal values, equal results.
+bool same_reference_knot(const planner::PlanKnot& a, const planner::PlanKnot& b) {
+  return a.stamp_ns == b.stamp_ns && a.in_contact == b.in_contact && a.q == b.q && a.v == b.v &&
+         a.point_position_m == b.point_position_m && a.com_position_m == b.com_position_m;
+}
+
 bool knot_finite(const planner::PlanKnot& k) {
   return k.q.allFinite() && k.v.allFinite() && k.point_position_m.allFinite() && k.point_velocity_m_s.allFinite();
 }
@@ -227,25 +234,32 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
       }
     }
   }
-  st.num_eq = rows;
-  const int rest = kMaxEqualities - rows;
-  if (rest > 0) {  // the solver multiplies full matrices in its residual check: keep the padding finite
-    st.C.bottomRows(rest).setZero();
-    st.D.bottomRows(rest).setZero();
-    st.e.tail(rest).setZero();
+  // The rows past num_eq stay zero (the solver's residual check multiplies full matrices):
+  // mpc_init zeroed them all, so only the rows the previous build used are cleared.
+  const int stale = std::max(st.num_eq, rows) - rows;
+  if (stale > 0) {
+    st.C.middleRows(rows, stale).setZero();
+    st.D.middleRows(rows, stale).setZero();
+    st.e.segment(rows, stale).setZero();
   }
+  st.num_eq = rows;
   return violation;
 }
 
 void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::PlanKnot& knot, int k, bool terminal) {
   auto& st = ws.qp.stages[k];
   const double scale = terminal ? cfg.dt_s * cfg.terminal_weight_scale : cfg.dt_s;
-  st.Q.setZero();
+  // Q and R are diagonal but for the swing x-y cost's block of Q and the friction barriers'
+  // 3×3 force blocks of R; only those are cleared (mpc_init zeroed the rest).
+  if (ws.swing_block_written[k]) {
+    st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().setZero();
+    ws.swing_block_written[k] = false;
+  }
   st.Q.diagonal() = scale * ws.weight_state;
   st.q = (scale * ws.weight_state).cwiseProduct(state_error(ws.x[k], ws.x_ref[k]));
   add_joint_limit_barrier(cfg, ws, ws.x[k], scale, st);  // same scale: same equilibrium as the stages
   if (terminal) return;
-  st.R.setZero();
+  for (int c = 0; c < kNumPoints; ++c) st.R.template block<3, 3>(kUForces + 3 * c, kUForces + 3 * c).setZero();
   st.R.diagonal() = cfg.dt_s * ws.weight_input;
   st.r = (cfg.dt_s * ws.weight_input).cwiseProduct(ws.u[k] - ws.u_ref[k]);
   for (int c = 0; c < kNumPoints; ++c) {
@@ -274,7 +288,10 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
     j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
     const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
     const double w = cfg.dt_s * cfg.weight_swing_xy;
-    st.Q.noalias() += w * j.transpose() * j;
+    // j is zero in the momentum columns: only Q's base-and-joint block changes.
+    st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().noalias() +=
+        w * j.template rightCols<kNx - kXBasePosition>().transpose() * j.template rightCols<kNx - kXBasePosition>();
+    ws.swing_block_written[k] = true;
     st.q.noalias() += w * j.transpose() * error;
   }
 }
@@ -347,23 +364,33 @@ const char* to_string(MpcStatus s) {
 void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws) {
   ws.initialized = false;
   ws.warm = false;
+  ws.reference_cached = 0;
   if (mpc_validate_config(config) != nullptr) return;
   ws.horizon = mpc_num_stages(config);
   fill_weights(model, config, ws);
   ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
   ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
-  for (auto& st : ws.qp.stages) {
+  for (auto& st : ws.qp.stages) {  // what the builds never write stays zero (build_stage_cost, build_equalities)
+    st.Q.setZero();
+    st.R.setZero();
     st.S.setZero();
+    st.C.setZero();
+    st.D.setZero();
+    st.e.setZero();
     st.num_eq = 0;
     st.num_ineq = 0;
   }
+  ws.swing_block_written.fill(false);
   ws.qp.horizon = ws.horizon;
   ws.qp.x_initial.setZero();
   ws.qp_settings = qp::OcpSettings{};
   ws.initialized = true;
 }
 
-void mpc_reset(MpcWorkspace& ws) { ws.warm = false; }
+void mpc_reset(MpcWorkspace& ws) {
+  ws.warm = false;
+  ws.reference_cached = 0;
+}
 
 MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
                           const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
@@ -379,18 +406,39 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
     if (!knot_finite(reference.knots[k])) return MpcStatus::kBadReference;
   }
 
-  // Reference trajectory in MPC coordinates (yaw kept continuous along the horizon).
+  // Reference trajectory in MPC coordinates (yaw kept continuous along the horizon). Knots
+  // of the previous call are taken from the cache: slot k + s held the knot now at k when the
+  // window moved s ≥ 0 stages (read before it is overwritten, k ascending).
   const double mg = model.total_mass_kg * model::kGravity_m_s2;
+  const hal::TimeNs dt_ns = static_cast<hal::TimeNs>(std::llround(cfg.dt_s * 1e9));
+  int s = -1;
+  if (ws.reference_cached > 0 && dt_ns > 0) {
+    const hal::TimeNs moved = reference.knots[0].stamp_ns - ws.reference_knot[0].stamp_ns;
+    if (moved >= 0 && moved % dt_ns == 0 && moved / dt_ns < ws.reference_cached) s = static_cast<int>(moved / dt_ns);
+  }
+  const int cached = ws.reference_cached;
   for (int k = 0; k <= T; ++k) {
     const planner::PlanKnot& knot = reference.knots[k];
-    state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.x_ref[k]);
+    const int j = s >= 0 ? k + s : -1;
+    if (j >= 0 && j < cached && same_reference_knot(knot, ws.reference_knot[j])) {
+      if (j != k) {
+        ws.reference_knot[k] = ws.reference_knot[j];
+        ws.reference_state[k] = ws.reference_state[j];
+        ws.u_ref[k] = ws.u_ref[j];
+      }
+    } else {
+      ws.reference_knot[k] = knot;
+      state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.reference_state[k]);
+      reference_forces(knot, mg, ws.u_ref[k]);
+      ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
+    }
+    ws.x_ref[k] = ws.reference_state[k];
     if (k > 0) {
       ws.x_ref[k][kXEuler] = ws.x_ref[k - 1][kXEuler] + wrap_angle(ws.x_ref[k][kXEuler] - ws.x_ref[k - 1][kXEuler]);
     }
     ws.head_rad[k] = knot.q.segment<2>(7 + kNumMpcJoints);
-    reference_forces(knot, mg, ws.u_ref[k]);
-    ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
   }
+  ws.reference_cached = T + 1;
 
   StateVector x0;
   state_from_configuration(model, ws.world_data, q, v, x0);
@@ -453,7 +501,13 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
     violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
   }
   build_stage_cost(cfg, ws, reference.knots[T], T, true);
-  ws.qp.stages[T].num_eq = 0;
+  {
+    auto& terminal = ws.qp.stages[T];  // no equalities at the terminal stage (ocp_qp.h)
+    terminal.C.topRows(terminal.num_eq).setZero();
+    terminal.D.topRows(terminal.num_eq).setZero();
+    terminal.e.head(terminal.num_eq).setZero();
+    terminal.num_eq = 0;
+  }
   ws.qp.horizon = T;
   ws.qp.x_initial.setZero();
   ws.constraint_violation = violation;

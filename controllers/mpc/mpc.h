@@ -167,6 +167,13 @@ struct MpcWorkspace {
   std::array<StateVector, kMaxStages + 1> x_ref{};
   std::array<InputVector, kMaxStages + 1> u_ref{};
   std::array<HeadVector, kMaxStages + 1> head_rad{};
+  // The reference in MPC coordinates is a function of its knot alone: the previous call's
+  // knots and their (pre-unwrap) states and inputs are kept, and a knot met again (same stamp,
+  // same values, as consecutive windows of one motion share all but their tail) is not
+  // recomputed. reference_cached counts the valid entries.
+  std::array<planner::PlanKnot, kMaxStages + 1> reference_knot{};
+  std::array<StateVector, kMaxStages + 1> reference_state{};
+  int reference_cached = 0;
   bool warm = false;
   hal::TimeNs last_stamp_ns = 0;
 
@@ -180,6 +187,7 @@ struct MpcWorkspace {
   planner::PlanKnot scratch_knot;
   wbc::WbcReference scratch_reference;
   Ocp qp;
+  std::array<bool, kMaxStages + 1> swing_block_written{};  // stage Q has the swing x-y block (not diagonal)
   OcpWorkspace qp_workspace;
   OcpSolution solution;
   qp::OcpSettings qp_settings;
