@@ -26,7 +26,9 @@ bool config_valid(const EstimatorConfig& c) {
   for (double v : positive) {
     if (!finite_positive(v)) return false;
   }
-  return std::isfinite(c.ground_height_m) && c.dt_min_s <= c.dt_max_s;
+  const bool bias_ok = std::isfinite(c.initial_accel_bias_variance_m2_s4) && c.initial_accel_bias_variance_m2_s4 >= 0.0 &&
+                       std::isfinite(c.accel_bias_random_walk_m2_s5) && c.accel_bias_random_walk_m2_s5 >= 0.0;
+  return bias_ok && std::isfinite(c.ground_height_m) && c.dt_min_s <= c.dt_max_s;
 }
 
 // A usable IMU sample: flagged valid, finite, within the sensor's ranges, and a
@@ -88,6 +90,7 @@ void seed_filter(const model::Model& model, EstimatorState& s, const Eigen::Vect
   s.p.setZero();
   s.p.diagonal().setConstant(c.initial_position_variance_m2);
   s.p.diagonal().segment<3>(3).setConstant(c.initial_velocity_variance_m2_s2);
+  s.p.diagonal().segment<3>(kBiasIndex).setConstant(c.initial_accel_bias_variance_m2_s4);
   s.initialized = true;
 }
 
@@ -99,6 +102,7 @@ void fill_process_variance(const EstimatorConfig& c, const ContactFlags& contact
     const double scale = contact[i] ? 1.0 : c.non_contact_noise_scale;
     q.segment<3>(point_index(i, 0)).setConstant(scale * dt_s * c.foot_process_noise_position);
   }
+  q.segment<3>(kBiasIndex).setConstant(dt_s * c.accel_bias_random_walk_m2_s5);
 }
 
 // y and R from the kinematics. Stance heights are the ground plane; a swing
@@ -138,6 +142,7 @@ void write_output(const EstimatorState& s, EstimateOutput& out) {
   out.q.segment<4>(3) = s.orientation.coeffs();
   out.q.tail<model::kNumJoints>() = s.joint_position_rad;
   out.base_velocity_world_m_s = s.x.segment<3>(3);
+  out.accel_bias_world_m_s2 = s.x.segment<3>(kBiasIndex);
   out.v.head<3>() = rotation.transpose() * s.x.segment<3>(3);  // conventions.h: base axes
   out.v.segment<3>(3) = s.gyro.value;                         // IMU axes are base axes
   out.v.tail<model::kNumJoints>() = s.joint_velocity_rad_s;

@@ -36,6 +36,13 @@ struct EstimatorConfig {
   double foot_sensor_noise_velocity = 1.0;   // variance of a relative velocity row
   double foot_height_sensor_noise = 0.005;   // variance of a stance-height row
   double non_contact_noise_scale = 1000.0;   // FACTS.md §6: swing points are ×1000
+  // World-frame acceleration bias (linear_kf.h): its variance at reset, (m/s²)² -- the
+  // MTi's 0.2° tilt (1σ) is 0.034 m/s², so σ 0.1 covers 0.6°; with σ 0.05 the bias had
+  // reached 65 % of the true tilt leak after 6 s standing, with 0.1 88 % -- and its random
+  // walk, (m/s²)²/s (σ grows 1 mm/s² per √s: a tilt error that wanders over minutes, and
+  // the yaw turning a body-fixed part of it). Both 0: no bias state, Leju's filter exactly.
+  double initial_accel_bias_variance_m2_s4 = 1e-2;
+  double accel_bias_random_walk_m2_s5 = 1e-6;
   // Initial covariance at reset: the pose is known from kinematics, the velocity is not.
   double initial_position_variance_m2 = 1e-4;
   double initial_velocity_variance_m2_s2 = 0.1;
@@ -74,6 +81,7 @@ struct EstimateOutput {
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   Eigen::Vector3d base_velocity_world_m_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_bias_world_m_s2 = Eigen::Vector3d::Zero();  // the filter's b_a
   EstimatorStatus status = EstimatorStatus::kNotInitialized;
   // Watchdog diagnostics: ‖y − C x‖ over the in-contact rows before the update
   // (mixed m and m/s), and trace(P) after it.

@@ -27,11 +27,16 @@ SparseRow row_of(int m) {
 
 void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_m_s2,
                    const KfVector& process_variance, double dt_s) {
-  x.head<3>() += dt_s * x.segment<3>(3) + (0.5 * dt_s * dt_s) * a_world_m_s2;
-  x.segment<3>(3) += dt_s * a_world_m_s2;
-  // A P Aᵀ with A = I + dt·E (E maps velocity rows onto position rows).
-  p.topRows<3>() += dt_s * p.middleRows<3>(3);
-  p.leftCols<3>() += dt_s * p.middleCols<3>(3);
+  const Eigen::Vector3d a = a_world_m_s2 - x.segment<3>(kBiasIndex);
+  const double h = 0.5 * dt_s * dt_s;
+  x.head<3>() += dt_s * x.segment<3>(3) + h * a;
+  x.segment<3>(3) += dt_s * a;
+  // A P, rows: position rows first (they read the old velocity rows), then velocity rows.
+  p.topRows<3>() += dt_s * p.middleRows<3>(3) - h * p.middleRows<3>(kBiasIndex);
+  p.middleRows<3>(3) -= dt_s * p.middleRows<3>(kBiasIndex);
+  // (A P) Aᵀ, columns: the same.
+  p.leftCols<3>() += dt_s * p.middleCols<3>(3) - h * p.middleCols<3>(kBiasIndex);
+  p.middleCols<3>(3) -= dt_s * p.middleCols<3>(kBiasIndex);
   p.diagonal() += process_variance;
 }
 

@@ -1,7 +1,12 @@
 // The linear Kalman filter behind the state estimator (Leju's KalmanFilterEstimate,
 // FACTS.md §6), kept apart from the robot so its algebra can be tested alone.
 //
-// State x (30), world axes:   [p_base (3); v_base (3); c_0 … c_7 (8×3)]
+// State x (33), world axes:   [p_base (3); v_base (3); c_0 … c_7 (8×3); b_a (3)]
+//   b_a: a constant bias of the world-frame acceleration the IMU gives (R·a_imu − g).
+//   Its main source is the IMU's roll/pitch error (0.2° on the MTi): it tips gravity into
+//   the horizontal, g·sin 0.2° ≈ 0.034 m/s², which Leju's filter (no bias state) turns into
+//   ~1 cm/s of velocity error and a standing robot that walks off (5 cm in 30 s under the
+//   MPC). With the feet planted the bias is observable; its variance 0 keeps Leju's filter.
 // Measurements y (56):        [c_i − p_base (24); ċ_i − v_base relative (24); c_i,z (8)]
 //   rows 0..23   y = c_i,k − p_k        (relative position, leg kinematics)
 //   rows 24..47  y = −v_k               (relative velocity of a fixed point: ċ_i = 0)
@@ -19,7 +24,8 @@
 
 namespace kuavo::estimator {
 
-inline constexpr int kStateDim = 6 + 3 * model::kNumContactPoints;  // 30
+inline constexpr int kBiasIndex = 6 + 3 * model::kNumContactPoints;  // 30
+inline constexpr int kStateDim = kBiasIndex + 3;                     // 33
 inline constexpr int kMeasurementDim = 7 * model::kNumContactPoints;  // 56
 inline constexpr int kPositionRows = 0;
 inline constexpr int kVelocityRows = 3 * model::kNumContactPoints;
@@ -32,8 +38,9 @@ using KfMeasurementVector = Eigen::Matrix<double, kMeasurementDim, 1>;
 // Index of contact point i, axis k in the state.
 constexpr int point_index(int i, int k) { return 6 + 3 * i + k; }
 
-// p += v·dt + ½a·dt², v += a·dt, points constant; P = A P Aᵀ + diag(q).
-// A is the identity plus a dt block, so A P Aᵀ is two row/column axpys, not a product.
+// With ā = a − b_a: p += v·dt + ½ā·dt², v += ā·dt, points and bias constant;
+// P = A P Aᵀ + diag(q). A is the identity plus three small blocks (dt, −½dt², −dt), so
+// A P Aᵀ is row and column axpys, not a product.
 void kf_predict_rt(KfVector& x, KfCovariance& p, const Eigen::Vector3d& a_world_m_s2,
                    const KfVector& process_variance, double dt_s);
 

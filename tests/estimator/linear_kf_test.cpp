@@ -75,6 +75,9 @@ TEST(EstimatorLinearKf, PredictionEqualsDenseForm) {
   for (int i = 0; i < kStateDim; ++i) q[i] = 1e-3 * (i + 1);
   MatrixXd big_a = MatrixXd::Identity(kStateDim, kStateDim);
   big_a.block(0, 3, 3, 3) = dt_s * Eigen::Matrix3d::Identity();
+  // The bias enters as −b: ½dt² into the position, dt into the velocity.
+  big_a.block(0, kBiasIndex, 3, 3) = -0.5 * dt_s * dt_s * Eigen::Matrix3d::Identity();
+  big_a.block(3, kBiasIndex, 3, 3) = -dt_s * Eigen::Matrix3d::Identity();
   Eigen::Matrix<double, kStateDim, 3> b = Eigen::Matrix<double, kStateDim, 3>::Zero();
   b.topRows<3>() = 0.5 * dt_s * dt_s * Eigen::Matrix3d::Identity();
   b.middleRows<3>(3) = dt_s * Eigen::Matrix3d::Identity();
