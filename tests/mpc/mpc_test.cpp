@@ -221,6 +221,55 @@ TEST(MpcStep, NoAllocationOverAHundredCalls) {
   EXPECT_EQ(ok, 100);
 }
 
+// The build's shortcuts against the plain build: the reference of a knot met again is taken
+// from the previous call, and Q, R, C, D are cleared only where the last build wrote. A second
+// workspace runs the same calls with its reference cache emptied and every stage matrix zeroed
+// before each build (what the build did without the shortcuts); the QPs must be identical, bit
+// for bit, through stepping (swing rows, swing x-y blocks) and back to standing, and when a
+// window's knots change under the same stamps.
+TEST(MpcStep, CachedReferenceAndPartialClearingBuildTheSameQp) {
+  MpcFixture& f = mpc_fixture();
+  static mpc::MpcWorkspace plain;
+  mpc::mpc_init(f.model, f.config, plain);
+  static mpc::MpcPlan plain_plan;
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.05;
+  int compared = 0;
+  for (int call = 0; call < 60; ++call) {
+    const hal::TimeNs t = static_cast<hal::TimeNs>(call) * 20'000'000;
+    if (call < 40) {
+      stepping_window(f, t, SteppingPlan{});
+    } else {
+      standing_window(f, t);
+    }
+    if (call % 7 == 3) {  // another motion at the same stamps (a new dance): the cache must see it
+      for (int k = 0; k < f.window.count; ++k) f.window.knots[k].q[7 + 14] += 0.02;
+    }
+    plain.reference_cached = 0;
+    for (auto& st : plain.qp.stages) {
+      st.Q.setZero();
+      st.R.setZero();
+      st.C.setZero();
+      st.D.setZero();
+      st.e.setZero();
+    }
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, plain, f.q0, v, f.window), MpcStatus::kOk);
+    for (int k = 0; k <= f.ws.horizon; ++k) {
+      const auto& a = f.ws.qp.stages[k];
+      const auto& b = plain.qp.stages[k];
+      ASSERT_EQ(a.num_eq, b.num_eq) << call << " " << k;
+      ASSERT_TRUE(a.Q == b.Q && a.q == b.q && a.R == b.R && a.r == b.r && a.S == b.S) << call << " " << k;
+      ASSERT_TRUE(a.C == b.C && a.D == b.D && a.e == b.e) << call << " " << k;
+      ASSERT_TRUE(a.A == b.A && a.B == b.B && a.b == b.b) << call << " " << k;
+      ++compared;
+    }
+    ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
+    ASSERT_EQ(mpc::mpc_solve_qp_rt(plain), MpcStatus::kOk);
+  }
+  EXPECT_EQ(compared, 60 * 61);
+}
+
 }  // namespace
 }  // namespace kuavo::test
 
