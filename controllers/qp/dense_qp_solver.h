@@ -332,6 +332,7 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
 
   ws.q = 0;
   ws.num_eq_active = 0;
+  ws.counters = DenseQpCounters{};
   ws.is_active.fill(0);
   ws.x.setZero();
   ws.u.setZero();
@@ -377,6 +378,7 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
   if (impose_block(qp, ws, block.data(), block_size)) {
     ws.num_eq_active = NE;
     iterations = guess_size;
+    ws.counters.guess_imposed = guess_size;
     working_set_minimizer(qp, ws);
   } else {
     // Some of the block is (nearly) dependent: add one constraint at a time from the
@@ -408,6 +410,7 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
         ws.num_eq_active = ws.q;
       } else {
         ++iterations;
+        ++ws.counters.guess_imposed;
       }
     }
   }
@@ -427,6 +430,8 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
     if (dropped == 0) break;
     working_set_minimizer(qp, ws);
     iterations += dropped;
+    ws.counters.guess_dropped += dropped;
+    ++ws.counters.drop_rounds;
   }
 
   // Main GI loop: add the most violated inequality, dropping blocking ones on the way.
@@ -488,9 +493,11 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
       }
       if (t2 <= t1) {
         add_to_working_set(ws, p, u_plus, std::sqrt(zn));
+        ++ws.counters.additions;
         break;
       }
       drop_from_working_set(ws, blocking);
+      ++ws.counters.blocking_drops;
       slack = Cd::dot(qp, p, ws.x) - bnd;
     }
   }
