@@ -99,6 +99,9 @@ struct DenseQpWorkspace {
   static constexpr int kNumCodes = 2 * (NI + NV);
 
   Square L = Square::Zero();  // H = L Lᵀ in the lower triangle (the strict upper holds H's)
+  // Lᵀ in the upper triangle: the solves with Lᵀ then run down columns (axpy form) too.
+  Square Lt = Square::Zero();
+  Vector inv_diag = Vector::Zero();   // 1 / L(i, i)
   // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
   // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
   // factorization V = Q R, i.e. RᵀR = NᵀH⁻¹N. Q itself is never formed.
