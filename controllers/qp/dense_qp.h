@@ -82,6 +82,16 @@ struct DenseQpSolution {
   int working_set_size = 0;
 };
 
+// What the last solve spent its working-set changes on (solution.iterations is their sum):
+// for benchmarks and diagnostics, written by the solver, never read by it.
+struct DenseQpCounters {
+  int guess_imposed = 0;  // warm-start rows imposed at the start
+  int guess_dropped = 0;  // of those, dropped for a negative multiplier before the GI loop
+  int drop_rounds = 0;    // re-solves those drops took
+  int additions = 0;      // GI: constraints added
+  int blocking_drops = 0; // GI: working-set members dropped on the way to an addition
+};
+
 template <int NV, int NE, int NI>
 struct DenseQpWorkspace {
   using Vector = Eigen::Matrix<double, NV, 1>;
@@ -89,6 +99,9 @@ struct DenseQpWorkspace {
   static constexpr int kNumCodes = 2 * (NI + NV);
 
   Square L = Square::Zero();  // H = L Lᵀ in the lower triangle (the strict upper holds H's)
+  // Lᵀ in the upper triangle: the solves with Lᵀ then run down columns (axpy form) too.
+  Square Lt = Square::Zero();
+  Vector inv_diag = Vector::Zero();   // 1 / L(i, i)
   // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
   // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
   // factorization V = Q R, i.e. RᵀR = NᵀH⁻¹N. Q itself is never formed.
@@ -111,6 +124,7 @@ struct DenseQpWorkspace {
   std::array<std::uint8_t, kNumCodes> is_active{};
   int q = 0;
   int num_eq_active = 0;
+  DenseQpCounters counters;
 };
 
 }  // namespace kuavo::qp

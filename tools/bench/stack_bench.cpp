@@ -177,6 +177,99 @@ void time_ticks(benchmark::State& state, Fixture& f) {
   state.counters["first_mismatch_tick"] = first_mismatch;
 }
 
+// The WBC QPs of a motion's hardest ticks, captured with the working set each was warm
+// started from, so the solver alone can be timed on them: many repetitions of the same
+// solve, the fastest kept (the QP's intrinsic time), far steadier than whole-tick timings.
+struct HardQp {
+  wbc::Qp qp;
+  wbc::QpSolution previous;  // the warm start (the tick before's solution)
+  int tick = 0, warm_iterations = 0;
+};
+
+// Replays the motion once and keeps the QPs that took at least min_iterations iterations.
+std::vector<std::unique_ptr<HardQp>> capture_hard_qps(Fixture& f, int min_iterations) {
+  std::vector<std::unique_ptr<HardQp>> out;
+  if (!f.ok) return out;
+  stack::stack_start(f.robot, f.cfg, *f.control, *f.planner_ws, *f.plan, f.frames[0], 0);
+  auto previous = std::make_unique<wbc::QpSolution>();
+  const int n = static_cast<int>(f.frames.size());
+  for (int i = 0; i < n; ++i) {
+    const hal::TimeNs now = i * 2'000'000LL;
+    if (i % 10 == 0) {
+      stack::stack_plan_rt(f.robot, f.cfg, *f.planner_ws, *f.plan, f.control->estimate.q, f.control->estimate.v, now, f.pending);
+      stack::stack_apply_plan_rt(*f.control, f.pending);
+    }
+    *previous = f.control->wbc.solution;
+    stack::stack_control_tick_rt(f.robot, f.cfg, *f.control, f.frames[i], now, stack::StateOverride{}, f.command);
+    const int iterations = f.control->wbc.diagnostics.qp_iterations;
+    if (iterations >= min_iterations && previous->status == qp::QpStatus::kSolved) {
+      auto h = std::make_unique<HardQp>();
+      h->qp = f.control->wbc.qp;
+      h->previous = *previous;
+      h->tick = i;
+      h->warm_iterations = iterations;
+      out.push_back(std::move(h));
+    }
+  }
+  stack::stack_start(f.robot, f.cfg, *f.control, *f.planner_ws, *f.plan, f.frames[0], 0);
+  return out;
+}
+
+// Each captured QP solved `repeats` times warm (from its captured working set) or cold.
+//   qp_max_us   the worst over the QPs of the fastest of the repetitions
+//   qp_mean_us  the mean over the QPs of the fastest
+void time_hard_qps(benchmark::State& state, const std::vector<std::unique_ptr<HardQp>>& qps, bool warm) {
+  if (qps.empty()) {
+    state.SkipWithError("no captured QPs");
+    return;
+  }
+  static wbc::QpWorkspace ws;
+  static wbc::QpSolution sol;
+  qp::DenseQpSettings settings;
+  settings.max_iterations = wbc::WbcConfig{}.qp_max_iterations;
+  settings.warm_start = warm;
+  std::vector<double> fastest(qps.size(), std::numeric_limits<double>::infinity());
+  std::vector<int> iterations(qps.size(), 0), final_size(qps.size(), 0);
+  std::vector<qp::DenseQpCounters> counters(qps.size());
+  int failures = 0;
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < qps.size(); ++k) {
+      sol = qps[k]->previous;
+      const rtos::TimeNs t0 = rtos::now_ns();
+      benchmark::DoNotOptimize(qp::solve_dense_qp(qps[k]->qp, settings, ws, sol));
+      fastest[k] = std::min(fastest[k], static_cast<double>(rtos::now_ns() - t0) * 1e-3);
+      iterations[k] = sol.iterations;
+      counters[k] = ws.counters;
+      final_size[k] = sol.working_set_size;
+      failures += sol.status == qp::QpStatus::kSolved ? 0 : 1;
+    }
+  }
+  const auto worst = std::max_element(fastest.begin(), fastest.end());
+  double sum = 0.0;
+  for (double t : fastest) sum += t;
+  state.counters["qps"] = static_cast<double>(qps.size());
+  state.counters["qp_max_us"] = *worst;
+  state.counters["qp_mean_us"] = sum / static_cast<double>(qps.size());
+  state.counters["tick_at_max"] = qps[worst - fastest.begin()]->tick;
+  state.counters["iter_at_max"] = iterations[worst - fastest.begin()];
+  state.counters["iter_max"] = *std::max_element(iterations.begin(), iterations.end());
+  state.counters["failures"] = failures;
+  if (std::getenv("KUAVO_BENCH_WORST")) {
+    std::vector<int> order(qps.size());
+    for (std::size_t k = 0; k < qps.size(); ++k) order[k] = static_cast<int>(k);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return fastest[a] > fastest[b]; });
+    for (int k = 0; k < std::min<int>(static_cast<int>(qps.size()), 10); ++k) {
+      const int o = order[k];
+      const qp::DenseQpCounters& c = counters[o];
+      std::fprintf(stderr,
+                   "%s tick %5d  %6.1f us  %2d iterations (%2d in the replay): guess %2d, dropped %2d in %d rounds, "
+                   "%2d added, %2d blocking drops, %2d active at the end\n",
+                   warm ? "warm" : "cold", qps[o]->tick, fastest[o], iterations[o], qps[o]->warm_iterations,
+                   c.guess_imposed, c.guess_dropped, c.drop_rounds, c.additions, c.blocking_drops, final_size[o]);
+    }
+  }
+}
+
 }  // namespace
 
 // Whole replays: 5 of the 8 s gait, 3 of the dance (the iteration counts need the
@@ -194,6 +287,30 @@ int main(int argc, char** argv) {
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_ControlTick_DanceMpc_Blend20ms", [&](benchmark::State& s) { time_ticks(s, dance_blend); })
       ->Iterations(3 * static_cast<benchmark::IterationCount>(std::max<std::size_t>(1, dance_blend.frames.size())))
+      ->Unit(benchmark::kMicrosecond);
+  // The dance's hardest QPs (≥ 15 iterations in the replay: the ticks after a new plan).
+  static std::vector<std::unique_ptr<HardQp>> hard;
+  bool captured = false;
+  auto hard_qps = [&]() -> const std::vector<std::unique_ptr<HardQp>>& {
+    if (!captured) {
+      captured = true;
+      hard = capture_hard_qps(dance, 15);
+      // KUAVO_BENCH_DUMP_QPS=file writes them (raw HardQp records, this build's layout) for
+      // offline profiling of the solver.
+      if (const char* path = std::getenv("KUAVO_BENCH_DUMP_QPS")) {
+        if (std::FILE* out = std::fopen(path, "wb")) {
+          for (const auto& h : hard) std::fwrite(h.get(), sizeof(HardQp), 1, out);
+          std::fclose(out);
+        }
+      }
+    }
+    return hard;
+  };
+  benchmark::RegisterBenchmark("BM_WbcQp_DanceHard_Warm", [&](benchmark::State& s) { time_hard_qps(s, hard_qps(), true); })
+      ->Iterations(30)
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("BM_WbcQp_DanceHard_Cold", [&](benchmark::State& s) { time_hard_qps(s, hard_qps(), false); })
+      ->Iterations(30)
       ->Unit(benchmark::kMicrosecond);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
