@@ -111,8 +111,8 @@ TEST(RiccatiKernels, CholeskyMatchesEigenAndRefusesIndefinite) {
   }
 }
 
-// One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go P against the
-// classical range-space formulas with Eigen's LLT, with padding in every block.
+// One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go's factor Lp against
+// the classical range-space formulas with Eigen's LLT, with padding in every block.
 template <int NX, int NU, int NC>
 void check_stage(int ne, std::mt19937_64& rng) {
   using Layout = RiccatiLayout<NX, NU, NC>;
@@ -133,6 +133,7 @@ void check_stage(int ne, std::mt19937_64& rng) {
   const int ne_padded = kernels::round_up4(ne);
   riccati_detail::load_stage(s, ne_padded, K);
   ASSERT_EQ((riccati_detail::factor_stage<NX, NU, NC>(w->L.data(), ne, ne_padded)), QpStatus::kSolved);
+  ASSERT_TRUE((riccati_detail::factor_cost_to_go<NX, NU, NC>(w->L.data(), ne_padded)));
 
   const Eigen::LLT<MatrixXd> llt(MatrixXd(s.R));
   const MatrixXd Lu = llt.matrixL();
@@ -151,7 +152,13 @@ void check_stage(int ne, std::mt19937_64& rng) {
     EXPECT_LE((MatrixXd(K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>()) - MatrixXd(m_llt.matrixL())).cwiseAbs().maxCoeff(), tol);
     EXPECT_LE((K.block(kXo, kUp, NX, ne) + GmT).cwiseAbs().maxCoeff(), tol);
   }
-  EXPECT_LE((K.template block<NX, NX>(kXo, kXo) - P).cwiseAbs().maxCoeff(), tol) << "P, ne = " << ne;
+  // The x block is Lp (P = Lp·Lpᵀ), zeros above the diagonal inside its 4×4 diagonal chunks.
+  const MatrixXd Lp = K.template block<NX, NX>(kXo, kXo).template triangularView<Eigen::Lower>();
+  EXPECT_LE((Lp * Lp.transpose() - P).cwiseAbs().maxCoeff(), tol) << "P, ne = " << ne;
+  EXPECT_LE((Lp - MatrixXd(P.llt().matrixL())).cwiseAbs().maxCoeff(), tol) << "Lp, ne = " << ne;
+  for (int j = 0; j < NX; ++j) {
+    for (int i = j / 4 * 4; i < j; ++i) EXPECT_EQ(K(kXo + i, kXo + j), 0.0) << i << "," << j;
+  }
   (void)kLd;
 }
 
