@@ -289,13 +289,13 @@ void add_x_product(const double* Yt, const double* A, bool factored, double* L) 
 template <int NX, int NU, int NC, int NG>
 void add_cost_to_go_product(const RiccatiStage<NX, NU, NC, NG>& w, const Eigen::Matrix<double, NX, 1>& v,
                             Eigen::Matrix<double, NX, 1>& out, Eigen::Matrix<double, NX, 1>& tmp) {
-  constexpr int kXo = RiccatiLayout<NX, NU, NC>::kXo;
-  const auto X = ConstFactorMap<NX, NU, NC>(w.L.data()).template block<NX, NX>(kXo, kXo);
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  const double* X = w.L.data() + Layout::kXo * (Layout::kLd + 1);
   if (w.p_factored) {
-    tmp.noalias() = X.template triangularView<Eigen::Lower>().transpose() * v;
-    out.noalias() += X.template triangularView<Eigen::Lower>() * tmp;
+    kernels::trmv_lower_trans(NX, X, Layout::kLd, v.data(), tmp.data());
+    kernels::trmv_lower_add(NX, X, Layout::kLd, tmp.data(), out.data());
   } else {
-    out.noalias() += X * v;
+    kernels::gemv_n<kernels::Update::kAdd>(NX, NX, X, Layout::kLd, v.data(), out.data());
   }
 }
 
@@ -375,8 +375,8 @@ template <int NX, int NU, int N, int NC, int NG>
 void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
                    const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
   using Layout = RiccatiLayout<NX, NU, NC>;
-  using Map = riccati_detail::ConstFactorMap<NX, NU, NC>;
-  constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
+  using kernels::Update;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo;
   const int T = qp.horizon;
   {
     const auto& s = qp.stages[T];
@@ -389,16 +389,13 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
   for (int k = T - 1; k >= 0; --k) {
     const auto& s = qp.stages[k];
     auto& w = ws.stage[k];
-    const auto& next = ws.stage[k + 1];
-    const Map K(w.L.data());
-    const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
-    const auto X = K.template block<NX, NU>(kXo, 0);
-    ws.v = next.p;
-    riccati_detail::add_cost_to_go_product(next, vec.b[k], ws.v, ws.lpt_v);
+    const double* L = w.L.data();
+    ws.v = ws.stage[k + 1].p;
+    riccati_detail::add_cost_to_go_product(ws.stage[k + 1], vec.b[k], ws.v, ws.lpt_v);
     ws.qu = vec.r[k];
-    ws.qu.noalias() += s.B.transpose() * ws.v;
+    kernels::gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data());
     w.p = vec.q[k];
-    w.p.noalias() += s.A.transpose() * ws.v;
+    kernels::gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data());
     if constexpr (NG > 0) {
       const int m = s.num_ineq;
       if (m > 0) {
@@ -407,16 +404,16 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
       }
     }
     w.k0 = ws.qu;
-    Lu.solveInPlace(w.k0);
-    w.p.noalias() -= X * w.k0;
+    kernels::trsv_lower(NU, L, kLd, w.k0.data());                                        // Lu⁻¹qu
+    kernels::gemv_n<Update::kSub>(NX, NU, L + kXo, kLd, w.k0.data(), w.p.data());        // − X k0
     if constexpr (NC > 0) {
       const int ne = s.num_eq;
       if (ne > 0) {
-        auto gm = w.gm.head(ne);
-        gm = -vec.e[k].head(ne);
-        gm.noalias() -= K.block(kUp, 0, ne, NU) * w.k0;  // − Yᵀk0
-        K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().solveInPlace(gm);
-        w.p.noalias() -= K.block(kXo, kUp, NX, ne) * gm;  // + (Lm⁻¹G)ᵀ gm
+        double* gm = w.gm.data();
+        for (int i = 0; i < ne; ++i) gm[i] = -vec.e[k](i);
+        kernels::gemv_n<Update::kSub>(ne, NU, L + kUp, kLd, w.k0.data(), gm);             // − Yᵀk0
+        kernels::trsv_lower(ne, L + kUp * (kLd + 1), kLd, gm);
+        kernels::gemv_n<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, gm, w.p.data());  // + (Lm⁻¹G)ᵀ gm
       }
     }
   }
@@ -424,27 +421,25 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
   for (int k = 0; k < T; ++k) {
     const auto& s = qp.stages[k];
     const auto& w = ws.stage[k];
-    const Map K(w.L.data());
-    const auto Lu = K.template topLeftCorner<NU, NU>().template triangularView<Eigen::Lower>();
-    const auto X = K.template block<NX, NU>(kXo, 0);
+    const double* L = w.L.data();
     ws.t = w.k0;
-    ws.t.noalias() += X.transpose() * sol.x[k];
+    kernels::gemv_t<Update::kAdd>(NX, NU, L + kXo, kLd, sol.x[k].data(), ws.t.data());   // + Xᵀx
     if constexpr (NC > 0) {
       sol.nu[k].setZero();
       const int ne = s.num_eq;
       if (ne > 0) {
-        auto nu = sol.nu[k].head(ne);
-        nu = w.gm.head(ne);
-        nu.noalias() -= K.block(kXo, kUp, NX, ne).transpose() * sol.x[k];
-        K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>().transpose().solveInPlace(nu);
-        ws.t.noalias() += K.block(kUp, 0, ne, NU).transpose() * nu;
+        double* nu = sol.nu[k].data();
+        for (int i = 0; i < ne; ++i) nu[i] = w.gm(i);
+        kernels::gemv_t<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, sol.x[k].data(), nu);
+        kernels::trsv_lower_trans(ne, L + kUp * (kLd + 1), kLd, nu);
+        kernels::gemv_t<Update::kAdd>(ne, NU, L + kUp, kLd, nu, ws.t.data());
       }
     }
     sol.u[k] = -ws.t;
-    Lu.transpose().solveInPlace(sol.u[k]);
+    kernels::trsv_lower_trans(NU, L, kLd, sol.u[k].data());
     sol.x[k + 1] = vec.b[k];
-    sol.x[k + 1].noalias() += s.A * sol.x[k];
-    sol.x[k + 1].noalias() += s.B * sol.u[k];
+    kernels::gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data());
+    kernels::gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data());
   }
   for (int k = 0; k <= T; ++k) {
     sol.costate[k] = ws.stage[k].p;

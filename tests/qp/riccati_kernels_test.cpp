@@ -111,6 +111,73 @@ TEST(RiccatiKernels, CholeskyMatchesEigenAndRefusesIndefinite) {
   }
 }
 
+double max_abs(const Eigen::VectorXd& v) { return v.size() == 0 ? 0.0 : v.cwiseAbs().maxCoeff(); }
+
+// The vector-pass kernels: every row remainder (masked loads), column remainders, leading
+// dimensions larger than the extents, and nothing written past the extent.
+TEST(RiccatiKernels, MatrixVectorProductsMatchEigen) {
+  std::mt19937_64 rng(106);
+  for (const int m : {0, 1, 2, 3, 4, 5, 7, 12, 38, 50}) {
+    for (const int n : {1, 2, 3, 4, 5, 9, 38, 50}) {
+      const int lda = m + 3;
+      const MatrixXd A = random_matrix(lda, n, rng);
+      const Eigen::VectorXd xn = random_matrix(n, 1, rng), xm = random_matrix(m + 1, 1, rng);
+      const double tol = kTolerance * 10.0 * (1.0 + std::max(m, n));
+      Eigen::VectorXd y0 = random_matrix(m + 1, 1, rng), y = y0;  // one guard entry past m
+      kernels::gemv_n<Update::kAdd>(m, n, A.data(), lda, xn.data(), y.data());
+      EXPECT_LE(max_abs(y.head(m) - (y0.head(m) + A.topRows(m) * xn)), tol) << m << "x" << n;
+      EXPECT_EQ(y(m), y0(m));
+      y = y0;
+      kernels::gemv_n<Update::kSub>(m, n, A.data(), lda, xn.data(), y.data());
+      EXPECT_LE(max_abs(y.head(m) - (y0.head(m) - A.topRows(m) * xn)), tol) << m << "x" << n;
+      EXPECT_EQ(y(m), y0(m));
+      const Eigen::VectorXd z0 = random_matrix(n + 1, 1, rng);
+      const Eigen::VectorXd atx = A.topRows(m).transpose() * xm.head(m);
+      Eigen::VectorXd z = z0;
+      kernels::gemv_t<Update::kSet>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - atx), tol) << m << "x" << n;
+      EXPECT_EQ(z(n), z0(n));
+      z = z0;
+      kernels::gemv_t<Update::kAdd>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - (z0.head(n) + atx)), tol) << m << "x" << n;
+      z = z0;
+      kernels::gemv_t<Update::kSub>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - (z0.head(n) - atx)), tol) << m << "x" << n;
+      EXPECT_EQ(z(n), z0(n));
+    }
+  }
+}
+
+TEST(RiccatiKernels, TriangularSolvesAndProductsMatchEigen) {
+  std::mt19937_64 rng(107);
+  for (const int n : {1, 2, 3, 4, 5, 7, 12, 38, 50}) {
+    const int ld = n + 2;
+    MatrixXd L = random_matrix(ld, n, rng);
+    for (int j = 0; j < n; ++j) L(j, j) = 2.0 + std::abs(L(j, j));  // well conditioned
+    const auto Lt = L.topRows(n).triangularView<Eigen::Lower>();
+    const Eigen::VectorXd b = random_matrix(n, 1, rng);
+    Eigen::VectorXd x = b;
+    kernels::trsv_lower(n, L.data(), ld, x.data());
+    EXPECT_LE((Lt * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
+    x = b;
+    kernels::trsv_lower_trans(n, L.data(), ld, x.data());
+    EXPECT_LE((Lt.transpose() * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
+    // The triangular products read the 4×4 diagonal chunks whole: zeros above the diagonal there.
+    for (int j = 0; j < n; ++j) {
+      for (int i = j / 4 * 4; i < j; ++i) L(i, j) = 0.0;
+    }
+    const MatrixXd Ld = L.topRows(n).triangularView<Eigen::Lower>();
+    Eigen::VectorXd y = Eigen::VectorXd::Constant(n + 1, 5.0);
+    kernels::trmv_lower_trans(n, L.data(), ld, b.data(), y.data());
+    EXPECT_LE((y.head(n) - Ld.transpose() * b).cwiseAbs().maxCoeff(), kTolerance * 10.0 * (1.0 + n)) << n;
+    EXPECT_EQ(y(n), 5.0);
+    const Eigen::VectorXd y0 = y;
+    kernels::trmv_lower_add(n, L.data(), ld, b.data(), y.data());
+    EXPECT_LE((y.head(n) - y0.head(n) - Ld * b).cwiseAbs().maxCoeff(), kTolerance * 10.0 * (1.0 + n)) << n;
+    EXPECT_EQ(y(n), 5.0);
+  }
+}
+
 // One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go's factor Lp against
 // the classical range-space formulas with Eigen's LLT, with padding in every block.
 template <int NX, int NU, int NC>
