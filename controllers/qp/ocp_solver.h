@@ -72,24 +72,31 @@ double linearize(const OcpQp<NX, NU, N, NC, NG>& qp, OcpWorkspace<NX, NU, N, NC,
   auto& v = ws.vec;
   v.x_initial = qp.x_initial - sol.x[0];
   double res = v.x_initial.cwiseAbs().maxCoeff();
+  // The products on the vector-pass kernels (riccati_kernels.h): Eigen's general gemv costs
+  // its setup at these sizes, and this runs once per interior-point iteration and per MPC call.
+  using kernels::gemv_n;
+  using kernels::gemv_t;
+  using kernels::Update;
   for (int k = 0; k <= T; ++k) {
     const auto& s = qp.stages[k];
     const bool terminal = k == T;
+    const double* x = sol.x[k].data();
+    const double* u = sol.u[k].data();
     v.q[k] = s.q;
-    v.q[k].noalias() += s.Q * sol.x[k];
+    gemv_n<Update::kAdd>(NX, NX, s.Q.data(), NX, x, v.q[k].data());
     if (!terminal) {
-      v.q[k].noalias() += s.S.transpose() * sol.u[k];
+      gemv_t<Update::kAdd>(NU, NX, s.S.data(), NU, u, v.q[k].data());  // + Sᵀu
       v.r[k] = s.r;
-      v.r[k].noalias() += s.R * sol.u[k];
-      v.r[k].noalias() += s.S * sol.x[k];
+      gemv_n<Update::kAdd>(NU, NU, s.R.data(), NU, u, v.r[k].data());
+      gemv_n<Update::kAdd>(NU, NX, s.S.data(), NU, x, v.r[k].data());
       v.b[k] = s.b - sol.x[k + 1];
-      v.b[k].noalias() += s.A * sol.x[k];
-      v.b[k].noalias() += s.B * sol.u[k];
+      gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, x, v.b[k].data());
+      gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, u, v.b[k].data());
       res = std::max(res, v.b[k].cwiseAbs().maxCoeff());
       ws.ru = v.r[k];
-      ws.ru.noalias() += s.B.transpose() * sol.costate[k + 1];
+      gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, sol.costate[k + 1].data(), ws.ru.data());
       ws.rx = v.q[k] - sol.costate[k];
-      ws.rx.noalias() += s.A.transpose() * sol.costate[k + 1];
+      gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, sol.costate[k + 1].data(), ws.rx.data());
     } else {
       ws.rx = v.q[k] - sol.costate[k];
     }
@@ -98,13 +105,13 @@ double linearize(const OcpQp<NX, NU, N, NC, NG>& qp, OcpWorkspace<NX, NU, N, NC,
       v.e[k].setZero();
       if (!terminal && ne > 0) {
         auto re = ws.re.head(ne);  // only the used rows (the MPC's capacity is 30, ~12 used)
-        re.noalias() = s.C.topRows(ne) * sol.x[k];
-        re.noalias() += s.D.topRows(ne) * sol.u[k];
-        re -= s.e.head(ne);
+        re = -s.e.head(ne);
+        gemv_n<Update::kAdd>(ne, NX, s.C.data(), NC, x, re.data());
+        gemv_n<Update::kAdd>(ne, NU, s.D.data(), NC, u, re.data());
         v.e[k].head(ne) = -re;
-        res = std::max(res, ws.re.head(ne).cwiseAbs().maxCoeff());
-        ws.rx.noalias() += s.C.topRows(ne).transpose() * sol.nu[k].head(ne);
-        ws.ru.noalias() += s.D.topRows(ne).transpose() * sol.nu[k].head(ne);
+        res = std::max(res, re.cwiseAbs().maxCoeff());
+        gemv_t<Update::kAdd>(ne, NX, s.C.data(), NC, sol.nu[k].data(), ws.rx.data());
+        gemv_t<Update::kAdd>(ne, NU, s.D.data(), NC, sol.nu[k].data(), ws.ru.data());
       }
     }
     if constexpr (NG > 0) {

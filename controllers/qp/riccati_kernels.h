@@ -180,4 +180,153 @@ inline bool cholesky(double* L, int ld, int n) {
   return true;
 }
 
+// ---- Vector pass: matrix-vector products and triangular solves (riccati_solve). ----
+// Any m, n (row remainders through masked loads, so nothing past row m is read or written).
+// Eigen's gemv at these sizes (38–50) is its general blocked kernel with per-call setup.
+
+#ifdef KUAVO_QP_KERNELS_SIMD
+// Lanes [0, r) of a 4-lane mask, r = 1…4.
+inline __m256i row_mask(int r) {
+  return _mm256_cmpgt_epi64(_mm256_set1_epi64x(r), _mm256_setr_epi64x(0, 1, 2, 3));
+}
+#endif
+
+// y[m] (+=, −=) A[m×n]·x, A column-major (lda), kSet not supported (callers add into y).
+template <Update kUpdate>
+inline void gemv_n(int m, int n, const double* A, int lda, const double* x, double* y) {
+  static_assert(kUpdate != Update::kSet, "gemv_n accumulates");
+  constexpr double sign = kUpdate == Update::kAdd ? 1.0 : -1.0;
+#ifdef KUAVO_QP_KERNELS_SIMD
+  const int m4 = m / 4 * 4;
+  const __m256i tail = row_mask(m - m4);
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const __m256d b0 = _mm256_set1_pd(sign * x[j]), b1 = _mm256_set1_pd(sign * x[j + 1]);
+    const __m256d b2 = _mm256_set1_pd(sign * x[j + 2]), b3 = _mm256_set1_pd(sign * x[j + 3]);
+    const double* a = A + j * lda;
+    int i = 0;
+    for (; i < m4; i += 4) {
+      __m256d acc = _mm256_loadu_pd(y + i);
+      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), b0, acc);
+      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), b1, acc);
+      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), b2, acc);
+      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), b3, acc);
+      _mm256_storeu_pd(y + i, acc);
+    }
+    if (i < m) {
+      __m256d acc = _mm256_maskload_pd(y + i, tail);
+      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i, tail), b0, acc);
+      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + lda, tail), b1, acc);
+      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 2 * lda, tail), b2, acc);
+      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 3 * lda, tail), b3, acc);
+      _mm256_maskstore_pd(y + i, tail, acc);
+    }
+  }
+  for (; j < n; ++j) {
+    const __m256d b = _mm256_set1_pd(sign * x[j]);
+    const double* a = A + j * lda;
+    int i = 0;
+    for (; i < m4; i += 4) _mm256_storeu_pd(y + i, _mm256_fmadd_pd(_mm256_loadu_pd(a + i), b, _mm256_loadu_pd(y + i)));
+    if (i < m) {
+      _mm256_maskstore_pd(y + i, tail,
+                          _mm256_fmadd_pd(_mm256_maskload_pd(a + i, tail), b, _mm256_maskload_pd(y + i, tail)));
+    }
+  }
+#else
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < m; ++i) y[i] += sign * A[i + j * lda] * x[j];
+  }
+#endif
+}
+
+// y[n] (=, +=, −=) Aᵀ·x for a column-major A[m×n] (lda).
+template <Update kUpdate>
+inline void gemv_t(int m, int n, const double* A, int lda, const double* x, double* y) {
+#ifdef KUAVO_QP_KERNELS_SIMD
+  const int m4 = m / 4 * 4;
+  const __m256i tail = row_mask(m - m4);
+  const __m256d x_tail = m4 < m ? _mm256_maskload_pd(x + m4, tail) : _mm256_setzero_pd();
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const double* a = A + j * lda;
+    __m256d c0 = _mm256_setzero_pd(), c1 = _mm256_setzero_pd(), c2 = _mm256_setzero_pd(), c3 = _mm256_setzero_pd();
+    for (int i = 0; i < m4; i += 4) {
+      const __m256d xv = _mm256_loadu_pd(x + i);
+      c0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), xv, c0);
+      c1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), xv, c1);
+      c2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), xv, c2);
+      c3 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), xv, c3);
+    }
+    if (m4 < m) {
+      c0 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c0);
+      c1 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + lda, tail), x_tail, c1);
+      c2 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 2 * lda, tail), x_tail, c2);
+      c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
+    }
+    // Horizontal sums of c0…c3 into one vector [Σc0, Σc1, Σc2, Σc3].
+    const __m256d h01 = _mm256_hadd_pd(c0, c1), h23 = _mm256_hadd_pd(c2, c3);
+    const __m256d sum = _mm256_add_pd(_mm256_permute2f128_pd(h01, h23, 0x20), _mm256_permute2f128_pd(h01, h23, 0x31));
+    if constexpr (kUpdate == Update::kSet) {
+      _mm256_storeu_pd(y + j, sum);
+    } else if constexpr (kUpdate == Update::kAdd) {
+      _mm256_storeu_pd(y + j, _mm256_add_pd(_mm256_loadu_pd(y + j), sum));
+    } else {
+      _mm256_storeu_pd(y + j, _mm256_sub_pd(_mm256_loadu_pd(y + j), sum));
+    }
+  }
+  for (; j < n; ++j) {
+    const double* a = A + j * lda;
+    __m256d c = _mm256_setzero_pd();
+    for (int i = 0; i < m4; i += 4) c = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), _mm256_loadu_pd(x + i), c);
+    if (m4 < m) c = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c);
+    const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
+    const double d = _mm_cvtsd_f64(_mm_add_sd(h, _mm_unpackhi_pd(h, h)));
+    if constexpr (kUpdate == Update::kSet) y[j] = d;
+    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
+    else y[j] -= d;
+  }
+#else
+  for (int j = 0; j < n; ++j) {
+    double d = 0.0;
+    for (int i = 0; i < m; ++i) d += A[i + j * lda] * x[i];
+    if constexpr (kUpdate == Update::kSet) y[j] = d;
+    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
+    else y[j] -= d;
+  }
+#endif
+}
+
+// x ← L⁻¹x, L lower triangular n×n (upper part not read).
+inline void trsv_lower(int n, const double* L, int ld, double* x) {
+  for (int j = 0; j < n; j += 4) {
+    const int jb = std::min(4, n - j);
+    for (int c = j; c < j + jb; ++c) {
+      x[c] /= L[c + c * ld];
+      for (int r = c + 1; r < j + jb; ++r) x[r] -= L[r + c * ld] * x[c];
+    }
+    gemv_n<Update::kSub>(n - j - jb, jb, L + j + jb + j * ld, ld, x + j, x + j + jb);
+  }
+}
+
+// x ← L⁻ᵀx, L lower triangular n×n (upper part not read).
+inline void trsv_lower_trans(int n, const double* L, int ld, double* x) {
+  for (int j = (n - 1) / 4 * 4; j >= 0; j -= 4) {
+    const int jb = std::min(4, n - j);
+    gemv_t<Update::kSub>(n - j - jb, jb, L + j + jb + j * ld, ld, x + j + jb, x + j);
+    for (int c = j + jb - 1; c >= j; --c) {
+      for (int r = c + 1; r < j + jb; ++r) x[c] -= L[r + c * ld] * x[r];
+      x[c] /= L[c + c * ld];
+    }
+  }
+}
+
+// y = Lᵀx and y += L·x for a lower triangular L whose strict upper part inside the 4×4
+// diagonal chunks is zero (the cost-to-go factor's storage; the rest above is not read).
+inline void trmv_lower_trans(int n, const double* L, int ld, const double* x, double* y) {
+  for (int j = 0; j < n; j += 4) gemv_t<Update::kSet>(n - j, std::min(4, n - j), L + j + j * ld, ld, x + j, y + j);
+}
+inline void trmv_lower_add(int n, const double* L, int ld, const double* x, double* y) {
+  for (int j = 0; j < n; j += 4) gemv_n<Update::kAdd>(n - j, std::min(4, n - j), L + j + j * ld, ld, x + j, y + j);
+}
+
 }  // namespace kuavo::qp::kernels

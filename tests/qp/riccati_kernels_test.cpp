@@ -111,8 +111,75 @@ TEST(RiccatiKernels, CholeskyMatchesEigenAndRefusesIndefinite) {
   }
 }
 
-// One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go P against the
-// classical range-space formulas with Eigen's LLT, with padding in every block.
+double max_abs(const Eigen::VectorXd& v) { return v.size() == 0 ? 0.0 : v.cwiseAbs().maxCoeff(); }
+
+// The vector-pass kernels: every row remainder (masked loads), column remainders, leading
+// dimensions larger than the extents, and nothing written past the extent.
+TEST(RiccatiKernels, MatrixVectorProductsMatchEigen) {
+  std::mt19937_64 rng(106);
+  for (const int m : {0, 1, 2, 3, 4, 5, 7, 12, 38, 50}) {
+    for (const int n : {1, 2, 3, 4, 5, 9, 38, 50}) {
+      const int lda = m + 3;
+      const MatrixXd A = random_matrix(lda, n, rng);
+      const Eigen::VectorXd xn = random_matrix(n, 1, rng), xm = random_matrix(m + 1, 1, rng);
+      const double tol = kTolerance * 10.0 * (1.0 + std::max(m, n));
+      Eigen::VectorXd y0 = random_matrix(m + 1, 1, rng), y = y0;  // one guard entry past m
+      kernels::gemv_n<Update::kAdd>(m, n, A.data(), lda, xn.data(), y.data());
+      EXPECT_LE(max_abs(y.head(m) - (y0.head(m) + A.topRows(m) * xn)), tol) << m << "x" << n;
+      EXPECT_EQ(y(m), y0(m));
+      y = y0;
+      kernels::gemv_n<Update::kSub>(m, n, A.data(), lda, xn.data(), y.data());
+      EXPECT_LE(max_abs(y.head(m) - (y0.head(m) - A.topRows(m) * xn)), tol) << m << "x" << n;
+      EXPECT_EQ(y(m), y0(m));
+      const Eigen::VectorXd z0 = random_matrix(n + 1, 1, rng);
+      const Eigen::VectorXd atx = A.topRows(m).transpose() * xm.head(m);
+      Eigen::VectorXd z = z0;
+      kernels::gemv_t<Update::kSet>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - atx), tol) << m << "x" << n;
+      EXPECT_EQ(z(n), z0(n));
+      z = z0;
+      kernels::gemv_t<Update::kAdd>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - (z0.head(n) + atx)), tol) << m << "x" << n;
+      z = z0;
+      kernels::gemv_t<Update::kSub>(m, n, A.data(), lda, xm.data(), z.data());
+      EXPECT_LE(max_abs(z.head(n) - (z0.head(n) - atx)), tol) << m << "x" << n;
+      EXPECT_EQ(z(n), z0(n));
+    }
+  }
+}
+
+TEST(RiccatiKernels, TriangularSolvesAndProductsMatchEigen) {
+  std::mt19937_64 rng(107);
+  for (const int n : {1, 2, 3, 4, 5, 7, 12, 38, 50}) {
+    const int ld = n + 2;
+    MatrixXd L = random_matrix(ld, n, rng);
+    for (int j = 0; j < n; ++j) L(j, j) = 2.0 + std::abs(L(j, j));  // well conditioned
+    const auto Lt = L.topRows(n).triangularView<Eigen::Lower>();
+    const Eigen::VectorXd b = random_matrix(n, 1, rng);
+    Eigen::VectorXd x = b;
+    kernels::trsv_lower(n, L.data(), ld, x.data());
+    EXPECT_LE((Lt * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
+    x = b;
+    kernels::trsv_lower_trans(n, L.data(), ld, x.data());
+    EXPECT_LE((Lt.transpose() * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
+    // The triangular products read the 4×4 diagonal chunks whole: zeros above the diagonal there.
+    for (int j = 0; j < n; ++j) {
+      for (int i = j / 4 * 4; i < j; ++i) L(i, j) = 0.0;
+    }
+    const MatrixXd Ld = L.topRows(n).triangularView<Eigen::Lower>();
+    Eigen::VectorXd y = Eigen::VectorXd::Constant(n + 1, 5.0);
+    kernels::trmv_lower_trans(n, L.data(), ld, b.data(), y.data());
+    EXPECT_LE((y.head(n) - Ld.transpose() * b).cwiseAbs().maxCoeff(), kTolerance * 10.0 * (1.0 + n)) << n;
+    EXPECT_EQ(y(n), 5.0);
+    const Eigen::VectorXd y0 = y;
+    kernels::trmv_lower_add(n, L.data(), ld, b.data(), y.data());
+    EXPECT_LE((y.head(n) - y0.head(n) - Ld * b).cwiseAbs().maxCoeff(), kTolerance * 10.0 * (1.0 + n)) << n;
+    EXPECT_EQ(y(n), 5.0);
+  }
+}
+
+// One stage of the signed sweep: Lu, X, Yᵀ, Lm, −(Lm⁻¹G)ᵀ and the cost-to-go's factor Lp against
+// the classical range-space formulas with Eigen's LLT, with padding in every block.
 template <int NX, int NU, int NC>
 void check_stage(int ne, std::mt19937_64& rng) {
   using Layout = RiccatiLayout<NX, NU, NC>;
@@ -133,6 +200,7 @@ void check_stage(int ne, std::mt19937_64& rng) {
   const int ne_padded = kernels::round_up4(ne);
   riccati_detail::load_stage(s, ne_padded, K);
   ASSERT_EQ((riccati_detail::factor_stage<NX, NU, NC>(w->L.data(), ne, ne_padded)), QpStatus::kSolved);
+  ASSERT_TRUE((riccati_detail::factor_cost_to_go<NX, NU, NC>(w->L.data(), ne_padded)));
 
   const Eigen::LLT<MatrixXd> llt(MatrixXd(s.R));
   const MatrixXd Lu = llt.matrixL();
@@ -151,7 +219,13 @@ void check_stage(int ne, std::mt19937_64& rng) {
     EXPECT_LE((MatrixXd(K.block(kUp, kUp, ne, ne).template triangularView<Eigen::Lower>()) - MatrixXd(m_llt.matrixL())).cwiseAbs().maxCoeff(), tol);
     EXPECT_LE((K.block(kXo, kUp, NX, ne) + GmT).cwiseAbs().maxCoeff(), tol);
   }
-  EXPECT_LE((K.template block<NX, NX>(kXo, kXo) - P).cwiseAbs().maxCoeff(), tol) << "P, ne = " << ne;
+  // The x block is Lp (P = Lp·Lpᵀ), zeros above the diagonal inside its 4×4 diagonal chunks.
+  const MatrixXd Lp = K.template block<NX, NX>(kXo, kXo).template triangularView<Eigen::Lower>();
+  EXPECT_LE((Lp * Lp.transpose() - P).cwiseAbs().maxCoeff(), tol) << "P, ne = " << ne;
+  EXPECT_LE((Lp - MatrixXd(P.llt().matrixL())).cwiseAbs().maxCoeff(), tol) << "Lp, ne = " << ne;
+  for (int j = 0; j < NX; ++j) {
+    for (int i = j / 4 * 4; i < j; ++i) EXPECT_EQ(K(kXo + i, kXo + j), 0.0) << i << "," << j;
+  }
   (void)kLd;
 }
 

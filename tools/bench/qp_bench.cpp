@@ -169,22 +169,36 @@ void make_ocp(MpcQp& qp, std::mt19937_64& rng, bool equalities, bool inequalitie
   }
 }
 
-void riccati_once(benchmark::State& state, bool equalities) {
+// What each timed iteration runs: the matrix pass, the vector pass (with rollout), or both.
+enum class RiccatiPart { kBoth, kFactor, kSolve };
+
+void riccati_once(benchmark::State& state, bool equalities, RiccatiPart part = RiccatiPart::kBoth) {
   static auto b = std::make_unique<OcpBench>();
   std::mt19937_64 rng(2);
   make_ocp(b->qp, rng, equalities, false);
   copy_vectors(b->qp, b->ws.vec);
+  if (riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) state.SkipWithError("factor");
   for (auto _ : state) {
-    if (riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) state.SkipWithError("factor");
-    riccati_solve(b->qp, b->ws.riccati, b->ws.vec, b->sol);
+    if (part != RiccatiPart::kSolve && riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) {
+      state.SkipWithError("factor");
+    }
+    if (part != RiccatiPart::kFactor) riccati_solve(b->qp, b->ws.riccati, b->ws.vec, b->sol);
     benchmark::DoNotOptimize(b->sol.u[0].data());
+    benchmark::DoNotOptimize(b->ws.riccati.stage[0].L.data());
   }
+  int factored = 0;  // stages whose cost-to-go took the square-root path
+  for (const auto& w : b->ws.riccati.stage) factored += w.p_factored ? 1 : 0;
+  state.counters["p_factored"] = factored;
 }
 
 void BM_OcpRiccati_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false); }
 void BM_OcpRiccati_N60_nx38_nu50_eq12(benchmark::State& s) { riccati_once(s, true); }
+void BM_OcpRiccatiFactorOnly_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false, RiccatiPart::kFactor); }
+void BM_OcpRiccatiSolveOnly_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false, RiccatiPart::kSolve); }
 BENCHMARK(BM_OcpRiccati_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OcpRiccati_N60_nx38_nu50_eq12)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OcpRiccatiFactorOnly_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OcpRiccatiSolveOnly_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
 
 void BM_OcpInteriorPoint_N60_eq12_ineq20(benchmark::State& state) {
   static auto b = std::make_unique<OcpBench>();
