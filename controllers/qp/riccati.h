@@ -229,6 +229,9 @@ QpStatus factor_stage(double* L, int ne, int ne_padded) {
   return QpStatus::kSolved;
 }
 
+template <int NX, int NU, int NC>
+bool factor_x_block(double* L);
+
 // The sweep continued over the x columns (d = +1): on return the x block's lower triangle is
 // Lp with Pₖ = Lp·Lpᵀ = H_xx − X Xᵀ + (Lm⁻¹G)ᵀ(Lm⁻¹G), ready for the previous stage's
 // triangular product. Returns false (x block clobbered) if Pₖ is not numerically definite.
@@ -243,6 +246,16 @@ bool factor_cost_to_go(double* L, int ne_padded) {
   if (ne_padded > 0) {
     gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
   }
+  return factor_x_block<NX, NU, NC>(L);
+}
+
+// In-place Cholesky of the x block alone (the terminal stage: Pₜ = Q_T, no u or ν columns, whose
+// storage may hold a longer horizon's stage). Returns false if not numerically definite.
+template <int NX, int NU, int NC>
+bool factor_x_block(double* L) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kLd = Layout::kLd, kXo = Layout::kXo, kXp = Layout::kXp;
+  double* P = L + kXo * (kLd + 1);
   if (!kernels::cholesky(P, kLd, kXp)) return false;
   for (int j = 0; j < kXp; j += 4) {  // zeros above the diagonal where the triangular product reads
     for (int c = j + 1; c < j + 4; ++c) {
@@ -250,6 +263,17 @@ bool factor_cost_to_go(double* L, int ne_padded) {
     }
   }
   return true;
+}
+
+// The x block's upper triangle from its lower one.
+template <int NX, int NU, int NC>
+void symmetrize_x_block(double* L) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kLd = Layout::kLd;
+  double* P = L + Layout::kXo * (kLd + 1);
+  for (int j = 1; j < NX; ++j) {
+    for (int i = 0; i < j; ++i) P[i + j * kLd] = P[j + i * kLd];
+  }
 }
 
 // Fallback for a semidefinite Pₖ: the x block, re-formed as H_xx by the caller, becomes the
@@ -265,9 +289,7 @@ void schur_cost_to_go(double* L, int ne_padded) {
   if (ne_padded > 0) {
     gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
   }
-  for (int j = 1; j < NX; ++j) {
-    for (int i = 0; i < j; ++i) P[i + j * kLd] = P[j + i * kLd];
-  }
+  symmetrize_x_block<NX, NU, NC>(L);
 }
 
 // Lower triangle of [B A]ᵀPₖ₊₁[B A]'s x block, added into the x block of L: ZᵀZ from Zᵀ in Yt
@@ -318,11 +340,11 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     FactorMap<NX, NU, NC> K(L);
     load_x_block<NX, NU, NC>(qp.stages[T].Q, K);
     add_barrier_hessian(qp.stages[T], wT, ws.GuW, ws.GxW, true, L);
-    wT.p_factored = factor_cost_to_go<NX, NU, NC>(L, 0);  // no u or ν columns: x only
+    wT.p_factored = factor_x_block<NX, NU, NC>(L);
     if (!wT.p_factored) {
       load_x_block<NX, NU, NC>(qp.stages[T].Q, K);
       add_barrier_hessian(qp.stages[T], wT, ws.GuW, ws.GxW, true, L);
-      schur_cost_to_go<NX, NU, NC>(L, 0);
+      symmetrize_x_block<NX, NU, NC>(L);
     }
   }
   for (int k = T - 1; k >= 0; --k) {

@@ -97,6 +97,34 @@ TEST(OcpQp, ShorterHorizonThanCapacityMatchesDense) {
   }
 }
 
+// A workspace that solved a longer horizon keeps that horizon's factors in the later stages
+// (the MPC changes its horizon between calls): the new terminal stage must ignore them, so the
+// answer is the one a fresh workspace gives, bit for bit.
+template <int NG>
+void check_shorter_horizon_after_longer(std::mt19937_64& rng) {
+  auto reused = std::make_unique<OcpFixture<4, 3, 8, 2, NG>>();
+  auto fresh = std::make_unique<OcpFixture<4, 3, 8, 2, NG>>();
+  make_random_ocp(reused->qp, rng, 8);
+  ASSERT_EQ(solve_ocp_qp(reused->qp, OcpSettings{}, reused->ws, reused->sol), QpStatus::kSolved);
+  make_random_ocp(reused->qp, rng, 3);
+  fresh->qp = reused->qp;
+  ASSERT_EQ(solve_ocp_qp(reused->qp, OcpSettings{}, reused->ws, reused->sol), QpStatus::kSolved);
+  ASSERT_EQ(solve_ocp_qp(fresh->qp, OcpSettings{}, fresh->ws, fresh->sol), QpStatus::kSolved);
+  for (int k = 0; k <= 3; ++k) {
+    EXPECT_EQ(reused->sol.x[k], fresh->sol.x[k]) << k;
+    EXPECT_EQ(reused->sol.u[k], fresh->sol.u[k]) << k;
+    EXPECT_EQ(reused->sol.costate[k], fresh->sol.costate[k]) << k;
+  }
+}
+
+TEST(OcpQp, ShorterHorizonAfterALongerOneMatchesAFreshWorkspace) {
+  std::mt19937_64 rng(24);
+  for (int n = 0; n < 3; ++n) {
+    check_shorter_horizon_after_longer<0>(rng);
+    check_shorter_horizon_after_longer<3>(rng);
+  }
+}
+
 TEST(OcpQp, MpcSizeRandomProblemsSatisfyKkt) {
   auto f = std::make_unique<OcpFixture<38, 50, 12, 12, 20>>();
   std::mt19937_64 rng(24);
