@@ -229,26 +229,6 @@ QpStatus factor_stage(double* L, int ne, int ne_padded) {
   return QpStatus::kSolved;
 }
 
-template <int NX, int NU, int NC>
-bool factor_x_block(double* L);
-
-// The sweep continued over the x columns (d = +1): on return the x block's lower triangle is
-// Lp with Pₖ = Lp·Lpᵀ = H_xx − X Xᵀ + (Lm⁻¹G)ᵀ(Lm⁻¹G), ready for the previous stage's
-// triangular product. Returns false (x block clobbered) if Pₖ is not numerically definite.
-template <int NX, int NU, int NC>
-bool factor_cost_to_go(double* L, int ne_padded) {
-  using Layout = RiccatiLayout<NX, NU, NC>;
-  using kernels::gemm;
-  using kernels::Update;
-  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
-  double* P = L + kXo * (kLd + 1);
-  gemm<true, Update::kSub, true>(kXp, NX, kUp, L + kXo, kLd, L + kXo, kLd, P, kLd);
-  if (ne_padded > 0) {
-    gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
-  }
-  return factor_x_block<NX, NU, NC>(L);
-}
-
 // In-place Cholesky of the x block alone (the terminal stage: Pₜ = Q_T, no u or ν columns, whose
 // storage may hold a longer horizon's stage). Returns false if not numerically definite.
 template <int NX, int NU, int NC>
@@ -263,6 +243,30 @@ bool factor_x_block(double* L) {
     }
   }
   return true;
+}
+
+// The x block's Schur complement, lower triangle: H_xx − X Xᵀ + (Lm⁻¹G)ᵀ(Lm⁻¹G), from the
+// factored u and ν columns.
+template <int NX, int NU, int NC>
+void subtract_schur_product(double* L, int ne_padded) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  using kernels::gemm;
+  using kernels::Update;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
+  double* P = L + kXo * (kLd + 1);
+  gemm<true, Update::kSub, true>(kXp, NX, kUp, L + kXo, kLd, L + kXo, kLd, P, kLd);
+  if (ne_padded > 0) {
+    gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
+  }
+}
+
+// The sweep continued over the x columns (d = +1): on return the x block's lower triangle is
+// Lp with Pₖ = Lp·Lpᵀ = H_xx − X Xᵀ + (Lm⁻¹G)ᵀ(Lm⁻¹G), ready for the previous stage's
+// triangular product. Returns false (x block clobbered) if Pₖ is not numerically definite.
+template <int NX, int NU, int NC>
+bool factor_cost_to_go(double* L, int ne_padded) {
+  subtract_schur_product<NX, NU, NC>(L, ne_padded);
+  return factor_x_block<NX, NU, NC>(L);
 }
 
 // The x block's upper triangle from its lower one.
@@ -280,15 +284,7 @@ void symmetrize_x_block(double* L) {
 // Schur complement Pₖ itself, both triangles.
 template <int NX, int NU, int NC>
 void schur_cost_to_go(double* L, int ne_padded) {
-  using Layout = RiccatiLayout<NX, NU, NC>;
-  using kernels::gemm;
-  using kernels::Update;
-  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
-  double* P = L + kXo * (kLd + 1);
-  gemm<true, Update::kSub, true>(kXp, NX, kUp, L + kXo, kLd, L + kXo, kLd, P, kLd);
-  if (ne_padded > 0) {
-    gemm<true, Update::kAdd, true>(kXp, NX, ne_padded, L + kXo + kUp * kLd, kLd, L + kXo + kUp * kLd, kLd, P, kLd);
-  }
+  subtract_schur_product<NX, NU, NC>(L, ne_padded);
   symmetrize_x_block<NX, NU, NC>(L);
 }
 
