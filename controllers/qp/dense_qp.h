@@ -120,6 +120,9 @@ struct DenseQpWorkspace {
   Vector gram_diagonal = Vector::Zero();
   Eigen::Matrix<double, NI, 1> cx = Eigen::Matrix<double, NI, 1>::Zero();
   Eigen::Matrix<double, NI, 1> inv_row_norm = Eigen::Matrix<double, NI, 1>::Zero();
+  // Selection weights (see the GI loop): 1/‖D^-½ n‖ per row, √H_jj per bound, D = diag(H).
+  Eigen::Matrix<double, NI, 1> row_weight = Eigen::Matrix<double, NI, 1>::Zero();
+  Vector bound_weight = Vector::Zero();
   std::array<ConstraintCode, NV> active{};  // equalities as -1 - i, first
   std::array<std::uint8_t, kNumCodes> is_active{};
   int q = 0;

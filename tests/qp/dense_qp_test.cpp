@@ -207,6 +207,74 @@ TEST(DenseQp, BadInputIsRejected) {
   EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kBadInput);
 }
 
+// Infinite entries of H, g, A, b or C (not only NaN) are bad input: the finiteness check
+// is a vectorized sum, which must still see a single inf among the zeros.
+TEST(DenseQp, InfiniteDataIsRejected) {
+  auto f = std::make_unique<Fixture<58, 6, 60>>();
+  std::mt19937_64 rng(18);
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    const int i = n % 58, j = (7 * n) % 58, r = n % 60;
+    const double bad = (n % 2 == 0) ? kInfinity : -kInfinity;
+    switch (n % 5) {
+      case 0: f->qp.H(i, j) = bad; break;
+      case 1: f->qp.g(i) = bad; break;
+      case 2: f->qp.A(n % 6, j) = bad; break;
+      case 3: f->qp.b(n % 6) = bad; break;
+      default: f->qp.C(r, j) = bad; break;
+    }
+    EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kBadInput) << n;
+  }
+  // Infinite bounds are not bad input (a disabled side), NaN bounds are.
+  make_random_dense_qp(f->qp, rng);
+  f->qp.x_upper.setConstant(kInfinity);
+  f->qp.c_lower(3) = -kInfinity;
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+  f->qp.x_lower(5) = std::nan("");
+  EXPECT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kBadInput);
+}
+
+// Variables on very different scales (the WBC's accelerations and forces: cost weights from
+// 1e-4 to 1e3): the GI loop picks the constraint to add by violation in the metric of
+// diag(H), which must not change the answer. Oracle: the KKT conditions.
+TEST(DenseQp, BadlyScaledVariablesSatisfyKkt) {
+  auto f = std::make_unique<Fixture<58, 6, 60>>();
+  std::mt19937_64 rng(19);
+  int total_active = 0;
+  for (int n = 0; n < 30; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    // x = S x̃ with S from 1e-2 to 1e2: H → S H S, g → S g, A → A S, C → C S, bounds / S.
+    Eigen::Matrix<double, 58, 1> s;
+    for (int j = 0; j < 58; ++j) s(j) = std::pow(10.0, uniform(rng, -2.0, 2.0));
+    f->qp.H = s.asDiagonal() * f->qp.H * s.asDiagonal();
+    f->qp.g = s.asDiagonal() * f->qp.g;
+    f->qp.A = f->qp.A * s.asDiagonal();
+    f->qp.C = f->qp.C * s.asDiagonal();
+    f->qp.x_lower = f->qp.x_lower.cwiseQuotient(s);
+    f->qp.x_upper = f->qp.x_upper.cwiseQuotient(s);
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(dense_kkt(f->qp, f->sol));
+    total_active += f->sol.working_set_size;
+  }
+  EXPECT_GT(total_active, 30 * 5);
+}
+
+// The counters account for every working-set change: their sum is the iteration count.
+TEST(DenseQp, CountersAddUpToIterations) {
+  auto f = std::make_unique<Fixture<56, 18, 60>>();
+  std::mt19937_64 rng(20);
+  DenseQpSettings warm;
+  warm.warm_start = true;
+  for (int n = 0; n < 20; ++n) {
+    make_random_dense_qp(f->qp, rng);  // a new problem: the previous working set is a poor guess
+    ASSERT_EQ(solve_dense_qp(f->qp, n % 3 == 0 ? DenseQpSettings{} : warm, f->ws, f->sol), QpStatus::kSolved);
+    const DenseQpCounters& c = f->ws.counters;
+    EXPECT_EQ(c.guess_imposed + c.guess_dropped + c.additions + c.blocking_drops, f->sol.iterations) << n;
+    // Every row at the end was imposed or added and not dropped since.
+    EXPECT_EQ(c.guess_imposed - c.guess_dropped + c.additions - c.blocking_drops, f->sol.working_set_size) << n;
+  }
+}
+
 TEST(DenseQp, IterationCapReturnsWorkingSetMinimizer) {
   auto f = std::make_unique<Fixture<56, 18, 60>>();
   std::mt19937_64 rng(10);
