@@ -102,6 +102,9 @@ struct RiccatiWorkspace {
   // (or Zᵀ = [B A]ᵀLp when Pₖ₊₁ is factored).
   alignas(64) std::array<double, Layout::kLd * NX> BAt{};
   alignas(64) std::array<double, Layout::kLd * NX> Yt{};
+  // Per 4-row group of BAt: 1 + the last row in which the group's columns of [B A] are
+  // nonzero (0: all zero). Zᵀ = [B A]ᵀLp is zero in the same columns (Lp is lower).
+  std::array<int, Layout::kLd / 4> extent{};
   Eigen::Matrix<double, NG, NU> GuW = Eigen::Matrix<double, NG, NU>::Zero();  // √W Gu
   Eigen::Matrix<double, NG, NX> GxW = Eigen::Matrix<double, NG, NX>::Zero();  // √W Gx
   Eigen::Matrix<double, NX, 1> v = Eigen::Matrix<double, NX, 1>::Zero();
@@ -152,6 +155,74 @@ void add_barrier_hessian(const OcpStage<NX, NU, NC, NG>& s, const RiccatiStage<N
     K.template block<NX, NU>(Layout::kXo, 0).noalias() += GxW.topRows(m).transpose() * GuW.topRows(m);
   } else {
     (void)s, (void)w, (void)GuW, (void)GxW, (void)x_only, (void)L;
+  }
+}
+
+// Structure of [B A] that the square-root products exploit (bit for bit the dense products:
+// only exact zero terms at the end of each inner sum are skipped). A column of [B A] that is
+// zero below row e gives a row of Zᵀ = [B A]ᵀLp that is zero from column e on, because Lp is
+// lower triangular. The centroidal MPC's B has force columns with 6 nonzero rows (CoM velocity,
+// momentum) of 38 and its A the joints' identity: ~20 % of the matrix pass's flops.
+template <int NX, int NU, int NC>
+void column_extents(const double* B, const double* A, int* extent) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  const auto last_nonzero = [](const double* col) {
+    int e = NX;
+    while (e > 0 && col[e - 1] == 0.0) --e;  // dense columns stop at once
+    return e;
+  };
+  for (int g = 0; g < Layout::kLd / 4; ++g) extent[g] = 0;
+  for (int j = 0; j < NU; ++j) extent[j / 4] = std::max(extent[j / 4], last_nonzero(B + j * NX));
+  for (int j = 0; j < NX; ++j) {
+    int& e = extent[(Layout::kXo + j) / 4];
+    e = std::max(e, last_nonzero(A + j * NX));
+  }
+}
+
+// C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
+// of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
+// the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
+// diagonal on.
+template <bool kLower>
+void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
+                            double* C) {
+  using kernels::gemm;
+  using kernels::Update;
+  for (int j = 0; j < n; j += 4) {
+    const int ej = extent[(col0 + j) / 4];
+    if (ej == 0) continue;
+    int i = kLower ? j : 0;
+    while (i < m) {
+      const int e = extent[(row0 + i) / 4];
+      int i_end = i + 4;
+      while (i_end < m && extent[(row0 + i_end) / 4] == e) i_end += 4;
+      const int k = std::min(e, ej);
+      if (k > 0) {
+        gemm<true, Update::kAdd>(i_end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
+                                 C + i + j * ld, ld);
+      }
+      i = i_end;
+    }
+  }
+}
+
+// Zᵀ[m×NX] = [B A]ᵀ(rows row0 … row0+m)·Lp, skipping what the extents make zero (those
+// entries are set to zero).
+template <int NX>
+void zt_product_by_extents(const int* extent, int row0, int m, const double* BAt, const double* Lp, int ld,
+                           double* Zt) {
+  using kernels::gemm;
+  using kernels::Update;
+  for (int j = 0; j < NX; j += 4) {
+    int i = 0;
+    while (i < m) {
+      const int e = extent[(row0 + i) / 4];
+      int i_end = i + 4;
+      while (i_end < m && extent[(row0 + i_end) / 4] == e) i_end += 4;
+      gemm<false, Update::kSet>(i_end - i, std::min(4, NX - j), std::max(0, e - j), BAt + row0 + i + j * ld, ld,
+                                Lp + j + j * ld, ld, Zt + row0 + i + j * ld, ld);
+      i = i_end;
+    }
   }
 }
 
@@ -291,13 +362,13 @@ void schur_cost_to_go(double* L, int ne_padded) {
 // Lower triangle of [B A]ᵀPₖ₊₁[B A]'s x block, added into the x block of L: ZᵀZ from Zᵀ in Yt
 // when Pₖ₊₁ is factored, else Yt·A with Yt = [B A]ᵀPₖ₊₁.
 template <int NX, int NU, int NC>
-void add_x_product(const double* Yt, const double* A, bool factored, double* L) {
+void add_x_product(const double* Yt, const double* A, const int* extent, bool factored, double* L) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kXo = Layout::kXo, kXp = Layout::kXp;
   if (factored) {
-    gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
+    add_product_by_extents<true>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
   } else {
     gemm<false, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, A, NX, L + kXo * (kLd + 1), kLd);
   }
@@ -357,12 +428,14 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
+    int* extent = ws.extent.data();
     if (next.p_factored) {
-      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ.
-      kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
-      kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
-      gemm<true, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd);
-      gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
+      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ, over the extents.
+      column_extents<NX, NU, NC>(s.B.data(), s.A.data(), extent);
+      zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
+      zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
+      add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L);
+      add_product_by_extents<false>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
     } else {
       // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
       gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
@@ -370,7 +443,7 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
       gemm<false, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd);
       gemm<false, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
     }
-    add_x_product<NX, NU, NC>(Yt, s.A.data(), next.p_factored, L);
+    add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);
 
@@ -379,7 +452,7 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     w.p_factored = factor_cost_to_go<NX, NU, NC>(L, ne_padded);
     if (!w.p_factored) {
       load_x_block<NX, NU, NC>(s.Q, K);
-      add_x_product<NX, NU, NC>(Yt, s.A.data(), next.p_factored, L);
+      add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, L);
       add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
       schur_cost_to_go<NX, NU, NC>(L, ne_padded);
     }
