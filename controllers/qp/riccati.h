@@ -163,8 +163,10 @@ void add_barrier_hessian(const OcpStage<NX, NU, NC, NG>& s, const RiccatiStage<N
 // zero below row e gives a row of Zᵀ = [B A]ᵀLp that is zero from column e on, because Lp is
 // lower triangular. The centroidal MPC's B has force columns with 6 nonzero rows (CoM velocity,
 // momentum) of 38 and its A the joints' identity: ~20 % of the matrix pass's flops.
+// Returns false if every column reaches the last row (dense [B A]: the caller keeps its
+// whole-matrix products, whose constant inner extent the compiler specializes).
 template <int NX, int NU, int NC>
-void column_extents(const double* B, const double* A, int* extent) {
+bool column_extents(const double* B, const double* A, int* extent) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   const auto last_nonzero = [](const double* col) {
     int e = NX;
@@ -173,17 +175,21 @@ void column_extents(const double* B, const double* A, int* extent) {
   };
   for (int g = 0; g < Layout::kLd / 4; ++g) extent[g] = 0;
   for (int j = 0; j < NU; ++j) extent[j / 4] = std::max(extent[j / 4], last_nonzero(B + j * NX));
+  bool tails = false;
+  for (int j = 0; j < NU; ++j) tails |= extent[j / 4] < NX;
   for (int j = 0; j < NX; ++j) {
     int& e = extent[(Layout::kXo + j) / 4];
     e = std::max(e, last_nonzero(A + j * NX));
   }
+  for (int j = 0; j < NX; ++j) tails |= extent[(Layout::kXo + j) / 4] < NX;
+  return tails;
 }
 
 // C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
 // of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
 // the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
 // diagonal on.
-template <bool kLower>
+template <bool kLower, int NX>
 void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
                             double* C) {
   using kernels::gemm;
@@ -197,9 +203,9 @@ void add_product_by_extents(const int* extent, int row0, int m, int col0, int n,
       int i_end = i + 4;
       while (i_end < m && extent[(row0 + i_end) / 4] == e) i_end += 4;
       const int k = std::min(e, ej);
+      const int rows = i_end - i, cols = std::min(4, n - j);
       if (k > 0) {
-        gemm<true, Update::kAdd>(i_end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
-                                 C + i + j * ld, ld);
+        gemm<true, Update::kAdd>(rows, cols, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld);
       }
       i = i_end;
     }
@@ -367,8 +373,10 @@ void add_x_product(const double* Yt, const double* A, const int* extent, bool fa
   using kernels::gemm;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kXo = Layout::kXo, kXp = Layout::kXp;
-  if (factored) {
-    add_product_by_extents<true>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
+  if (factored && extent != nullptr) {
+    add_product_by_extents<true, NX>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
+  } else if (factored) {
+    gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
   } else {
     gemm<false, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, A, NX, L + kXo * (kLd + 1), kLd);
   }
@@ -428,14 +436,21 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
-    int* extent = ws.extent.data();
+    const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
     if (next.p_factored) {
-      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ, over the extents.
-      column_extents<NX, NU, NC>(s.B.data(), s.A.data(), extent);
-      zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
-      zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
-      add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L);
-      add_product_by_extents<false>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
+      // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ (over the extents).
+      if (column_extents<NX, NU, NC>(s.B.data(), s.A.data(), ws.extent.data())) {
+        extent = ws.extent.data();
+        zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
+        zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
+        add_product_by_extents<true, NX>(extent, 0, kUp, 0, NU, Yt, kLd, L);
+        add_product_by_extents<false, NX>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
+      } else {
+        kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
+        kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
+        gemm<true, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd);
+        gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
+      }
     } else {
       // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
       gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
