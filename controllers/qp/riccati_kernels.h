@@ -151,22 +151,60 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
 // holds L: L(c,c) = √(d·a_c), L(r,c) = a_rc / (d·L(c,c)). Returns false at a pivot with
 // d·a ≤ 0 or NaN (not definite with the expected sign).
 inline bool factor_panel4(double* L, int ld, int j, int row_end, int row2_begin, int row2_end, double d) {
+  // The 4×4 diagonal block first (it yields the pivots' reciprocals and the factors f), then
+  // every 4 rows below it in registers: per entry the same operations in the same order as
+  // column by column (scale by 1/(d·l), then − f·l for each earlier column of the panel, fused
+  // as the compiler fuses it), so the result is bit for bit the column sweep's, with one load
+  // and store per entry instead of one per column.
+  double inv[4];
+  double f[4][4] = {};
   for (int c = j; c < j + 4; ++c) {
     double* Lc = L + c * ld;
     const double a = d * Lc[c];
     if (!(a > 0.0)) return false;
     const double l = std::sqrt(a);
     Lc[c] = l;
-    const double inv = 1.0 / (d * l);
-    for (int r = c + 1; r < row_end; ++r) Lc[r] *= inv;
-    for (int r = row2_begin; r < row2_end; ++r) Lc[r] *= inv;
+    inv[c - j] = 1.0 / (d * l);
+    for (int r = c + 1; r < j + 4; ++r) Lc[r] *= inv[c - j];
     for (int c2 = c + 1; c2 < j + 4; ++c2) {
       double* L2 = L + c2 * ld;
-      const double f = d * Lc[c2];
-      for (int r = c2; r < row_end; ++r) L2[r] -= f * Lc[r];
-      for (int r = row2_begin; r < row2_end; ++r) L2[r] -= f * Lc[r];
+      f[c - j][c2 - j] = d * Lc[c2];
+      for (int r = c2; r < j + 4; ++r) L2[r] -= f[c - j][c2 - j] * Lc[r];
     }
   }
+  const auto rows_below = [&](int begin, int end) {
+    int r = begin;
+#ifdef KUAVO_QP_KERNELS_SIMD
+    for (; r + 4 <= end; r += 4) {
+      double* p = L + r + j * ld;
+      __m256d v0 = _mm256_loadu_pd(p), v1 = _mm256_loadu_pd(p + ld);
+      __m256d v2 = _mm256_loadu_pd(p + 2 * ld), v3 = _mm256_loadu_pd(p + 3 * ld);
+      v0 = _mm256_mul_pd(v0, _mm256_set1_pd(inv[0]));
+      v1 = _mm256_fnmadd_pd(_mm256_set1_pd(f[0][1]), v0, v1);
+      v2 = _mm256_fnmadd_pd(_mm256_set1_pd(f[0][2]), v0, v2);
+      v3 = _mm256_fnmadd_pd(_mm256_set1_pd(f[0][3]), v0, v3);
+      v1 = _mm256_mul_pd(v1, _mm256_set1_pd(inv[1]));
+      v2 = _mm256_fnmadd_pd(_mm256_set1_pd(f[1][2]), v1, v2);
+      v3 = _mm256_fnmadd_pd(_mm256_set1_pd(f[1][3]), v1, v3);
+      v2 = _mm256_mul_pd(v2, _mm256_set1_pd(inv[2]));
+      v3 = _mm256_fnmadd_pd(_mm256_set1_pd(f[2][3]), v2, v3);
+      v3 = _mm256_mul_pd(v3, _mm256_set1_pd(inv[3]));
+      _mm256_storeu_pd(p, v0);
+      _mm256_storeu_pd(p + ld, v1);
+      _mm256_storeu_pd(p + 2 * ld, v2);
+      _mm256_storeu_pd(p + 3 * ld, v3);
+    }
+#endif
+    for (; r < end; ++r) {
+      double* p = L + r + j * ld;
+      for (int c = 0; c < 4; ++c) {
+        p[c * ld] *= inv[c];
+        for (int c2 = c + 1; c2 < 4; ++c2) p[c2 * ld] -= f[c][c2] * p[c * ld];
+      }
+    }
+  };
+  rows_below(j + 4, row_end);
+  rows_below(row2_begin, row2_end);
   return true;
 }
 
