@@ -4,6 +4,8 @@
 #   tools/run.sh demo   -> the main job (see README.md)
 #   tools/run.sh test   -> the whole test suite (CI calls this)
 #   tools/run.sh build  -> set-up and build only
+# Environment: KUAVO_BUILD_DIR (default build/), KUAVO_JOBS (default nproc), KUAVO_ARCH
+# (-march of every target, default x86-64-v3 = the robot; x86-64-v4 adds the AVX-512 tiles).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${KUAVO_BUILD_DIR:-$here/build}"
@@ -22,7 +24,7 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${missing[@]}"
 fi
 
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release ${KUAVO_ARCH:+-DKUAVO_ARCH="$KUAVO_ARCH"} >/dev/null
 cmake --build "$build" -j "$jobs"
 
 case "${1:-build}" in
