@@ -185,11 +185,19 @@ bool column_extents(const double* B, const double* A, int* extent) {
   return tails;
 }
 
+// End of the run of 4-row groups from row i (< m, relative to row0) that share i's extent.
+inline int extent_run_end(const int* extent, int row0, int i, int m) {
+  const int e = extent[(row0 + i) / 4];
+  int end = i + 4;
+  while (end < m && extent[(row0 + end) / 4] == e) end += 4;
+  return end;
+}
+
 // C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
 // of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
 // the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
 // diagonal on.
-template <bool kLower, int NX>
+template <bool kLower>
 void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
                             double* C) {
   using kernels::gemm;
@@ -199,13 +207,11 @@ void add_product_by_extents(const int* extent, int row0, int m, int col0, int n,
     if (ej == 0) continue;
     int i = kLower ? j : 0;
     while (i < m) {
-      const int e = extent[(row0 + i) / 4];
-      int i_end = i + 4;
-      while (i_end < m && extent[(row0 + i_end) / 4] == e) i_end += 4;
-      const int k = std::min(e, ej);
-      const int rows = i_end - i, cols = std::min(4, n - j);
+      const int i_end = extent_run_end(extent, row0, i, m);
+      const int k = std::min(extent[(row0 + i) / 4], ej);
       if (k > 0) {
-        gemm<true, Update::kAdd>(rows, cols, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld);
+        gemm<true, Update::kAdd>(i_end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
+                                 C + i + j * ld, ld);
       }
       i = i_end;
     }
@@ -222,11 +228,10 @@ void zt_product_by_extents(const int* extent, int row0, int m, const double* BAt
   for (int j = 0; j < NX; j += 4) {
     int i = 0;
     while (i < m) {
-      const int e = extent[(row0 + i) / 4];
-      int i_end = i + 4;
-      while (i_end < m && extent[(row0 + i_end) / 4] == e) i_end += 4;
-      gemm<false, Update::kSet>(i_end - i, std::min(4, NX - j), std::max(0, e - j), BAt + row0 + i + j * ld, ld,
-                                Lp + j + j * ld, ld, Zt + row0 + i + j * ld, ld);
+      const int i_end = extent_run_end(extent, row0, i, m);
+      const int k = std::max(0, extent[(row0 + i) / 4] - j);
+      gemm<false, Update::kSet>(i_end - i, std::min(4, NX - j), k, BAt + row0 + i + j * ld, ld, Lp + j + j * ld, ld,
+                                Zt + row0 + i + j * ld, ld);
       i = i_end;
     }
   }
@@ -374,7 +379,7 @@ void add_x_product(const double* Yt, const double* A, const int* extent, bool fa
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kXo = Layout::kXo, kXp = Layout::kXp;
   if (factored && extent != nullptr) {
-    add_product_by_extents<true, NX>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
+    add_product_by_extents<true>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
   } else if (factored) {
     gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
   } else {
@@ -443,8 +448,8 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
         extent = ws.extent.data();
         zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
         zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
-        add_product_by_extents<true, NX>(extent, 0, kUp, 0, NU, Yt, kLd, L);
-        add_product_by_extents<false, NX>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
+        add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L);
+        add_product_by_extents<false>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
       } else {
         kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
         kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);

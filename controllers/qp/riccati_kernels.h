@@ -44,6 +44,20 @@ inline const double* b_entry(const double* B, int ldb, int p, int j) {
   return kTransB ? B + j + p * ldb : B + p + j * ldb;
 }
 
+#ifdef KUAVO_QP_KERNELS_SIMD
+// C (=, +=, −=) x for one 4-row vector of C's column.
+template <Update kUpdate>
+inline void update_ymm(double* c, __m256d x) {
+  if constexpr (kUpdate == Update::kSet) {
+    _mm256_storeu_pd(c, x);
+  } else if constexpr (kUpdate == Update::kAdd) {
+    _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), x));
+  } else {
+    _mm256_storeu_pd(c, _mm256_sub_pd(_mm256_loadu_pd(c), x));
+  }
+}
+#endif
+
 // One MR×NR tile of C (MR = 4 or 8, NR = 1…4) over the inner extent k.
 template <int MR, int NR, bool kTransB, Update kUpdate>
 inline void tile(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
@@ -64,16 +78,7 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
     }
   }
   for (int j = 0; j < NR; ++j) {
-    for (int v = 0; v < MV; ++v) {
-      double* c = C + j * ldc + 4 * v;
-      if constexpr (kUpdate == Update::kSet) {
-        _mm256_storeu_pd(c, acc[v][j]);
-      } else if constexpr (kUpdate == Update::kAdd) {
-        _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), acc[v][j]));
-      } else {
-        _mm256_storeu_pd(c, _mm256_sub_pd(_mm256_loadu_pd(c), acc[v][j]));
-      }
-    }
+    for (int v = 0; v < MV; ++v) update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j]);
   }
 #else
   double acc[MR][NR] = {};
@@ -104,16 +109,6 @@ inline void update_zmm(double* c, __m512d x) {
     _mm512_storeu_pd(c, _mm512_add_pd(_mm512_loadu_pd(c), x));
   } else {
     _mm512_storeu_pd(c, _mm512_sub_pd(_mm512_loadu_pd(c), x));
-  }
-}
-template <Update kUpdate>
-inline void update_ymm(double* c, __m256d x) {
-  if constexpr (kUpdate == Update::kSet) {
-    _mm256_storeu_pd(c, x);
-  } else if constexpr (kUpdate == Update::kAdd) {
-    _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), x));
-  } else {
-    _mm256_storeu_pd(c, _mm256_sub_pd(_mm256_loadu_pd(c), x));
   }
 }
 
