@@ -102,6 +102,11 @@ struct DenseQpWorkspace {
   // Lᵀ in the upper triangle: the solves with Lᵀ then run down columns (axpy form) too.
   Square Lt = Square::Zero();
   Vector inv_diag = Vector::Zero();   // 1 / L(i, i)
+  // H's rows [dense_size, NV) have no entry off the diagonal (the WBC's contact forces carry a
+  // diagonal weight only), so L is [L₁₁ 0; 0 D] with L₁₁ dense_size × dense_size: only that
+  // block is factored and the triangular solves scale the rest. L and Lt hold stale values
+  // outside the block and the diagonal; nothing reads them.
+  int dense_size = NV;
   // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
   // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
   // factorization V = Q R, i.e. RᵀR = NᵀH⁻¹N. Q itself is never formed.

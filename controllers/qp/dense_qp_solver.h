@@ -102,26 +102,48 @@ struct Codes {
 // one entry and updates the rest with one contiguous column (a vectorized axpy), where a
 // dot-product form would wait on a horizontal sum per entry (2-3× slower at NV = 58).
 // x ← L⁻¹x for x zero above `first` (a bound's normal ±eⱼ: L⁻¹n is zero above j too).
+// Both skip what L's block structure makes zero (dense_qp.h, dense_size): past the dense
+// block a solve is a scaling.
 template <int NV, int NE, int NI>
 void solve_lower(const DenseQpWorkspace<NV, NE, NI>& ws, double* x, int first = 0) {
   const double* L = ws.L.data();
-  for (int j = first; j < NV; ++j) {
+  const int kd = ws.dense_size;
+  for (int j = first; j < kd; ++j) {
     const double xj = x[j] * ws.inv_diag[j];
     x[j] = xj;
     const double* col = L + j * NV;
-    for (int i = j + 1; i < NV; ++i) x[i] -= xj * col[i];
+    for (int i = j + 1; i < kd; ++i) x[i] -= xj * col[i];
   }
+  for (int j = std::max(first, kd); j < NV; ++j) x[j] *= ws.inv_diag[j];
 }
 // x ← L⁻ᵀx, with Lᵀ's columns from ws.Lt.
 template <int NV, int NE, int NI>
 void solve_lower_transpose(const DenseQpWorkspace<NV, NE, NI>& ws, double* x) {
   const double* U = ws.Lt.data();
-  for (int j = NV - 1; j >= 0; --j) {
+  const int kd = ws.dense_size;
+  for (int j = NV - 1; j >= kd; --j) x[j] *= ws.inv_diag[j];
+  for (int j = kd - 1; j >= 0; --j) {
     const double xj = x[j] * ws.inv_diag[j];
     x[j] = xj;
     const double* col = U + j * NV;
     for (int i = 0; i < j; ++i) x[i] -= xj * col[i];
   }
+}
+
+// The smallest k such that H has no entry off the diagonal in rows [k, NV) (lower triangle).
+template <int NV>
+int dense_block_size(const Eigen::Matrix<double, NV, NV>& H) {
+  int k = 0;
+  for (int j = 0; j < NV; ++j) {
+    const double* col = H.data() + j * NV;
+    for (int i = NV - 1; i >= std::max(k, j + 1); --i) {
+      if (col[i] != 0.0) {
+        k = i + 1;
+        break;
+      }
+    }
+  }
+  return k;
 }
 
 // out = L⁻¹n. L⁻¹n is zero above n's first nonzero entry, so the solve starts there: a bound's
@@ -265,17 +287,17 @@ void working_set_minimizer(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, N
   ws.x += ws.column;
 }
 
-// Imposes the m constraints codes[0, m) as the working set in one block: V = L⁻¹N by one
-// triangular solve, R by the Cholesky of the Gram matrix VᵀV. Returns false (working set left
+// Imposes the m constraints codes[0, m) as the working set in one block: V = L⁻¹N, R by the Cholesky of the Gram matrix VᵀV. Returns false (working set left
 // empty) if the Cholesky says some are nearly dependent.
 template <int NV, int NE, int NI>
 bool impose_block(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& ws, const ConstraintCode* codes, int m) {
-  using C = Codes<NV, NE, NI>;
   ws.q = 0;
   if (m == 0) return true;
-  for (int k = 0; k < m; ++k) C::normal(qp, codes[k], ws.V.col(k));
+  // Column by column as every later addition does (solve_normal_into: from the normal's first
+  // nonzero, scaling past the dense block): bounds and the WBC's friction rows cost almost
+  // nothing, where a blocked triangular solve pays for all of L per column.
+  for (int k = 0; k < m; ++k) solve_normal_into(qp, codes[k], ws, ws.V.col(k));
   const auto V1 = ws.V.leftCols(m);
-  ws.L.template triangularView<Eigen::Lower>().solveInPlace(ws.V.leftCols(m));
   // Gram matrix and its Cholesky factor in the lower triangle (Eigen's blocked Cholesky runs
   // column-major there), then R = Lᵀ.
   auto G = ws.R.topLeftCorner(m, m);
@@ -401,14 +423,28 @@ QpStatus solve_dense_qp(const DenseQp<NV, NE, NI>& qp, const DenseQpSettings& se
   // In place, without Eigen::LLT's l1 norm (a strided pass over H, for a condition estimate
   // that is never used). Unblocked: at these sizes the blocked version's panel bookkeeping
   // costs more than it saves (9 against 13 µs at NV = 58).
+  // Only H's dense leading block is factored (dense_size): the rest of L is √diag(H).
+  const int kd = dense_block_size(qp.H);
+  ws.dense_size = kd;
   ws.L = qp.H;
-  if (Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(ws.L) >= 0) {
+  bool convex = true;
+  if (kd > 0) {
+    auto L11 = ws.L.topLeftCorner(kd, kd);
+    convex = Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(L11) < 0;
+  }
+  for (int i = kd; i < NV && convex; ++i) {
+    convex = qp.H(i, i) > 0.0;
+    ws.L(i, i) = std::sqrt(qp.H(i, i));
+  }
+  if (!convex) {
     write_solution(qp, ws, sol, QpStatus::kNotConvex, 0);
     return sol.status;
   }
   for (int i = 0; i < NV; ++i) {  // down Lt's columns: its writes stay sequential
     ws.inv_diag(i) = 1.0 / ws.L(i, i);
-    for (int j = 0; j < i; ++j) ws.Lt(j, i) = ws.L(i, j);
+    if (i < kd) {
+      for (int j = 0; j < i; ++j) ws.Lt(j, i) = ws.L(i, j);
+    }
   }
   ws.gt = qp.g;
   solve_lower(ws, ws.gt.data());

@@ -54,6 +54,58 @@ TEST(DenseQp, WbcSizeRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<82,
 TEST(DenseQp, ReducedWbcSizeRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<56, 18, 60>(60, 2); }
 TEST(DenseQp, SmallRandomProblemsSatisfyKkt) { random_problems_satisfy_kkt<8, 2, 6>(300, 3); }
 
+// The WBC's Hessian: a dense block over the accelerations, a diagonal weight on the contact
+// forces, and friction rows over the forces alone. The solver factors only the dense block
+// (DenseQpWorkspace::dense_size); a coupling entry anywhere left of the diagonal in a row must
+// put that row in the block. Cases: the WBC pattern (block 34 of 58), one coupling entry far
+// down the first column (row 40: the block grows to 41 over diagonal rows 34..39), and a
+// diagonal H (no block). KKT certificate on each; the block size against the construction.
+TEST(DenseQp, BlockDiagonalHessianSatisfiesKkt) {
+  constexpr int kNv = 58, kDense = 34;
+  auto f = std::make_unique<Fixture<kNv, 6, 60>>();
+  std::mt19937_64 rng(11);
+  int total_active = 0;
+  for (int n = 0; n < 60; ++n) {
+    make_random_dense_qp(f->qp, rng);
+    const int pattern = n % 3;
+    const Eigen::MatrixXd dense = f->qp.H.topLeftCorner(kDense, kDense);
+    f->qp.H.setZero();
+    for (int i = 0; i < kNv; ++i) f->qp.H(i, i) = uniform(rng, 0.5, 2.0);
+    if (pattern != 2) f->qp.H.topLeftCorner(kDense, kDense) = dense;
+    if (pattern == 1) {
+      f->qp.H(40, 0) = 0.3;
+      f->qp.H(0, 40) = 0.3;
+    }
+    // Friction-like rows on the trailing variables only (their L⁻¹n skips the block), all
+    // constraints re-centred on a new feasible point.
+    f->qp.C.topRows(30).leftCols(kDense).setZero();
+    Eigen::VectorXd x_feasible(kNv);
+    for (int i = 0; i < kNv; ++i) x_feasible(i) = gaussian(rng);
+    f->qp.b = f->qp.A * x_feasible;
+    for (int i = 0; i < 60; ++i) {
+      const double cx = f->qp.C.row(i).dot(x_feasible);
+      f->qp.c_lower(i) = cx - uniform(rng, 0.0, 2.0);
+      f->qp.c_upper(i) = cx + uniform(rng, 0.0, 2.0);
+    }
+    for (int j = 0; j < kNv; ++j) {
+      f->qp.x_lower(j) = x_feasible(j) - uniform(rng, 0.1, 3.0);
+      f->qp.x_upper(j) = x_feasible(j) + uniform(rng, 0.1, 3.0);
+    }
+    ASSERT_EQ(solve_dense_qp(f->qp, DenseQpSettings{}, f->ws, f->sol), QpStatus::kSolved) << n;
+    expect_kkt(dense_kkt(f->qp, f->sol));
+    EXPECT_EQ(f->ws.dense_size, pattern == 0 ? kDense : pattern == 1 ? 41 : 0) << n;
+    total_active += f->sol.working_set_size;
+    // The warm start imposes the working set as one block (V column by column): same solution.
+    auto warm = std::make_unique<DenseQpSolution<kNv, 6, 60>>(f->sol);
+    DenseQpSettings settings;
+    settings.warm_start = true;
+    ASSERT_EQ(solve_dense_qp(f->qp, settings, f->ws, *warm), QpStatus::kSolved) << n;
+    expect_kkt(dense_kkt(f->qp, *warm));
+    EXPECT_LE((warm->x - f->sol.x).cwiseAbs().maxCoeff(), 1e-8) << n;
+  }
+  EXPECT_GT(total_active, 60 * 5);
+}
+
 TEST(DenseQp, BoundsOnlyIkSizeSatisfiesKkt) {
   auto f = std::make_unique<Fixture<34, 0, 0>>();
   std::mt19937_64 rng(4);
