@@ -83,6 +83,15 @@ void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
   }
 }
 
+bool kf_axes_separated(const KfCovariance& p) {
+  for (int j = 0; j < kStateDim; ++j) {
+    for (int i = 0; i < kStateDim; ++i) {
+      if (i % 3 != j % 3 && p(i, j) != 0.0) return false;
+    }
+  }
+  return true;
+}
+
 bool kf_bound_horizontal_rt(KfCovariance& p, double det_limit_m4) {
   const double det_m4 = p(0, 0) * p(1, 1) - p(0, 1) * p(1, 0);
   if (!(det_m4 > det_limit_m4)) return false;

@@ -56,6 +56,12 @@ void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
 // Returns true when it acted.
 bool kf_bound_horizontal_rt(KfCovariance& p, double det_limit_m4);
 
+// True when every cross-axis entry of P (state i is axis i mod 3; i mod 3 ≠ j mod 3) is
+// zero. Nothing in the filter couples two axes (A is the identity plus per-axis blocks, Q
+// and R are diagonal, every row of C involves one axis, the seed P is diagonal, the
+// horizontal guard only zeroes entries), so the estimator's P always is.
+bool kf_axes_separated(const KfCovariance& p);
+
 // C x: what the state predicts for the measurements.
 KfMeasurementVector kf_predicted_measurement(const KfVector& x);
 

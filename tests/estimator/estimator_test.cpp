@@ -160,10 +160,13 @@ TEST(EstimatorSynthetic, StandingStillDoesNotDrift) {
   ASSERT_EQ(estimator::estimator_reset(robot(), g_state, f, q0.head<2>()), EstimatorStatus::kOk);
   EstimateOutput out;
   double trace_at_5_s = 0.0;
+  int mixed_axes = 0;  // steps after which P has a cross-axis entry (kf_update_rt's precondition)
   for (int n = 0; n < 5000; ++n) {
     estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
     if (n == 2499) trace_at_5_s = out.covariance_trace;
+    mixed_axes += estimator::kf_axes_separated(g_state.p) ? 0 : 1;
   }
+  EXPECT_EQ(mixed_axes, 0);
   EXPECT_EQ(out.status, EstimatorStatus::kOk);
   EXPECT_LT((out.q.head<3>() - q0.head<3>()).norm(), 1e-9);
   EXPECT_LT(out.base_velocity_world_m_s.norm(), 1e-9);
@@ -287,6 +290,7 @@ TEST(EstimatorRealTime, NoHeapOverTenThousandSteps) {
     EXPECT_EQ(trap.count(), 0u) << "first allocation: " << trap.first_size_bytes() << " bytes";
   }
   EXPECT_TRUE(std::isfinite(checksum));
+  EXPECT_TRUE(estimator::kf_axes_separated(g_state.p));  // through swings and rejected samples
 }
 
 }  // namespace
