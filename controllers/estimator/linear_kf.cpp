@@ -6,9 +6,13 @@ namespace {
 
 constexpr int kPoints = model::kNumContactPoints;
 
-// One axis's sub-filter: its 11 states, its 11×11 block of P (see linear_kf.h).
-using AxisVector = Eigen::Matrix<double, kAxisStates, 1>;
-using AxisCovariance = Eigen::Matrix<double, kAxisStates, kAxisStates>;
+// One axis's sub-filter: its 11 states, its 11×11 block of P (see linear_kf.h), padded
+// to 12 with a row and column so that each column is three whole AVX packets. The padding
+// never enters the real entries (each entry of a rank-one update is computed on its own);
+// it is zeroed so that it holds no garbage.
+constexpr int kAxisPadded = kAxisStates + 1;
+using AxisVector = Eigen::Matrix<double, kAxisPadded, 1>;
+using AxisCovariance = Eigen::Matrix<double, kAxisPadded, kAxisPadded>;
 
 // Local indices within an axis (state index = 3·local + k).
 constexpr int kLocalPosition = 0;
@@ -71,8 +75,8 @@ void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
   // axis is an 11-state filter of its own. Within an axis the rows keep the order of the
   // 33-state sequential update (positions, fused velocity, heights); updates of different
   // axes touch disjoint entries, so their interleaving does not matter.
-  AxisVector xk, pc;
-  AxisCovariance pk;
+  AxisVector xk = AxisVector::Zero(), pc;
+  AxisCovariance pk = AxisCovariance::Zero();
   for (int k = 0; k < 3; ++k) {
     for (int a = 0; a < kAxisStates; ++a) {
       xk[a] = x[3 * a + k];
@@ -98,17 +102,16 @@ void kf_update_rt(KfVector& x, KfCovariance& p, const KfMeasurementVector& y,
         scalar_update(xk, pk, {local_point(i), 1.0, -1, 0.0}, y[m], measurement_variance[m], pc);
       }
     }
-    // Rounding in the rank-one downdates leaves P slightly asymmetric; Leju symmetrises too.
-    for (int a = 0; a < kAxisStates; ++a) {
-      for (int b = a + 1; b < kAxisStates; ++b) {
-        const double mean = 0.5 * (pk(b, a) + pk(a, b));
-        pk(b, a) = mean;
-        pk(a, b) = mean;
-      }
-    }
+    // Back into P, symmetrised on the way: rounding in the rank-one downdates leaves the
+    // block slightly asymmetric; Leju symmetrises too.
     for (int a = 0; a < kAxisStates; ++a) {
       x[3 * a + k] = xk[a];
-      for (int b = 0; b < kAxisStates; ++b) p(3 * b + k, 3 * a + k) = pk(b, a);
+      p(3 * a + k, 3 * a + k) = pk(a, a);
+      for (int b = a + 1; b < kAxisStates; ++b) {
+        const double mean = 0.5 * (pk(b, a) + pk(a, b));
+        p(3 * b + k, 3 * a + k) = mean;
+        p(3 * a + k, 3 * b + k) = mean;
+      }
     }
   }
 }
