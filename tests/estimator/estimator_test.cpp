@@ -259,6 +259,36 @@ TEST(EstimatorBadInput, JointsDtConfigAndStartUp) {
   EXPECT_EQ(out.status, EstimatorStatus::kDiverged);
 }
 
+// A non-finite entry anywhere in x or P (within an axis block, across axes, ±inf, NaN)
+// re-seeds the filter: one divergence, and x, P and the output finite again.
+TEST(EstimatorBadInput, NonFiniteStateOrCovarianceIsReseeded) {
+  const dynamics::ConfigVector q0 = yawed_stance(0.0);
+  const hal::SensorFrame good = frame_from(q0, dynamics::VelocityVector::Zero(), Eigen::Vector3d::Zero(), 0);
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, good, q0.head<2>()), EstimatorStatus::kOk);
+  EstimateOutput out;
+  struct Poison {
+    bool covariance;
+    int i, j;
+    double value;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const Poison& poison : {Poison{true, 7, 7, std::nan("")}, Poison{true, 0, 4, inf}, Poison{true, 31, 2, -inf},
+                               Poison{false, 5, 0, -inf}, Poison{false, 32, 0, std::nan("")}}) {
+    for (int n = 0; n < 20; ++n) estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+    ASSERT_EQ(out.status, EstimatorStatus::kOk);
+    const auto divergences = g_state.divergences;
+    (poison.covariance ? g_state.p(poison.i, poison.j) : g_state.x[poison.i]) = poison.value;
+    estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+    EXPECT_EQ(out.status, EstimatorStatus::kDiverged) << poison.i << ", " << poison.j;
+    EXPECT_EQ(g_state.divergences, divergences + 1) << poison.i << ", " << poison.j;
+    EXPECT_TRUE(g_state.x.allFinite() && g_state.p.allFinite()) << poison.i << ", " << poison.j;
+    // (A non-finite x also makes that step's innovation_norm non-finite: not checked here.)
+    EXPECT_TRUE(out.q.allFinite() && out.v.allFinite() && std::isfinite(out.covariance_trace))
+        << poison.i << ", " << poison.j;
+  }
+}
+
 TEST(EstimatorRealTime, NoHeapOverTenThousandSteps) {
   // A precomputed moving stance, varied contact flags and some rejected samples.
   static std::array<hal::SensorFrame, 32> frames;
