@@ -160,10 +160,13 @@ TEST(EstimatorSynthetic, StandingStillDoesNotDrift) {
   ASSERT_EQ(estimator::estimator_reset(robot(), g_state, f, q0.head<2>()), EstimatorStatus::kOk);
   EstimateOutput out;
   double trace_at_5_s = 0.0;
+  int mixed_axes = 0;  // steps after which P has a cross-axis entry (kf_update_rt's precondition)
   for (int n = 0; n < 5000; ++n) {
     estimator::estimator_step_rt(robot(), g_state, f, kAllContact, kDt_s, out);
     if (n == 2499) trace_at_5_s = out.covariance_trace;
+    mixed_axes += estimator::kf_axes_separated(g_state.p) ? 0 : 1;
   }
+  EXPECT_EQ(mixed_axes, 0);
   EXPECT_EQ(out.status, EstimatorStatus::kOk);
   EXPECT_LT((out.q.head<3>() - q0.head<3>()).norm(), 1e-9);
   EXPECT_LT(out.base_velocity_world_m_s.norm(), 1e-9);
@@ -256,6 +259,36 @@ TEST(EstimatorBadInput, JointsDtConfigAndStartUp) {
   EXPECT_EQ(out.status, EstimatorStatus::kDiverged);
 }
 
+// A non-finite entry anywhere in x or P (within an axis block, across axes, ±inf, NaN)
+// re-seeds the filter: one divergence, and x, P and the output finite again.
+TEST(EstimatorBadInput, NonFiniteStateOrCovarianceIsReseeded) {
+  const dynamics::ConfigVector q0 = yawed_stance(0.0);
+  const hal::SensorFrame good = frame_from(q0, dynamics::VelocityVector::Zero(), Eigen::Vector3d::Zero(), 0);
+  ASSERT_TRUE(estimator::estimator_init(estimator::EstimatorConfig{}, g_state));
+  ASSERT_EQ(estimator::estimator_reset(robot(), g_state, good, q0.head<2>()), EstimatorStatus::kOk);
+  EstimateOutput out;
+  struct Poison {
+    bool covariance;
+    int i, j;
+    double value;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const Poison& poison : {Poison{true, 7, 7, std::nan("")}, Poison{true, 0, 4, inf}, Poison{true, 31, 2, -inf},
+                               Poison{false, 5, 0, -inf}, Poison{false, 32, 0, std::nan("")}}) {
+    for (int n = 0; n < 20; ++n) estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+    ASSERT_EQ(out.status, EstimatorStatus::kOk);
+    const auto divergences = g_state.divergences;
+    (poison.covariance ? g_state.p(poison.i, poison.j) : g_state.x[poison.i]) = poison.value;
+    estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+    EXPECT_EQ(out.status, EstimatorStatus::kDiverged) << poison.i << ", " << poison.j;
+    EXPECT_EQ(g_state.divergences, divergences + 1) << poison.i << ", " << poison.j;
+    EXPECT_TRUE(g_state.x.allFinite() && g_state.p.allFinite()) << poison.i << ", " << poison.j;
+    // (A non-finite x also makes that step's innovation_norm non-finite: not checked here.)
+    EXPECT_TRUE(out.q.allFinite() && out.v.allFinite() && std::isfinite(out.covariance_trace))
+        << poison.i << ", " << poison.j;
+  }
+}
+
 TEST(EstimatorRealTime, NoHeapOverTenThousandSteps) {
   // A precomputed moving stance, varied contact flags and some rejected samples.
   static std::array<hal::SensorFrame, 32> frames;
@@ -287,6 +320,7 @@ TEST(EstimatorRealTime, NoHeapOverTenThousandSteps) {
     EXPECT_EQ(trap.count(), 0u) << "first allocation: " << trap.first_size_bytes() << " bytes";
   }
   EXPECT_TRUE(std::isfinite(checksum));
+  EXPECT_TRUE(estimator::kf_axes_separated(g_state.p));  // through swings and rejected samples
 }
 
 }  // namespace

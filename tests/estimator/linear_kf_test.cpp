@@ -31,6 +31,18 @@ struct Problem {
   KfMeasurementVector y, variance;
 };
 
+// Zeroes P's cross-axis entries (state i is axis i mod 3), as the estimator's P always has
+// them: the diagonal blocks of a positive definite matrix, so still positive definite.
+KfCovariance axis_separated(const KfCovariance& p) {
+  KfCovariance out = p;
+  for (int j = 0; j < kStateDim; ++j) {
+    for (int i = 0; i < kStateDim; ++i) {
+      if (i % 3 != j % 3) out(i, j) = 0.0;
+    }
+  }
+  return out;
+}
+
 Problem random_problem(std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
@@ -51,6 +63,8 @@ TEST(EstimatorLinearKf, SequentialUpdateEqualsBatchUpdate) {
   const MatrixXd c = measurement_matrix();
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     Problem pr = random_problem(seed);
+    pr.p = axis_separated(pr.p);  // kf_update_rt's precondition
+    ASSERT_TRUE(kf_axes_separated(pr.p));
     // Textbook: S = C P Cᵀ + R, K = P Cᵀ S⁻¹, x += K(y − Cx), P = (I − K C) P.
     const MatrixXd s = c * pr.p * c.transpose() + MatrixXd(pr.variance.asDiagonal());
     const MatrixXd k = pr.p * c.transpose() * s.inverse();
@@ -64,7 +78,36 @@ TEST(EstimatorLinearKf, SequentialUpdateEqualsBatchUpdate) {
     EXPECT_LT((pr.x - x_ref).norm(), 1e-9 * (1.0 + x_ref.norm())) << "seed " << seed;
     EXPECT_LT((pr.p - p_ref).norm(), 1e-9 * (1.0 + p_ref.norm())) << "seed " << seed;
     EXPECT_EQ((pr.p - pr.p.transpose()).norm(), 0.0);  // symmetrised exactly
+    EXPECT_TRUE(kf_axes_separated(pr.p)) << "seed " << seed;
   }
+}
+
+// The precondition's check sees a single cross-axis entry; prediction and the horizontal
+// guard keep an axis-separated P axis-separated (exactly, as the estimator relies on).
+TEST(EstimatorLinearKf, AxisSeparationIsCheckedAndPreserved) {
+  Problem pr = random_problem(11);
+  EXPECT_FALSE(kf_axes_separated(pr.p));
+  KfCovariance p = axis_separated(pr.p);
+  EXPECT_TRUE(kf_axes_separated(p));
+  for (int i : {0, 4, 17, 32}) {
+    for (int j : {1, 2, 6, 31}) {
+      if (i % 3 == j % 3) continue;
+      KfCovariance q = p;
+      q(i, j) = 1e-300;
+      EXPECT_FALSE(kf_axes_separated(q)) << i << ", " << j;
+    }
+  }
+  KfVector variance;
+  for (int i = 0; i < kStateDim; ++i) variance[i] = 1e-3 * (i + 1);
+  for (int n = 0; n < 10; ++n) {
+    kf_predict_rt(pr.x, p, Eigen::Vector3d(0.3, -0.2, 1.1), variance, 0.002);
+    KfMeasurementVector innovation;
+    kf_update_rt(pr.x, p, pr.y, pr.variance, innovation);
+  }
+  EXPECT_TRUE(kf_axes_separated(p));
+  p.topLeftCorner<2, 2>() *= 1e6;
+  EXPECT_TRUE(kf_bound_horizontal_rt(p, 1e-6));
+  EXPECT_TRUE(kf_axes_separated(p));
 }
 
 TEST(EstimatorLinearKf, PredictionEqualsDenseForm) {
