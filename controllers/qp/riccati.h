@@ -237,24 +237,44 @@ void zt_product_by_extents(const int* extent, int row0, int m, const double* BAt
   }
 }
 
-// Q into the x block with its padding (zero rows, identity pivots).
+// The lower triangle of a symmetric n×n S (column-major, lds) into D, each column from the
+// first row of its 4×4 diagonal chunk (so the chunk's few entries above the diagonal are S's).
+// Nothing reads the storage's upper triangle (beyond those chunks) in the u, ν and x blocks,
+// and neither S's upper triangle (Q and R are symmetric, ocp_qp.h) nor D's are touched: at
+// MPC size each stage's factor storage and data are touched once per factorization from
+// beyond L2, and the upper triangles are ~40 % of R's and Q's cache lines and ~25 % of the
+// storage's.
+inline void copy_lower(int n, const double* S, int lds, double* D, int ldd) {
+  for (int j = 0; j < n; ++j) {
+    const double* s = S + j * lds;
+    double* d = D + j * ldd;
+    int i = j / 4 * 4;
+#ifdef KUAVO_QP_KERNELS_SIMD
+    for (; i + 4 <= n; i += 4) _mm256_storeu_pd(d + i, _mm256_loadu_pd(s + i));  // no memmove call per column
+#endif
+    for (; i < n; ++i) d[i] = s[i];
+  }
+}
+
+// Q into the x block with its padding (zero rows, identity pivots), lower triangle (copy_lower).
 template <int NX, int NU, int NC>
 void load_x_block(const Eigen::Matrix<double, NX, NX>& Q, FactorMap<NX, NU, NC>& K) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   constexpr int kXo = Layout::kXo, kXp = Layout::kXp;
-  K.template block<NX, NX>(kXo, kXo) = Q;
+  copy_lower(NX, Q.data(), NX, K.data() + kXo * (Layout::kLd + 1), Layout::kLd);
   if constexpr (kXp > NX) {
     K.template block<kXp - NX, Layout::kLd>(kXo + NX, 0).setZero();
     for (int i = NX; i < kXp; ++i) K(kXo + i, kXo + i) = 1.0;
   }
 }
 
-// The stage's own blocks [R ·; D 0 ·; Sᵀ Cᵀ Q] into the lower triangle, with the padding.
+// The stage's own blocks [R ·; D 0 ·; Sᵀ Cᵀ Q] into the lower triangle, with the padding
+// (R and Q: copy_lower).
 template <int NX, int NU, int NC, int NG>
 void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, NU, NC>& K) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
-  K.template topLeftCorner<NU, NU>() = s.R;
+  copy_lower(NU, s.R.data(), NU, K.data(), Layout::kLd);
   if constexpr (kUp > NU) {
     K.template block<kUp - NU, NU>(NU, 0).setZero();
     K.template block<kUp - NU, kUp - NU>(NU, NU).setIdentity();
