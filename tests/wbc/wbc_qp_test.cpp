@@ -128,6 +128,54 @@ TEST(WbcQp, HoldStateReferenceKeepsStancePointsStillAndCarriesTheWeight) {
 }
 
 // Random moving states, both feet or one foot in contact: the returned triple is consistent.
+// H's acceleration block is Σ (task rows)ᵀ(task rows) plus diagonal weights; the WBC forms it
+// by blocks (a foot's rows reach only the base and its leg). Off the diagonal it must equal
+// the dense product of the task rows, whose point rows are √w·J_c with J_c computed apart;
+// H is symmetric and the force block and the acceleration–force block are diagonal / zero.
+TEST(WbcQp, HessianIsTheTaskRowsGramMatrix) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  wbc::wbc_init(m, cfg, ws);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  double worst_h = 0.0, worst_rows = 0.0, worst_other = 0.0;
+  for (int trial = 0; trial < 30; ++trial) {
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    for (int c = 0; c < kNumPoints; ++c) ref.in_contact[c] = trial % 3 == 0 || (trial % 3 == 1 ? c >= 4 : c < 4);
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.1 * u(rng);
+    dynamics::VelocityVector v;
+    for (int k = 0; k < kNv; ++k) v[k] = 0.3 * u(rng);
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    const Eigen::MatrixXd rows = ws.task_rows;
+    const Eigen::MatrixXd dense = rows.transpose() * rows;
+    const Eigen::MatrixXd H = ws.qp.H;
+    const double scale = 1.0 + dense.cwiseAbs().maxCoeff();
+    for (int j = 0; j < kNv; ++j) {
+      for (int i = 0; i < kNv; ++i) {
+        if (i != j) worst_h = std::max(worst_h, std::abs(H(i, j) - dense(i, j)) / scale);
+      }
+    }
+    worst_other = std::max(worst_other, (H - H.transpose()).cwiseAbs().maxCoeff());
+    worst_other = std::max(worst_other, H.block(kNv, 0, kNumForces, kNv).cwiseAbs().maxCoeff());
+    Eigen::MatrixXd force_block = H.bottomRightCorner(kNumForces, kNumForces);
+    force_block.diagonal().setZero();
+    worst_other = std::max(worst_other, force_block.cwiseAbs().maxCoeff());
+    contact_terms(q, v);
+    for (int c = 0; c < kNumPoints; ++c) {
+      const double w = std::sqrt(ref.in_contact[c] ? cfg.weight_stance_point : cfg.weight_swing_point);
+      const Eigen::MatrixXd expected = w * independent().contact_jacobian.middleRows<3>(3 * c);
+      worst_rows = std::max(worst_rows, (rows.middleRows(3 * c, 3) - expected).cwiseAbs().maxCoeff() / (1.0 + expected.cwiseAbs().maxCoeff()));
+    }
+  }
+  EXPECT_LT(worst_h, 1e-12);
+  EXPECT_LT(worst_rows, 1e-12);
+  EXPECT_EQ(worst_other, 0.0);
+}
+
 TEST(WbcQp, RandomStatesSatisfyDynamicsFrictionTorqueLimitsAndSwingZero) {
   const model::Model& m = wbc_robot();
   wbc::WbcWorkspace& ws = wbc_workspace();
