@@ -287,17 +287,44 @@ void working_set_minimizer(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, N
   ws.x += ws.column;
 }
 
-// Imposes the m constraints codes[0, m) as the working set in one block: V = L⁻¹N, R by the Cholesky of the Gram matrix VᵀV. Returns false (working set left
+// Imposes the m constraints codes[0, m) as the working set in one block: V = L⁻¹N by a
+// triangular solve, R by the Cholesky of the Gram matrix VᵀV. Returns false (working set left
 // empty) if the Cholesky says some are nearly dependent.
 template <int NV, int NE, int NI>
 bool impose_block(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& ws, const ConstraintCode* codes, int m) {
   ws.q = 0;
   if (m == 0) return true;
-  // Column by column as every later addition does (solve_normal_into: from the normal's first
-  // nonzero, scaling past the dense block): bounds and the WBC's friction rows cost almost
-  // nothing, where a blocked triangular solve pays for all of L per column.
-  for (int k = 0; k < m; ++k) solve_normal_into(qp, codes[k], ws, ws.V.col(k));
+  // V = L⁻¹N with L = [L₁₁ 0; 0 D] (dense_size): one blocked triangular solve with L₁₁ over
+  // the leading rows of the columns that reach them, a scaling of the rest. The working set
+  // is ordered so that those columns come first: the equalities, then the guess's rows that
+  // reach into the dense block, then the rest (on the WBC: the friction rows and the force
+  // bounds, whose L⁻¹n is n scaled). A dense problem keeps its order and one solve over all
+  // of L. (Column by column from each normal's first nonzero, as the additions do, measured
+  // slower on dense problems: 25 → 34 µs.)
+  using C = Codes<NV, NE, NI>;
+  const int kd = ws.dense_size;
+  std::array<ConstraintCode, NV> ordered{};
+  std::array<ConstraintCode, NV> parked{};
+  int lead = 0, rest = 0;
+  for (int k = 0; k < m; ++k) {  // leading columns into V in order, the rest parked in R
+    auto n = ws.R.col(rest);
+    C::normal(qp, codes[k], n);
+    if (codes[k] < 0 || (n.head(kd).array() != 0.0).any()) {
+      ws.V.col(lead) = n;
+      ordered[lead++] = codes[k];
+    } else {
+      parked[rest++] = codes[k];
+    }
+  }
+  for (int r = 0; r < rest; ++r) {
+    ws.V.col(lead + r) = ws.R.col(r);
+    ordered[lead + r] = parked[r];
+  }
   const auto V1 = ws.V.leftCols(m);
+  if (kd > 0 && lead > 0) {
+    ws.L.topLeftCorner(kd, kd).template triangularView<Eigen::Lower>().solveInPlace(ws.V.topLeftCorner(kd, lead));
+  }
+  if (kd < NV) ws.V.block(kd, 0, NV - kd, m).array().colwise() *= ws.inv_diag.tail(NV - kd).array();
   // Gram matrix and its Cholesky factor in the lower triangle (Eigen's blocked Cholesky runs
   // column-major there), then R = Lᵀ.
   auto G = ws.R.topLeftCorner(m, m);
@@ -315,8 +342,8 @@ bool impose_block(const DenseQp<NV, NE, NI>& qp, DenseQpWorkspace<NV, NE, NI>& w
     }
   }
   for (int k = 0; k < m; ++k) {
-    ws.active[k] = codes[k];
-    if (codes[k] >= 0) ws.is_active[codes[k]] = 1;
+    ws.active[k] = ordered[k];
+    if (ordered[k] >= 0) ws.is_active[ordered[k]] = 1;
   }
   ws.q = m;
   return true;
