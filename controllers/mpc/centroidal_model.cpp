@@ -133,8 +133,8 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   // ∂v_b.
   auto& tdx = p.base_twist_dx;
   auto& tdu = p.base_twist_du;
-  tdx.setZero();
-  tdu.setZero();
+  // Base-position columns of tdx and force columns of tdu are zero: never written here, so
+  // they keep the zeros of the point's construction (no per-call clearing).
   tdx.block<6, 3>(0, kXComVelocity).noalias() = ab_inv.leftCols<3>() * (m * r.transpose());
   tdx.block<6, 3>(0, kXMomentum).noalias() = ab_inv.rightCols<3>() * r.transpose();
   for (int i = 0; i < 3; ++i) {
@@ -147,9 +147,11 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   tdu.block<6, kNumMpcJoints>(0, kUJointVelocity).noalias() = -ab_inv * aj;
 
   // f and its Jacobians.
+  // fx and fu are mostly structural zeros (rows of ṙ, the joints; the joint-velocity columns of
+  // ṙ, ḣ; the force columns of q̇_j). Every call writes the same blocks below, the rest keeps the
+  // zeros of the point's construction: only ḣ's accumulated block is cleared.
   p.f.setZero();
-  p.fx.setZero();
-  p.fu.setZero();
+  p.fx.block<3, kNx>(kXMomentum, 0).setZero();
   Vec3 force_sum = Vec3::Zero();
   Mat3 force_skew_sum = Mat3::Zero();
   Eigen::Matrix<double, 3, kNumMpcJoints> jp;
@@ -187,7 +189,7 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
     p.fx.block<3, 1>(kXEuler, kXEuler + e) += p.euler_rate_map_derivative[e] * omega;
   }
   p.f.segment<kNumMpcJoints>(kXJoints) = uj;
-  p.fu.block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).setIdentity();
+  p.fu.block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal().setOnes();
 }
 
 void state_from_configuration(const model::Model& model, dynamics::Data& data, const dynamics::ConfigVector& q,

@@ -60,6 +60,8 @@ using MotionRowsU = Eigen::Matrix<double, 6, kNu>;
 using HeadVector = Eigen::Vector2d;
 
 // The model evaluated at one (x, u). ~40 KB with the scratch Data: static storage only.
+// centroidal_evaluate writes the same blocks of base_twist_dx/du, fx and fu every call and
+// relies on the rest (structural zeros) keeping the zeros of construction: do not write them.
 struct CentroidalPoint {
   dynamics::Data data;  // kinematics with the base at the origin, identity orientation
   std::array<Vec6, model::kNumBodies> subtree_momentum{};  // Σ I_i V_i over the subtree

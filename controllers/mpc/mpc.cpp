@@ -371,6 +371,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
   ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
   for (auto& st : ws.qp.stages) {  // what the builds never write stays zero (build_stage_cost, build_equalities)
+    st.A.setIdentity();              // ... or the identity (A's rows of ṙ and the joints)
+    st.B.setZero();
     st.Q.setZero();
     st.R.setZero();
     st.S.setZero();
@@ -486,9 +488,16 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
     auto& st = ws.qp.stages[k];
     centroidal_evaluate(model, ws.x[k], ws.u[k], ws.head_rad[k], ws.point);
     const CentroidalPoint& p = ws.point;
-    st.A.noalias() = cfg.dt_s * p.fx;
-    st.A.diagonal().array() += 1.0;
-    st.B.noalias() = cfg.dt_s * p.fu;
+    // A = I + dt·fx, B = dt·fu. fx is zero but in rows [3, 12) (ḣ, base position, Euler rates)
+    // and fu in rows [0, 12) and the joint-velocity identity: the rest of A is the identity and
+    // the rest of B zero, as mpc_init wrote them (nothing else writes A or B), and only the
+    // varying rows and B's diagonal dt are written (the same values as the whole products).
+    st.A.template middleRows<kXJoints - kXMomentum>(kXMomentum).noalias() =
+        cfg.dt_s * p.fx.template middleRows<kXJoints - kXMomentum>(kXMomentum);
+    st.A.diagonal().template segment<kXJoints - kXMomentum>(kXMomentum).array() += 1.0;
+    st.B.template topRows<kXJoints>().noalias() = cfg.dt_s * p.fu.template topRows<kXJoints>();
+    st.B.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal() =
+        cfg.dt_s * p.fu.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal();
     st.b = ws.x[k] + cfg.dt_s * p.f - ws.x[k + 1];
     violation = std::max(violation, st.b.cwiseAbs().maxCoeff());
     if (k <= kMpcPlanKnots) {

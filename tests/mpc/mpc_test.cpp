@@ -270,6 +270,51 @@ TEST(MpcStep, CachedReferenceAndPartialClearingBuildTheSameQp) {
   EXPECT_EQ(compared, 60 * 61);
 }
 
+// The build writes only the varying rows of A = I + dt·fx and B = dt·fu (the rest is mpc_init's
+// identity / zero), and centroidal_evaluate writes only the non-structural blocks of fx, fu and
+// the base twist derivatives (the rest keeps the zeros of construction). Through stepping and
+// back to standing, every stage's A and B must equal the whole products of a freshly
+// constructed point's evaluation, bit for bit, and the reused point must equal the fresh one.
+TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
+  MpcFixture& f = mpc_fixture();
+  mpc::mpc_init(f.model, f.config, f.ws);
+  static mpc::CentroidalPoint fresh;
+  static mpc::StateJacobian a;
+  static mpc::InputJacobian b;
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.05;
+  int compared = 0;
+  for (int call = 0; call < 50; ++call) {
+    const hal::TimeNs t = static_cast<hal::TimeNs>(call) * 20'000'000;
+    if (call < 35) {
+      stepping_window(f, t, SteppingPlan{});
+    } else {
+      standing_window(f, t);
+    }
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
+    for (int k = 0; k < f.ws.horizon; k += 7) {
+      fresh = mpc::CentroidalPoint{};
+      mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], fresh);
+      a = f.config.dt_s * fresh.fx;
+      a.diagonal().array() += 1.0;
+      b = f.config.dt_s * fresh.fu;
+      const auto& st = f.ws.qp.stages[k];
+      ASSERT_TRUE(st.A == a) << call << " " << k;
+      ASSERT_TRUE(st.B == b) << call << " " << k;
+      ++compared;
+    }
+    // The workspace's point was last evaluated at stage T − 1: reused, it must equal a fresh one.
+    const int last = f.ws.horizon - 1;
+    fresh = mpc::CentroidalPoint{};
+    mpc::centroidal_evaluate(f.model, f.ws.x[last], f.ws.u[last], f.ws.head_rad[last], fresh);
+    ASSERT_TRUE(f.ws.point.fx == fresh.fx && f.ws.point.fu == fresh.fu && f.ws.point.f == fresh.f) << call;
+    ASSERT_TRUE(f.ws.point.base_twist_dx == fresh.base_twist_dx && f.ws.point.base_twist_du == fresh.base_twist_du)
+        << call;
+    ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
+  }
+  EXPECT_EQ(compared, 50 * ((f.ws.horizon + 6) / 7));
+}
+
 }  // namespace
 }  // namespace kuavo::test
 
