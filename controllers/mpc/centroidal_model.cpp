@@ -1,6 +1,7 @@
 #include "controllers/mpc/centroidal_model.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "controllers/wbc/wbc_reference.h"
@@ -33,6 +34,18 @@ void orientation_terms(const Vec3& e, CentroidalPoint& p) {
 }
 
 }  // namespace
+
+int leg_chain_first_column(const model::Model& model, int body) {
+  int n = 0, lo = kNumMpcJoints, hi = -1;
+  for (int a = body; a > 0; a = model.bodies[a].parent) {
+    const int k = a - 1;
+    if (k >= kNumMpcJoints) continue;
+    ++n;
+    lo = std::min(lo, k);
+    hi = std::max(hi, k);
+  }
+  return n == kLegChain && hi - lo + 1 == kLegChain ? lo : -1;
+}
 
 void point_position_jacobian(const model::Model& model, const CentroidalPoint& p, int body,
                              const Vec3& point_base_m, Eigen::Matrix<double, 3, kNumMpcJoints>& jacobian) {
@@ -169,7 +182,13 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
     force_skew_sum += sf;
     for (int e = 0; e < 3; ++e) p.fx.block<3, 1>(kXMomentum, kXEuler + e) -= sf * (p.rotation_derivative[e] * arm_b);
     point_position_jacobian(model, p, body, point, jp);
-    p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() -= sf * (r * jp);
+    // jp is zero but in the columns of the body's chain: a leg's six contiguous joints.
+    const int lo = leg_chain_first_column(model, body);
+    if (lo >= 0) {
+      p.fx.block<3, kLegChain>(kXMomentum, kXJoints + lo).noalias() -= sf * (r * jp.middleCols<kLegChain>(lo));
+    } else {
+      p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() -= sf * (r * jp);
+    }
   }
   // − Σ skew(fᵢ) R (−J_c): the CoM moves with the joints too.
   p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() +=

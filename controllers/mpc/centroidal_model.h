@@ -92,6 +92,11 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
 void point_motion(const model::Model& model, const CentroidalPoint& p, int body, const Vec3& point_base_m,
                   Vec6& motion, MotionRowsX& motion_dx, MotionRowsU& motion_du);
 
+// The first MPC joint of body's chain when the chain is kLegChain contiguous MPC joints (a
+// foot: point_position_jacobian's only nonzero columns are then [lo, lo + kLegChain)), else −1.
+inline constexpr int kLegChain = 6;
+int leg_chain_first_column(const model::Model& model, int body);
+
 // ∂(point position, base axes)/∂q_j: 3 × 26.
 void point_position_jacobian(const model::Model& model, const CentroidalPoint& p, int body,
                              const Vec3& point_base_m, Eigen::Matrix<double, 3, kNumMpcJoints>& jacobian);

@@ -267,6 +267,8 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   }
 }
 
+constexpr int kSwingColumns = 5 + kLegChain;  // base x-y, Euler, the leg
+
 // Leju's soft swing x-y tracking: ½ w ‖p_xy(x) − p_xy,ref‖² per corner not in contact, Gauss-Newton
 // Hessian. Soft, so the optimizer may still move the touchdown spot.
 void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
@@ -285,12 +287,33 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
     j.setZero();
     j.block<2, 2>(0, kXBasePosition).setIdentity();
     for (int e = 0; e < 3; ++e) j.col(kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
-    j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    const int lo = leg_chain_first_column(model, body);
+    if (lo >= 0) {
+      j.block<2, kLegChain>(0, kXJoints + lo).noalias() = p.rotation.topRows<2>() * jp.middleCols<kLegChain>(lo);
+    } else {
+      j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    }
     const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
     const double w = cfg.dt_s * cfg.weight_swing_xy;
     // j is zero in the momentum columns: only Q's base-and-joint block changes.
-    st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().noalias() +=
-        w * j.template rightCols<kNx - kXBasePosition>().transpose() * j.template rightCols<kNx - kXBasePosition>();
+    if (lo >= 0) {
+      // and zero but in base x-y, the Euler angles and the leg's joints: the Gauss-Newton
+      // product on those 11 columns only, each entry as the dense product computes it
+      // (w · (j₀ₐ j₀ᵦ + j₁ₐ j₁ᵦ) added with fused multiply-adds).
+      std::array<int, kSwingColumns> cols{kXBasePosition, kXBasePosition + 1, kXEuler, kXEuler + 1, kXEuler + 2};
+      for (int i = 0; i < kLegChain; ++i) cols[5 + i] = kXJoints + lo + i;
+      for (int bi = 0; bi < kSwingColumns; ++bi) {
+        const int b = cols[bi];
+        for (int ai = 0; ai < kSwingColumns; ++ai) {
+          const int a = cols[ai];
+          const double acc = std::fma(j(1, a), j(1, b), j(0, a) * j(0, b));
+          st.Q(a, b) = std::fma(acc, w, st.Q(a, b));
+        }
+      }
+    } else {
+      st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().noalias() +=
+          w * j.template rightCols<kNx - kXBasePosition>().transpose() * j.template rightCols<kNx - kXBasePosition>();
+    }
     ws.swing_block_written[k] = true;
     st.q.noalias() += w * j.transpose() * error;
   }
