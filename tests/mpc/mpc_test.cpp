@@ -315,6 +315,51 @@ TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
   EXPECT_EQ(compared, 50 * ((f.ws.horizon + 6) / 7));
 }
 
+// The swing x-y cost adds w·JᵀJ per swing corner on the 11 columns where J is nonzero (base x-y,
+// Euler, the leg). Against the whole product of J written out here (dense, every column):
+// the difference of Q between builds with and without the cost, at the same linearization point.
+TEST(MpcStep, SwingXyHessianIsTheWholeGaussNewtonProduct) {
+  MpcFixture& f = mpc_fixture();
+  static mpc::MpcWorkspace with, without;
+  mpc::MpcConfig off = f.config;
+  off.weight_swing_xy = 0.0;
+  mpc::mpc_init(f.model, f.config, with);
+  mpc::mpc_init(f.model, off, without);
+  stepping_window(f, 0, SteppingPlan{});
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, with, f.q0, v, f.window), MpcStatus::kOk);
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, off, without, f.q0, v, f.window), MpcStatus::kOk);
+  static mpc::CentroidalPoint p;
+  static mpc::StateJacobian expected;
+  Eigen::Matrix<double, 3, mpc::kNumMpcJoints> jp;
+  Eigen::Matrix<double, 2, kNx> j;
+  const double w = f.config.dt_s * f.config.weight_swing_xy;
+  int swing_stages = 0;
+  for (int k = 0; k < with.horizon; ++k) {
+    ASSERT_TRUE(with.x[k] == without.x[k] && with.u[k] == without.u[k]);
+    mpc::centroidal_evaluate(f.model, with.x[k], with.u[k], with.head_rad[k], p);
+    expected.setZero();
+    bool swing = false;
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      if (f.window.knots[k].in_contact[c]) continue;
+      swing = true;
+      const int body = f.model.frames[c].body;
+      const dynamics::Vec3 point = dynamics::frame_position(f.model, p.data, c);
+      mpc::point_position_jacobian(f.model, p, body, point, jp);
+      j.setZero();
+      j(0, mpc::kXBasePosition) = 1.0;
+      j(1, mpc::kXBasePosition + 1) = 1.0;
+      for (int e = 0; e < 3; ++e) j.col(mpc::kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
+      j.middleCols<mpc::kNumMpcJoints>(mpc::kXJoints) = p.rotation.topRows<2>() * jp;
+      expected += w * j.transpose() * j;
+    }
+    swing_stages += swing ? 1 : 0;
+    const mpc::StateJacobian diff = with.qp.stages[k].Q - without.qp.stages[k].Q;
+    ASSERT_LE((diff - expected).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + expected.cwiseAbs().maxCoeff())) << k;
+  }
+  EXPECT_GT(swing_stages, 10);
+}
+
 }  // namespace
 }  // namespace kuavo::test
 
