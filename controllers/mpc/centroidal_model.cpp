@@ -68,8 +68,12 @@ void point_motion(const model::Model& model, const CentroidalPoint& p, int body,
   // Through the base twist: v_P = v_b + ω_b × P (+ joints), ω = ω_b (+ joints).
   motion_dx.topRows<3>() = p.base_twist_dx.topRows<3>() - skew(point_base_m) * p.base_twist_dx.bottomRows<3>();
   motion_dx.bottomRows<3>() = p.base_twist_dx.bottomRows<3>();
-  motion_du.topRows<3>() = p.base_twist_du.topRows<3>() - skew(point_base_m) * p.base_twist_du.bottomRows<3>();
-  motion_du.bottomRows<3>() = p.base_twist_du.bottomRows<3>();
+  // v_b does not depend on the forces (base_twist_du's force columns are zero).
+  constexpr int kNuj = kNu - kUJointVelocity;
+  motion_du.leftCols<kUJointVelocity>().setZero();
+  motion_du.block<3, kNuj>(0, kUJointVelocity) = p.base_twist_du.block<3, kNuj>(0, kUJointVelocity) -
+                                                skew(point_base_m) * p.base_twist_du.block<3, kNuj>(3, kUJointVelocity);
+  motion_du.block<3, kNuj>(3, kUJointVelocity) = p.base_twist_du.block<3, kNuj>(3, kUJointVelocity);
   for (int a = body; a > 0; a = model.bodies[a].parent) {
     const int k = a - 1;
     if (k >= kNumMpcJoints) continue;
