@@ -1,6 +1,7 @@
 #include "controllers/mpc/centroidal_model.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "controllers/wbc/wbc_reference.h"
@@ -34,6 +35,18 @@ void orientation_terms(const Vec3& e, CentroidalPoint& p) {
 
 }  // namespace
 
+int leg_chain_first_column(const model::Model& model, int body) {
+  int n = 0, lo = kNumMpcJoints, hi = -1;
+  for (int a = body; a > 0; a = model.bodies[a].parent) {
+    const int k = a - 1;
+    if (k >= kNumMpcJoints) continue;
+    ++n;
+    lo = std::min(lo, k);
+    hi = std::max(hi, k);
+  }
+  return n == kLegChain && hi - lo + 1 == kLegChain ? lo : -1;
+}
+
 void point_position_jacobian(const model::Model& model, const CentroidalPoint& p, int body,
                              const Vec3& point_base_m, Eigen::Matrix<double, 3, kNumMpcJoints>& jacobian) {
   jacobian.setZero();
@@ -55,8 +68,12 @@ void point_motion(const model::Model& model, const CentroidalPoint& p, int body,
   // Through the base twist: v_P = v_b + ω_b × P (+ joints), ω = ω_b (+ joints).
   motion_dx.topRows<3>() = p.base_twist_dx.topRows<3>() - skew(point_base_m) * p.base_twist_dx.bottomRows<3>();
   motion_dx.bottomRows<3>() = p.base_twist_dx.bottomRows<3>();
-  motion_du.topRows<3>() = p.base_twist_du.topRows<3>() - skew(point_base_m) * p.base_twist_du.bottomRows<3>();
-  motion_du.bottomRows<3>() = p.base_twist_du.bottomRows<3>();
+  // v_b does not depend on the forces (base_twist_du's force columns are zero).
+  constexpr int kNuj = kNu - kUJointVelocity;
+  motion_du.leftCols<kUJointVelocity>().setZero();
+  motion_du.block<3, kNuj>(0, kUJointVelocity) = p.base_twist_du.block<3, kNuj>(0, kUJointVelocity) -
+                                                skew(point_base_m) * p.base_twist_du.block<3, kNuj>(3, kUJointVelocity);
+  motion_du.block<3, kNuj>(3, kUJointVelocity) = p.base_twist_du.block<3, kNuj>(3, kUJointVelocity);
   for (int a = body; a > 0; a = model.bodies[a].parent) {
     const int k = a - 1;
     if (k >= kNumMpcJoints) continue;
@@ -133,8 +150,8 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   // ∂v_b.
   auto& tdx = p.base_twist_dx;
   auto& tdu = p.base_twist_du;
-  tdx.setZero();
-  tdu.setZero();
+  // Base-position columns of tdx and force columns of tdu are zero: never written here, so
+  // they keep the zeros of the point's construction (no per-call clearing).
   tdx.block<6, 3>(0, kXComVelocity).noalias() = ab_inv.leftCols<3>() * (m * r.transpose());
   tdx.block<6, 3>(0, kXMomentum).noalias() = ab_inv.rightCols<3>() * r.transpose();
   for (int i = 0; i < 3; ++i) {
@@ -147,9 +164,11 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
   tdu.block<6, kNumMpcJoints>(0, kUJointVelocity).noalias() = -ab_inv * aj;
 
   // f and its Jacobians.
+  // fx and fu are mostly structural zeros (rows of ṙ, the joints; the joint-velocity columns of
+  // ṙ, ḣ; the force columns of q̇_j). Every call writes the same blocks below, the rest keeps the
+  // zeros of the point's construction: only ḣ's accumulated block is cleared.
   p.f.setZero();
-  p.fx.setZero();
-  p.fu.setZero();
+  p.fx.block<3, kNx>(kXMomentum, 0).setZero();
   Vec3 force_sum = Vec3::Zero();
   Mat3 force_skew_sum = Mat3::Zero();
   Eigen::Matrix<double, 3, kNumMpcJoints> jp;
@@ -167,7 +186,13 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
     force_skew_sum += sf;
     for (int e = 0; e < 3; ++e) p.fx.block<3, 1>(kXMomentum, kXEuler + e) -= sf * (p.rotation_derivative[e] * arm_b);
     point_position_jacobian(model, p, body, point, jp);
-    p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() -= sf * (r * jp);
+    // jp is zero but in the columns of the body's chain: a leg's six contiguous joints.
+    const int lo = leg_chain_first_column(model, body);
+    if (lo >= 0) {
+      p.fx.block<3, kLegChain>(kXMomentum, kXJoints + lo).noalias() -= sf * (r * jp.middleCols<kLegChain>(lo));
+    } else {
+      p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() -= sf * (r * jp);
+    }
   }
   // − Σ skew(fᵢ) R (−J_c): the CoM moves with the joints too.
   p.fx.block<3, kNumMpcJoints>(kXMomentum, kXJoints).noalias() +=
@@ -187,7 +212,7 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
     p.fx.block<3, 1>(kXEuler, kXEuler + e) += p.euler_rate_map_derivative[e] * omega;
   }
   p.f.segment<kNumMpcJoints>(kXJoints) = uj;
-  p.fu.block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).setIdentity();
+  p.fu.block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal().setOnes();
 }
 
 void state_from_configuration(const model::Model& model, dynamics::Data& data, const dynamics::ConfigVector& q,

@@ -60,6 +60,8 @@ using MotionRowsU = Eigen::Matrix<double, 6, kNu>;
 using HeadVector = Eigen::Vector2d;
 
 // The model evaluated at one (x, u). ~40 KB with the scratch Data: static storage only.
+// centroidal_evaluate writes the same blocks of base_twist_dx/du, fx and fu every call and
+// relies on the rest (structural zeros) keeping the zeros of construction: do not write them.
 struct CentroidalPoint {
   dynamics::Data data;  // kinematics with the base at the origin, identity orientation
   std::array<Vec6, model::kNumBodies> subtree_momentum{};  // Σ I_i V_i over the subtree
@@ -89,6 +91,11 @@ void centroidal_evaluate(const model::Model& model, const StateVector& x, const 
 // u (through v_b too). Requires centroidal_evaluate on p.
 void point_motion(const model::Model& model, const CentroidalPoint& p, int body, const Vec3& point_base_m,
                   Vec6& motion, MotionRowsX& motion_dx, MotionRowsU& motion_du);
+
+// The first MPC joint of body's chain when the chain is kLegChain contiguous MPC joints (a
+// foot: point_position_jacobian's only nonzero columns are then [lo, lo + kLegChain)), else −1.
+inline constexpr int kLegChain = 6;
+int leg_chain_first_column(const model::Model& model, int body);
 
 // ∂(point position, base axes)/∂q_j: 3 × 26.
 void point_position_jacobian(const model::Model& model, const CentroidalPoint& p, int body,

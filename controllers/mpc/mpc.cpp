@@ -267,6 +267,8 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   }
 }
 
+constexpr int kSwingColumns = 5 + kLegChain;  // base x-y, Euler, the leg
+
 // Leju's soft swing x-y tracking: ½ w ‖p_xy(x) − p_xy,ref‖² per corner not in contact, Gauss-Newton
 // Hessian. Soft, so the optimizer may still move the touchdown spot.
 void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
@@ -285,12 +287,33 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
     j.setZero();
     j.block<2, 2>(0, kXBasePosition).setIdentity();
     for (int e = 0; e < 3; ++e) j.col(kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
-    j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    const int lo = leg_chain_first_column(model, body);
+    if (lo >= 0) {
+      j.block<2, kLegChain>(0, kXJoints + lo).noalias() = p.rotation.topRows<2>() * jp.middleCols<kLegChain>(lo);
+    } else {
+      j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
+    }
     const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
     const double w = cfg.dt_s * cfg.weight_swing_xy;
     // j is zero in the momentum columns: only Q's base-and-joint block changes.
-    st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().noalias() +=
-        w * j.template rightCols<kNx - kXBasePosition>().transpose() * j.template rightCols<kNx - kXBasePosition>();
+    if (lo >= 0) {
+      // and zero but in base x-y, the Euler angles and the leg's joints: the Gauss-Newton
+      // product on those 11 columns only, each entry as the dense product computes it
+      // (w · (j₀ₐ j₀ᵦ + j₁ₐ j₁ᵦ) added with fused multiply-adds).
+      std::array<int, kSwingColumns> cols{kXBasePosition, kXBasePosition + 1, kXEuler, kXEuler + 1, kXEuler + 2};
+      for (int i = 0; i < kLegChain; ++i) cols[5 + i] = kXJoints + lo + i;
+      for (int bi = 0; bi < kSwingColumns; ++bi) {
+        const int b = cols[bi];
+        for (int ai = 0; ai < kSwingColumns; ++ai) {
+          const int a = cols[ai];
+          const double acc = std::fma(j(1, a), j(1, b), j(0, a) * j(0, b));
+          st.Q(a, b) = std::fma(acc, w, st.Q(a, b));
+        }
+      }
+    } else {
+      st.Q.template bottomRightCorner<kNx - kXBasePosition, kNx - kXBasePosition>().noalias() +=
+          w * j.template rightCols<kNx - kXBasePosition>().transpose() * j.template rightCols<kNx - kXBasePosition>();
+    }
     ws.swing_block_written[k] = true;
     st.q.noalias() += w * j.transpose() * error;
   }
@@ -371,6 +394,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
   ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
   for (auto& st : ws.qp.stages) {  // what the builds never write stays zero (build_stage_cost, build_equalities)
+    st.A.setIdentity();              // ... or the identity (A's rows of ṙ and the joints)
+    st.B.setZero();
     st.Q.setZero();
     st.R.setZero();
     st.S.setZero();
@@ -486,9 +511,16 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
     auto& st = ws.qp.stages[k];
     centroidal_evaluate(model, ws.x[k], ws.u[k], ws.head_rad[k], ws.point);
     const CentroidalPoint& p = ws.point;
-    st.A.noalias() = cfg.dt_s * p.fx;
-    st.A.diagonal().array() += 1.0;
-    st.B.noalias() = cfg.dt_s * p.fu;
+    // A = I + dt·fx, B = dt·fu. fx is zero but in rows [3, 12) (ḣ, base position, Euler rates)
+    // and fu in rows [0, 12) and the joint-velocity identity: the rest of A is the identity and
+    // the rest of B zero, as mpc_init wrote them (nothing else writes A or B), and only the
+    // varying rows and B's diagonal dt are written (the same values as the whole products).
+    st.A.template middleRows<kXJoints - kXMomentum>(kXMomentum).noalias() =
+        cfg.dt_s * p.fx.template middleRows<kXJoints - kXMomentum>(kXMomentum);
+    st.A.diagonal().template segment<kXJoints - kXMomentum>(kXMomentum).array() += 1.0;
+    st.B.template topRows<kXJoints>().noalias() = cfg.dt_s * p.fu.template topRows<kXJoints>();
+    st.B.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal() =
+        cfg.dt_s * p.fu.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal();
     st.b = ws.x[k] + cfg.dt_s * p.f - ws.x[k + 1];
     violation = std::max(violation, st.b.cwiseAbs().maxCoeff());
     if (k <= kMpcPlanKnots) {

@@ -270,6 +270,96 @@ TEST(MpcStep, CachedReferenceAndPartialClearingBuildTheSameQp) {
   EXPECT_EQ(compared, 60 * 61);
 }
 
+// The build writes only the varying rows of A = I + dt·fx and B = dt·fu (the rest is mpc_init's
+// identity / zero), and centroidal_evaluate writes only the non-structural blocks of fx, fu and
+// the base twist derivatives (the rest keeps the zeros of construction). Through stepping and
+// back to standing, every stage's A and B must equal the whole products of a freshly
+// constructed point's evaluation, bit for bit, and the reused point must equal the fresh one.
+TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
+  MpcFixture& f = mpc_fixture();
+  mpc::mpc_init(f.model, f.config, f.ws);
+  static mpc::CentroidalPoint fresh;
+  static mpc::StateJacobian a;
+  static mpc::InputJacobian b;
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v[1] = 0.05;
+  int compared = 0;
+  for (int call = 0; call < 50; ++call) {
+    const hal::TimeNs t = static_cast<hal::TimeNs>(call) * 20'000'000;
+    if (call < 35) {
+      stepping_window(f, t, SteppingPlan{});
+    } else {
+      standing_window(f, t);
+    }
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
+    for (int k = 0; k < f.ws.horizon; k += 7) {
+      fresh = mpc::CentroidalPoint{};
+      mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], fresh);
+      a = f.config.dt_s * fresh.fx;
+      a.diagonal().array() += 1.0;
+      b = f.config.dt_s * fresh.fu;
+      const auto& st = f.ws.qp.stages[k];
+      ASSERT_TRUE(st.A == a) << call << " " << k;
+      ASSERT_TRUE(st.B == b) << call << " " << k;
+      ++compared;
+    }
+    // The workspace's point was last evaluated at stage T − 1: reused, it must equal a fresh one.
+    const int last = f.ws.horizon - 1;
+    fresh = mpc::CentroidalPoint{};
+    mpc::centroidal_evaluate(f.model, f.ws.x[last], f.ws.u[last], f.ws.head_rad[last], fresh);
+    ASSERT_TRUE(f.ws.point.fx == fresh.fx && f.ws.point.fu == fresh.fu && f.ws.point.f == fresh.f) << call;
+    ASSERT_TRUE(f.ws.point.base_twist_dx == fresh.base_twist_dx && f.ws.point.base_twist_du == fresh.base_twist_du)
+        << call;
+    ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
+  }
+  EXPECT_EQ(compared, 50 * ((f.ws.horizon + 6) / 7));
+}
+
+// The swing x-y cost adds w·JᵀJ per swing corner on the 11 columns where J is nonzero (base x-y,
+// Euler, the leg). Against the whole product of J written out here (dense, every column):
+// the difference of Q between builds with and without the cost, at the same linearization point.
+TEST(MpcStep, SwingXyHessianIsTheWholeGaussNewtonProduct) {
+  MpcFixture& f = mpc_fixture();
+  static mpc::MpcWorkspace with, without;
+  mpc::MpcConfig off = f.config;
+  off.weight_swing_xy = 0.0;
+  mpc::mpc_init(f.model, f.config, with);
+  mpc::mpc_init(f.model, off, without);
+  stepping_window(f, 0, SteppingPlan{});
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, with, f.q0, v, f.window), MpcStatus::kOk);
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, off, without, f.q0, v, f.window), MpcStatus::kOk);
+  static mpc::CentroidalPoint p;
+  static mpc::StateJacobian expected;
+  Eigen::Matrix<double, 3, mpc::kNumMpcJoints> jp;
+  Eigen::Matrix<double, 2, kNx> j;
+  const double w = f.config.dt_s * f.config.weight_swing_xy;
+  int swing_stages = 0;
+  for (int k = 0; k < with.horizon; ++k) {
+    ASSERT_TRUE(with.x[k] == without.x[k] && with.u[k] == without.u[k]);
+    mpc::centroidal_evaluate(f.model, with.x[k], with.u[k], with.head_rad[k], p);
+    expected.setZero();
+    bool swing = false;
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      if (f.window.knots[k].in_contact[c]) continue;
+      swing = true;
+      const int body = f.model.frames[c].body;
+      const dynamics::Vec3 point = dynamics::frame_position(f.model, p.data, c);
+      mpc::point_position_jacobian(f.model, p, body, point, jp);
+      j.setZero();
+      j(0, mpc::kXBasePosition) = 1.0;
+      j(1, mpc::kXBasePosition + 1) = 1.0;
+      for (int e = 0; e < 3; ++e) j.col(mpc::kXEuler + e) = (p.rotation_derivative[e] * point).head<2>();
+      j.middleCols<mpc::kNumMpcJoints>(mpc::kXJoints) = p.rotation.topRows<2>() * jp;
+      expected += w * j.transpose() * j;
+    }
+    swing_stages += swing ? 1 : 0;
+    const mpc::StateJacobian diff = with.qp.stages[k].Q - without.qp.stages[k].Q;
+    ASSERT_LE((diff - expected).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + expected.cwiseAbs().maxCoeff())) << k;
+  }
+  EXPECT_GT(swing_stages, 10);
+}
+
 }  // namespace
 }  // namespace kuavo::test
 
