@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/finite.h"
 
 namespace kuavo::estimator {
 
@@ -135,15 +136,6 @@ double contact_innovation_norm(const KfMeasurementVector& innovation, const Cont
 }
 
 EstimatorStatus worse(EstimatorStatus a, EstimatorStatus b) { return a > b ? a : b; }
-
-// Every entry finite: v − v is +0 for a finite v and NaN for ±inf and NaN, and a sum of
-// +0s and NaNs is 0 exactly when there is no NaN (no overflow, any order). One vectorised
-// pass; Eigen's allFinite tests P's 1089 entries one by one with a branch each
-// (7.8k instructions, this 2.5k).
-template <typename Derived>
-bool all_finite(const Eigen::MatrixBase<Derived>& m) {
-  return (m - m).sum() == 0.0;
-}
 
 void write_output(const EstimatorState& s, EstimateOutput& out) {
   const Eigen::Matrix3d rotation = s.orientation.toRotationMatrix();

@@ -104,8 +104,8 @@ struct DenseQpWorkspace {
   Vector inv_diag = Vector::Zero();   // 1 / L(i, i)
   // H's rows [dense_size, NV) have no entry off the diagonal (the WBC's contact forces carry a
   // diagonal weight only), so L is [L₁₁ 0; 0 D] with L₁₁ dense_size × dense_size: only that
-  // block is factored and the triangular solves scale the rest. L and Lt hold stale values
-  // outside the block and the diagonal; nothing reads them.
+  // block is factored and the triangular solves scale the rest. Lt holds stale values
+  // outside the block (nothing reads them); L outside it is H's zeros and diagonal √H_ii.
   int dense_size = NV;
   // Range-space Goldfarb–Idnani factors of the working set (normals N, q of them):
   // columns [0, q) of V are L⁻¹N, and R (upper triangular, q×q) is the triangle of the QR
