@@ -33,6 +33,15 @@
 
 namespace kuavo::qp::kernels {
 
+// Unrolls a tile's loops over its register vectors and columns (a handful, compile-time
+// bounds) before GCC decides where the accumulator arrays live. Without it GCC 12 kept the
+// AVX2 tiles' acc[][] in registers *and* stored all eight to the stack on every inner iteration
+// in some instantiations (out-of-line copies with run-time k, lda, ldb): eight 32-byte stores
+// per eight FMAs, the ZᵀZ products at 22 instead of 38 Gflop/s and the MPC-size factorization
+// 2.13 → 1.60 ms. Same instructions otherwise, so bit for bit.
+#define KUAVO_UNROLL _Pragma("GCC unroll 8")
+
+
 // What a product does with C.
 enum class Update { kSet, kAdd, kSub };
 
@@ -66,18 +75,25 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
 #ifdef KUAVO_QP_KERNELS_SIMD
   constexpr int MV = MR / 4;
   __m256d acc[MV][NR];
+  KUAVO_UNROLL
   for (int v = 0; v < MV; ++v) {
+    KUAVO_UNROLL
     for (int j = 0; j < NR; ++j) acc[v][j] = _mm256_setzero_pd();
   }
   for (int p = 0; p < k; ++p) {
     __m256d a[MV];
+    KUAVO_UNROLL
     for (int v = 0; v < MV; ++v) a[v] = _mm256_loadu_pd(A + p * lda + 4 * v);
+    KUAVO_UNROLL
     for (int j = 0; j < NR; ++j) {
       const __m256d b = _mm256_broadcast_sd(b_entry<kTransB>(B, ldb, p, j));
+      KUAVO_UNROLL
       for (int v = 0; v < MV; ++v) acc[v][j] = _mm256_fmadd_pd(a[v], b, acc[v][j]);
     }
   }
+  KUAVO_UNROLL
   for (int j = 0; j < NR; ++j) {
+    KUAVO_UNROLL
     for (int v = 0; v < MV; ++v) update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j]);
   }
 #else
@@ -122,24 +138,31 @@ inline void tile_zmm(int k, const double* A, int lda, const double* B, int ldb, 
   static_assert(NR >= 1 && NR <= 4, "tile columns");
   __m512d acc[MZ][NR];
   [[maybe_unused]] __m256d acc_h[NR];
+  KUAVO_UNROLL
   for (int j = 0; j < NR; ++j) {
+    KUAVO_UNROLL
     for (int v = 0; v < MZ; ++v) acc[v][j] = _mm512_setzero_pd();
     acc_h[j] = _mm256_setzero_pd();
   }
   for (int p = 0; p < k; ++p) {
     const double* Ap = A + p * lda;
     __m512d a[MZ];
+    KUAVO_UNROLL
     for (int v = 0; v < MZ; ++v) a[v] = _mm512_loadu_pd(Ap + 8 * v);
     [[maybe_unused]] __m256d a_h;
     if constexpr (kHalf) a_h = _mm256_loadu_pd(Ap + 8 * MZ);
+    KUAVO_UNROLL
     for (int j = 0; j < NR; ++j) {
       const __m512d b = _mm512_set1_pd(*b_entry<kTransB>(B, ldb, p, j));
+      KUAVO_UNROLL
       for (int v = 0; v < MZ; ++v) acc[v][j] = _mm512_fmadd_pd(a[v], b, acc[v][j]);
       if constexpr (kHalf) acc_h[j] = _mm256_fmadd_pd(a_h, _mm512_castpd512_pd256(b), acc_h[j]);
     }
   }
+  KUAVO_UNROLL
   for (int j = 0; j < NR; ++j) {
     double* c = C + j * ldc;
+    KUAVO_UNROLL
     for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j]);
     if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j]);
   }
