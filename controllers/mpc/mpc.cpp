@@ -409,6 +409,7 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.qp.horizon = ws.horizon;
   ws.qp.x_initial.setZero();
   ws.qp_settings = qp::OcpSettings{};
+  ws.qp_settings.lq_residual = false;  // mpc_solve_qp_rt checks the step finite; no one reads it
   ws.initialized = true;
 }
 

@@ -202,6 +202,12 @@ QpStatus solve_ocp_qp(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpSettings& set
     if (f != QpStatus::kSolved) return finish(f);
     copy_vectors(qp, ws.vec);
     riccati_solve(qp, ws.riccati, ws.vec, sol);
+    if (!settings.lq_residual) {
+      sol.residual = -1.0;  // not computed
+      bool finite = true;
+      for (int k = 0; k <= T && finite; ++k) finite = sol.x[k].allFinite() && sol.u[k].allFinite();
+      return finish(finite ? QpStatus::kSolved : QpStatus::kBadInput);
+    }
     sol.residual = linearize(qp, ws, sol);
     if (!std::isfinite(sol.residual)) return finish(QpStatus::kBadInput);
     return finish(QpStatus::kSolved);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <memory>
 #include <random>
 
@@ -71,6 +72,31 @@ TEST(OcpQp, EqualityOnlyMatchesDenseExactly) {
     expect_kkt(f->qp, ocp_kkt(f->qp, f->sol), 1e-10);
     expect_matches_dense<4, 3, 5, 2, 0, 5>(*f, 1e-10);
   }
+}
+
+// lq_residual = false (the MPC's setting): the same solution bit for bit, the residual
+// reported as not computed, and a non-finite result still refused.
+TEST(OcpQp, EqualityOnlyWithoutResidualIsTheSameSolution) {
+  auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+  auto g = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+  std::mt19937_64 rng(23);
+  OcpSettings fast;
+  fast.lq_residual = false;
+  for (int n = 0; n < 10; ++n) {
+    make_random_ocp(f->qp, rng, 5);
+    g->qp = f->qp;
+    ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
+    ASSERT_EQ(solve_ocp_qp(g->qp, fast, g->ws, g->sol), QpStatus::kSolved);
+    EXPECT_GE(f->sol.residual, 0.0);
+    EXPECT_EQ(g->sol.residual, -1.0);
+    for (int k = 0; k <= 5; ++k) {
+      EXPECT_EQ(f->sol.x[k], g->sol.x[k]);
+      EXPECT_EQ(f->sol.u[k], g->sol.u[k]);
+    }
+    expect_kkt(g->qp, ocp_kkt(g->qp, g->sol), 1e-10);
+  }
+  g->qp.stages[2].b(1) = std::numeric_limits<double>::quiet_NaN();  // reaches x₃ … x₅ only
+  EXPECT_EQ(solve_ocp_qp(g->qp, fast, g->ws, g->sol), QpStatus::kBadInput);
 }
 
 TEST(OcpQp, WithInequalitiesMatchesDense) {
