@@ -198,10 +198,9 @@ QpStatus solve_ocp_qp(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpSettings& set
       sol.lambda[k].setZero();
       ws.slack[k].setZero();
     }
-    const QpStatus f = riccati_factor(qp, ws.riccati);
-    if (f != QpStatus::kSolved) return finish(f);
     copy_vectors(qp, ws.vec);
-    riccati_solve(qp, ws.riccati, ws.vec, sol);
+    const QpStatus f = riccati_factor_solve(qp, ws.riccati, ws.vec, sol);
+    if (f != QpStatus::kSolved) return finish(f);
     if (!settings.lq_residual) {
       sol.residual = -1.0;  // not computed
       bool finite = true;

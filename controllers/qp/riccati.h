@@ -421,14 +421,63 @@ void add_cost_to_go_product(const RiccatiStage<NX, NU, NC, NG>& w, const Eigen::
   }
 }
 
-}  // namespace riccati_detail
-
-// Matrix pass over stages T … 0. Reads the barrier weights ws.stage[k].w. Returns kSolved,
-// kNotConvex (a Quu not positive definite) or kRankDeficient (a Dₖ). Pₖ itself may be
-// semidefinite (then it is kept unfactored and the previous stage takes the general product).
+// The vector pass's backward recursion at the terminal stage: p_T = q_T + G_xᵀρ_T.
 template <int NX, int NU, int N, int NC, int NG>
-QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws) {
-  using namespace riccati_detail;
+void backward_vector_terminal(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                              const RiccatiVectors<NX, NU, N, NC>& vec) {
+  const int T = qp.horizon;
+  const auto& s = qp.stages[T];
+  auto& w = ws.stage[T];
+  w.p = vec.q[T];
+  if constexpr (NG > 0) {
+    if (s.num_ineq > 0) w.p.noalias() += s.Gx.topRows(s.num_ineq).transpose() * w.rho.head(s.num_ineq);
+  }
+}
+
+// One stage k < T of the backward recursion (stage k factored, stage k+1's p set): p_k, k0_k, gm_k.
+template <int NX, int NU, int N, int NC, int NG>
+void backward_vector_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                           const RiccatiVectors<NX, NU, N, NC>& vec, int k) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  using kernels::Update;
+  constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo;
+  const auto& s = qp.stages[k];
+  auto& w = ws.stage[k];
+  const double* L = w.L.data();
+  ws.v = ws.stage[k + 1].p;
+  add_cost_to_go_product(ws.stage[k + 1], vec.b[k], ws.v, ws.lpt_v);
+  ws.qu = vec.r[k];
+  kernels::gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data());
+  w.p = vec.q[k];
+  kernels::gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data());
+  if constexpr (NG > 0) {
+    const int m = s.num_ineq;
+    if (m > 0) {
+      ws.qu.noalias() += s.Gu.topRows(m).transpose() * w.rho.head(m);
+      w.p.noalias() += s.Gx.topRows(m).transpose() * w.rho.head(m);
+    }
+  }
+  w.k0 = ws.qu;
+  kernels::trsv_lower(NU, L, kLd, w.k0.data());                                        // Lu⁻¹qu
+  kernels::gemv_n<Update::kSub>(NX, NU, L + kXo, kLd, w.k0.data(), w.p.data());        // − X k0
+  if constexpr (NC > 0) {
+    const int ne = s.num_eq;
+    if (ne > 0) {
+      double* gm = w.gm.data();
+      for (int i = 0; i < ne; ++i) gm[i] = -vec.e[k](i);
+      kernels::gemv_n<Update::kSub>(ne, NU, L + kUp, kLd, w.k0.data(), gm);             // − Yᵀk0
+      kernels::trsv_lower(ne, L + kUp * (kLd + 1), kLd, gm);
+      kernels::gemv_n<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, gm, w.p.data());  // + (Lm⁻¹G)ᵀ gm
+    }
+  }
+}
+
+// The matrix pass; with vec, also the vector pass's backward recursion, stage by stage right
+// after each stage's factorization while its factor, Pₖ₊₁ and [B A] are still in cache (at MPC
+// size the horizon's data lives beyond L2, and the separate backward pass reads it all again).
+template <int NX, int NU, int N, int NC, int NG>
+QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                     const RiccatiVectors<NX, NU, N, NC>* vec) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
   using kernels::Update;
@@ -446,6 +495,7 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
       add_barrier_hessian(qp.stages[T], wT, ws.GuW, ws.GxW, true, L);
       symmetrize_x_block<NX, NU, NC>(L);
     }
+    if (vec != nullptr) backward_vector_terminal(qp, ws, *vec);
   }
   for (int k = T - 1; k >= 0; --k) {
     const auto& s = qp.stages[k];
@@ -496,63 +546,26 @@ QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX,
       add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
       schur_cost_to_go<NX, NU, NC>(L, ne_padded);
     }
+    if (vec != nullptr) backward_vector_stage(qp, ws, *vec, k);
   }
   return QpStatus::kSolved;
 }
 
-// Vector pass and forward rollout: writes x, u, costate, nu of sol for the factorization in ws,
-// the vectors vec and the barrier linear terms Gᵀρ (ρ in ws.stage[k].rho).
+// The forward rollout from the backward recursion's p, k0, gm: x, u, nu, costate of sol.
 template <int NX, int NU, int N, int NC, int NG>
-void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                   const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+void forward_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                  const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo;
   const int T = qp.horizon;
-  {
-    const auto& s = qp.stages[T];
-    auto& w = ws.stage[T];
-    w.p = vec.q[T];
-    if constexpr (NG > 0) {
-      if (s.num_ineq > 0) w.p.noalias() += s.Gx.topRows(s.num_ineq).transpose() * w.rho.head(s.num_ineq);
-    }
-  }
-  for (int k = T - 1; k >= 0; --k) {
-    const auto& s = qp.stages[k];
-    auto& w = ws.stage[k];
-    const double* L = w.L.data();
-    ws.v = ws.stage[k + 1].p;
-    riccati_detail::add_cost_to_go_product(ws.stage[k + 1], vec.b[k], ws.v, ws.lpt_v);
-    ws.qu = vec.r[k];
-    kernels::gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data());
-    w.p = vec.q[k];
-    kernels::gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data());
-    if constexpr (NG > 0) {
-      const int m = s.num_ineq;
-      if (m > 0) {
-        ws.qu.noalias() += s.Gu.topRows(m).transpose() * w.rho.head(m);
-        w.p.noalias() += s.Gx.topRows(m).transpose() * w.rho.head(m);
-      }
-    }
-    w.k0 = ws.qu;
-    kernels::trsv_lower(NU, L, kLd, w.k0.data());                                        // Lu⁻¹qu
-    kernels::gemv_n<Update::kSub>(NX, NU, L + kXo, kLd, w.k0.data(), w.p.data());        // − X k0
-    if constexpr (NC > 0) {
-      const int ne = s.num_eq;
-      if (ne > 0) {
-        double* gm = w.gm.data();
-        for (int i = 0; i < ne; ++i) gm[i] = -vec.e[k](i);
-        kernels::gemv_n<Update::kSub>(ne, NU, L + kUp, kLd, w.k0.data(), gm);             // − Yᵀk0
-        kernels::trsv_lower(ne, L + kUp * (kLd + 1), kLd, gm);
-        kernels::gemv_n<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, gm, w.p.data());  // + (Lm⁻¹G)ᵀ gm
-      }
-    }
-  }
   sol.x[0] = vec.x_initial;
   for (int k = 0; k < T; ++k) {
     const auto& s = qp.stages[k];
     const auto& w = ws.stage[k];
     const double* L = w.L.data();
+    sol.costate[k] = w.p;  // πₖ = pₖ + Pₖxₖ, while stage k's storage is in cache
+    add_cost_to_go_product(w, sol.x[k], sol.costate[k], ws.lpt_v);
     ws.t = w.k0;
     kernels::gemv_t<Update::kAdd>(NX, NU, L + kXo, kLd, sol.x[k].data(), ws.t.data());   // + Xᵀx
     if constexpr (NC > 0) {
@@ -572,12 +585,42 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
     kernels::gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data());
     kernels::gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data());
   }
-  for (int k = 0; k <= T; ++k) {
-    sol.costate[k] = ws.stage[k].p;
-    riccati_detail::add_cost_to_go_product(ws.stage[k], sol.x[k], sol.costate[k], ws.lpt_v);
-  }
+  sol.costate[T] = ws.stage[T].p;
+  add_cost_to_go_product(ws.stage[T], sol.x[T], sol.costate[T], ws.lpt_v);
   if constexpr (NC > 0) sol.nu[T].setZero();
   sol.u[T].setZero();
+}
+
+}  // namespace riccati_detail
+
+// Matrix pass over stages T … 0. Reads the barrier weights ws.stage[k].w. Returns kSolved,
+// kNotConvex (a Quu not positive definite) or kRankDeficient (a Dₖ). Pₖ itself may be
+// semidefinite (then it is kept unfactored and the previous stage takes the general product).
+template <int NX, int NU, int N, int NC, int NG>
+QpStatus riccati_factor(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws) {
+  return riccati_detail::factor_pass(qp, ws, static_cast<const RiccatiVectors<NX, NU, N, NC>*>(nullptr));
+}
+
+// Vector pass and forward rollout: writes x, u, costate, nu of sol for the factorization in ws,
+// the vectors vec and the barrier linear terms Gᵀρ (ρ in ws.stage[k].rho).
+template <int NX, int NU, int N, int NC, int NG>
+void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                   const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+  riccati_detail::backward_vector_terminal(qp, ws, vec);
+  for (int k = qp.horizon - 1; k >= 0; --k) riccati_detail::backward_vector_stage(qp, ws, vec, k);
+  riccati_detail::forward_pass(qp, ws, vec, sol);
+}
+
+// riccati_factor then riccati_solve in one sweep, with the same arithmetic (bit for bit): the
+// backward vector recursion runs inside the matrix pass (see factor_pass). For one solve per
+// factorization (the equality-only LQ problem, the MPC's real-time iteration). sol is written
+// only on kSolved.
+template <int NX, int NU, int N, int NC, int NG>
+QpStatus riccati_factor_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                              const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+  const QpStatus f = riccati_detail::factor_pass(qp, ws, &vec);
+  if (f == QpStatus::kSolved) riccati_detail::forward_pass(qp, ws, vec, sol);
+  return f;
 }
 
 }  // namespace kuavo::qp

@@ -276,6 +276,52 @@ TEST(OcpQp, SemidefiniteCostToGoSatisfiesKkt) {
   }
 }
 
+// riccati_factor_solve (the backward vector recursion inside the matrix pass) against
+// riccati_factor then riccati_solve: the same arithmetic, so bit for bit, with equalities,
+// barrier weights and linear terms, semidefinite cost-to-go (the general product path) and a
+// horizon shorter than the capacity after a longer one.
+TEST(OcpQp, FusedFactorSolveIsTheSeparatePassesBitForBit) {
+  using Fixture = OcpFixture<38, 50, 12, 30, 20>;
+  auto f = std::make_unique<Fixture>();
+  auto g = std::make_unique<Fixture>();
+  std::mt19937_64 rng(41);
+  for (int n = 0; n < 6; ++n) {
+    const int T = n == 5 ? 7 : 12;
+    make_random_ocp(f->qp, rng, T);
+    if (n >= 3) {  // no state cost: P_T = 0, the previous stages' Pₖ of low rank
+      for (int k = 0; k <= T; ++k) {
+        f->qp.stages[k].Q.setZero();
+        f->qp.stages[k].S.setZero();
+      }
+    }
+    for (int k = 0; k <= T; ++k) {
+      for (int i = 0; i < 20; ++i) {
+        f->ws.riccati.stage[k].w(i) = uniform(rng, 0.0, 10.0);
+        f->ws.riccati.stage[k].rho(i) = gaussian(rng);
+      }
+      g->ws.riccati.stage[k].w = f->ws.riccati.stage[k].w;
+      g->ws.riccati.stage[k].rho = f->ws.riccati.stage[k].rho;
+    }
+    copy_vectors(f->qp, f->ws.vec);
+    copy_vectors(f->qp, g->ws.vec);
+    ASSERT_EQ(riccati_factor(f->qp, f->ws.riccati), QpStatus::kSolved) << n;
+    riccati_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol);
+    ASSERT_EQ(riccati_factor_solve(f->qp, g->ws.riccati, g->ws.vec, g->sol), QpStatus::kSolved) << n;
+    int factored = 0;
+    for (int k = 0; k <= T; ++k) {
+      EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.costate[k], g->sol.costate[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << n << " " << k;
+      factored += g->ws.riccati.stage[k].p_factored ? 1 : 0;
+    }
+    if (n >= 3) {
+      EXPECT_LT(factored, T + 1);  // the general product path was taken
+    }
+    EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
+  }
+}
+
 TEST(OcpQp, IterationCapIsHonoured) {
   auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
   std::mt19937_64 rng(29);

@@ -170,7 +170,9 @@ void make_ocp(MpcQp& qp, std::mt19937_64& rng, bool equalities, bool inequalitie
 }
 
 // What each timed iteration runs: the matrix pass, the vector pass (with rollout), or both.
-enum class RiccatiPart { kBoth, kFactor, kSolve };
+// kFused: riccati_factor_solve, the backward vector recursion inside the matrix pass (what the
+// equality-only path of solve_ocp_qp and so the MPC run).
+enum class RiccatiPart { kBoth, kFactor, kSolve, kFused };
 
 void riccati_once(benchmark::State& state, bool equalities, RiccatiPart part = RiccatiPart::kBoth) {
   static auto b = std::make_unique<OcpBench>();
@@ -179,6 +181,11 @@ void riccati_once(benchmark::State& state, bool equalities, RiccatiPart part = R
   copy_vectors(b->qp, b->ws.vec);
   if (riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) state.SkipWithError("factor");
   for (auto _ : state) {
+    if (part == RiccatiPart::kFused) {
+      if (riccati_factor_solve(b->qp, b->ws.riccati, b->ws.vec, b->sol) != QpStatus::kSolved) state.SkipWithError("factor");
+      benchmark::DoNotOptimize(b->sol.u[0].data());
+      continue;
+    }
     if (part != RiccatiPart::kSolve && riccati_factor(b->qp, b->ws.riccati) != QpStatus::kSolved) {
       state.SkipWithError("factor");
     }
@@ -193,10 +200,14 @@ void riccati_once(benchmark::State& state, bool equalities, RiccatiPart part = R
 
 void BM_OcpRiccati_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false); }
 void BM_OcpRiccati_N60_nx38_nu50_eq12(benchmark::State& s) { riccati_once(s, true); }
+void BM_OcpRiccatiFused_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false, RiccatiPart::kFused); }
+void BM_OcpRiccatiFused_N60_nx38_nu50_eq12(benchmark::State& s) { riccati_once(s, true, RiccatiPart::kFused); }
 void BM_OcpRiccatiFactorOnly_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false, RiccatiPart::kFactor); }
 void BM_OcpRiccatiSolveOnly_N60_nx38_nu50(benchmark::State& s) { riccati_once(s, false, RiccatiPart::kSolve); }
 BENCHMARK(BM_OcpRiccati_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OcpRiccati_N60_nx38_nu50_eq12)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OcpRiccatiFused_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OcpRiccatiFused_N60_nx38_nu50_eq12)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OcpRiccatiFactorOnly_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OcpRiccatiSolveOnly_N60_nx38_nu50)->Unit(benchmark::kMicrosecond);
 
