@@ -185,12 +185,32 @@ bool column_extents(const double* B, const double* A, int* extent) {
   return tails;
 }
 
-// End of the run of 4-row groups from row i (< m, relative to row0) that share i's extent.
-inline int extent_run_end(const int* extent, int row0, int i, int m) {
+// A run of 4-row groups from row i (< m, relative to row0) that one product takes with one
+// inner extent, the largest of the run's: rows [i, end), extent max_extent. A run grows while
+// the groups' extents stay within kRunSlack of the first's, up to kRunRows rows, so the MPC's
+// extents (a different one every 4 rows: a joint-velocity column reaches its joint's row)
+// make 8–24-row tiles instead of 4-row ones, which have only 4 accumulators, half an FMA
+// pipe's latency cover. The terms past a row's own extent are exact zeros (those entries of
+// [B A]ᵀ and so of Zᵀ are zero), and adding a zero product never changes an accumulator that
+// starts at +0 (it cannot become −0): bit for bit the per-extent products. A zero-extent
+// group (no product) is a run of its own.
+struct ExtentRun {
+  int end;
+  int max_extent;
+};
+inline constexpr int kRunSlack = 8;
+inline constexpr int kRunRows = 24;
+inline ExtentRun extent_run(const int* extent, int row0, int i, int m) {
   const int e = extent[(row0 + i) / 4];
-  int end = i + 4;
-  while (end < m && extent[(row0 + end) / 4] == e) end += 4;
-  return end;
+  ExtentRun run{i + 4, e};
+  if (e == 0) return run;
+  while (run.end < m && run.end - i < kRunRows) {
+    const int next = extent[(row0 + run.end) / 4];
+    if (next == 0 || next > e + kRunSlack || next < e - kRunSlack) break;
+    run.max_extent = std::max(run.max_extent, next);
+    run.end += 4;
+  }
+  return run;
 }
 
 // C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
@@ -207,13 +227,13 @@ void add_product_by_extents(const int* extent, int row0, int m, int col0, int n,
     if (ej == 0) continue;
     int i = kLower ? j : 0;
     while (i < m) {
-      const int i_end = extent_run_end(extent, row0, i, m);
-      const int k = std::min(extent[(row0 + i) / 4], ej);
+      const ExtentRun run = extent_run(extent, row0, i, m);
+      const int k = std::min(run.max_extent, ej);
       if (k > 0) {
-        gemm<true, Update::kAdd>(i_end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
+        gemm<true, Update::kAdd>(run.end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
                                  C + i + j * ld, ld);
       }
-      i = i_end;
+      i = run.end;
     }
   }
 }
@@ -228,11 +248,11 @@ void zt_product_by_extents(const int* extent, int row0, int m, const double* BAt
   for (int j = 0; j < NX; j += 4) {
     int i = 0;
     while (i < m) {
-      const int i_end = extent_run_end(extent, row0, i, m);
-      const int k = std::max(0, extent[(row0 + i) / 4] - j);
-      gemm<false, Update::kSet>(i_end - i, std::min(4, NX - j), k, BAt + row0 + i + j * ld, ld, Lp + j + j * ld, ld,
-                                Zt + row0 + i + j * ld, ld);
-      i = i_end;
+      const ExtentRun run = extent_run(extent, row0, i, m);
+      const int k = std::max(0, run.max_extent - j);
+      gemm<false, Update::kSet>(run.end - i, std::min(4, NX - j), k, BAt + row0 + i + j * ld, ld, Lp + j + j * ld,
+                                ld, Zt + row0 + i + j * ld, ld);
+      i = run.end;
     }
   }
 }
