@@ -105,6 +105,8 @@ struct RiccatiWorkspace {
   // Per 4-row group of BAt: 1 + the last row in which the group's columns of [B A] are
   // nonzero (0: all zero). Zᵀ = [B A]ᵀLp is zero in the same columns (Lp is lower).
   std::array<int, Layout::kLd / 4> extent{};
+  std::array<int, NU> last_b{};  // 1 + the last nonzero row of each column of B (kernels::transpose)
+  std::array<int, NX> last_a{};  // and of A
   Eigen::Matrix<double, NG, NU> GuW = Eigen::Matrix<double, NG, NU>::Zero();  // √W Gu
   Eigen::Matrix<double, NG, NX> GxW = Eigen::Matrix<double, NG, NX>::Zero();  // √W Gx
   Eigen::Matrix<double, NX, 1> v = Eigen::Matrix<double, NX, 1>::Zero();
@@ -163,23 +165,20 @@ void add_barrier_hessian(const OcpStage<NX, NU, NC, NG>& s, const RiccatiStage<N
 // zero below row e gives a row of Zᵀ = [B A]ᵀLp that is zero from column e on, because Lp is
 // lower triangular. The centroidal MPC's B has force columns with 6 nonzero rows (CoM velocity,
 // momentum) of 38 and its A the joints' identity: ~20 % of the matrix pass's flops.
-// Returns false if every column reaches the last row (dense [B A]: the caller keeps its
-// whole-matrix products, whose constant inner extent the compiler specializes).
+// From last_b, last_a (1 + each column's last nonzero row, from kernels::transpose): the
+// extent of each 4-row group of BAt. Returns false if every column reaches the last row (dense
+// [B A]: the caller keeps its whole-matrix products, whose constant inner extent the compiler
+// specializes).
 template <int NX, int NU, int NC>
-bool column_extents(const double* B, const double* A, int* extent) {
+bool column_extents(const int* last_b, const int* last_a, int* extent) {
   using Layout = RiccatiLayout<NX, NU, NC>;
-  const auto last_nonzero = [](const double* col) {
-    int e = NX;
-    while (e > 0 && col[e - 1] == 0.0) --e;  // dense columns stop at once
-    return e;
-  };
   for (int g = 0; g < Layout::kLd / 4; ++g) extent[g] = 0;
-  for (int j = 0; j < NU; ++j) extent[j / 4] = std::max(extent[j / 4], last_nonzero(B + j * NX));
+  for (int j = 0; j < NU; ++j) extent[j / 4] = std::max(extent[j / 4], last_b[j]);
   bool tails = false;
   for (int j = 0; j < NU; ++j) tails |= extent[j / 4] < NX;
   for (int j = 0; j < NX; ++j) {
     int& e = extent[(Layout::kXo + j) / 4];
-    e = std::max(e, last_nonzero(A + j * NX));
+    e = std::max(e, last_a[j]);
   }
   for (int j = 0; j < NX; ++j) tails |= extent[(Layout::kXo + j) / 4] < NX;
   return tails;
@@ -526,15 +525,15 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     FactorMap<NX, NU, NC> K(L);
     load_stage(s, ne_padded, K);
 
-    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd);
-    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd);
+    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data());
+    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data());
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
     const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
     if (next.p_factored) {
       // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ (over the extents).
-      if (column_extents<NX, NU, NC>(s.B.data(), s.A.data(), ws.extent.data())) {
+      if (column_extents<NX, NU, NC>(ws.last_b.data(), ws.last_a.data(), ws.extent.data())) {
         extent = ws.extent.data();
         zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
         zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);

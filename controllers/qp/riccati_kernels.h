@@ -223,10 +223,20 @@ inline void trmm_right_lower(int m, int n, const double* A, int lda, const doubl
   }
 }
 
-// dst(j, i) = src(i, j) for an m×n column-major src.
-inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd) {
+// dst(j, i) = src(i, j) for an m×n column-major src. With last (n entries): also last[j] = 1 +
+// the last row in which src's column j is nonzero (0: all zero; NaN counts as nonzero), found
+// on the vectors the transpose loads anyway instead of a second, branchy scan of src.
+inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd, int* last = nullptr) {
+  if (last != nullptr) {
+    for (int j = 0; j < n; ++j) last[j] = 0;
+  }
+  // Rows r of column j whose entries are nonzero, as a bit mask from bit 0 = row r0.
+  const auto note = [last](int j, int r0, int mask) {
+    if (mask != 0) last[j] = r0 + 32 - __builtin_clz(static_cast<unsigned>(mask));  // rows grow: the later the larger
+  };
   int i = 0;
 #ifdef KUAVO_QP_KERNELS_SIMD
+  const __m256d zero = _mm256_setzero_pd();
   for (; i + 4 <= m; i += 4) {
     int j = 0;
     for (; j + 4 <= n; j += 4) {
@@ -234,6 +244,12 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
       const __m256d a1 = _mm256_loadu_pd(src + i + (j + 1) * lds);
       const __m256d a2 = _mm256_loadu_pd(src + i + (j + 2) * lds);
       const __m256d a3 = _mm256_loadu_pd(src + i + (j + 3) * lds);
+      if (last != nullptr) {
+        note(j, i, _mm256_movemask_pd(_mm256_cmp_pd(a0, zero, _CMP_NEQ_UQ)));
+        note(j + 1, i, _mm256_movemask_pd(_mm256_cmp_pd(a1, zero, _CMP_NEQ_UQ)));
+        note(j + 2, i, _mm256_movemask_pd(_mm256_cmp_pd(a2, zero, _CMP_NEQ_UQ)));
+        note(j + 3, i, _mm256_movemask_pd(_mm256_cmp_pd(a3, zero, _CMP_NEQ_UQ)));
+      }
       const __m256d t0 = _mm256_unpacklo_pd(a0, a1), t1 = _mm256_unpackhi_pd(a0, a1);
       const __m256d t2 = _mm256_unpacklo_pd(a2, a3), t3 = _mm256_unpackhi_pd(a2, a3);
       _mm256_storeu_pd(dst + j + i * ldd, _mm256_permute2f128_pd(t0, t2, 0x20));
@@ -242,12 +258,20 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
       _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_permute2f128_pd(t1, t3, 0x31));
     }
     for (; j < n; ++j) {
-      for (int r = i; r < i + 4; ++r) dst[j + r * ldd] = src[r + j * lds];
+      int mask = 0;
+      for (int r = i; r < i + 4; ++r) {
+        dst[j + r * ldd] = src[r + j * lds];
+        mask |= (src[r + j * lds] != 0.0) << (r - i);
+      }
+      if (last != nullptr) note(j, i, mask);
     }
   }
 #endif
   for (; i < m; ++i) {
-    for (int j = 0; j < n; ++j) dst[j + i * ldd] = src[i + j * lds];
+    for (int j = 0; j < n; ++j) {
+      dst[j + i * ldd] = src[i + j * lds];
+      if (last != nullptr && src[i + j * lds] != 0.0) last[j] = i + 1;
+    }
   }
 }
 

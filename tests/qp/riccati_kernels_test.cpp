@@ -6,6 +6,9 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <memory>
+#include <cmath>
+#include <vector>
+#include <limits>
 #include <random>
 
 #include "controllers/qp/riccati.h"
@@ -77,6 +80,37 @@ TEST(RiccatiKernels, TransposeAndTriangularProductMatchEigen) {
       kernels::transpose(m, n, src.data(), m + 2, dst.data(), n + 1);
       EXPECT_EQ(dst.topRows(n), src.topRows(m).transpose());
       EXPECT_EQ(dst.row(n).norm(), 0.0);
+    }
+  }
+  // The columns' last nonzero rows, against a plain scan from the end: zero tails of every
+  // length (whole, none, remainders past the 4-row vectors), −0, NaN and infinities count as
+  // nonzero except −0, and rows past m (the leading-dimension padding) are not looked at.
+  for (const int m : {1, 3, 4, 7, 38}) {
+    for (const int n : {1, 5, 38, 50}) {
+      MatrixXd src = random_matrix(m + 2, n, rng);
+      for (int j = 0; j < n; ++j) {
+        const int tail = static_cast<int>(rng() % static_cast<unsigned>(m + 1));  // zero rows at the end
+        for (int i = m - tail; i < m; ++i) src(i, j) = 0.0;
+        if (j % 7 == 3 && tail < m) src(m - tail - 1, j) = std::numeric_limits<double>::quiet_NaN();
+        if (j % 7 == 5 && tail < m) src(m - tail - 1, j) = -std::numeric_limits<double>::infinity();
+        if (j % 5 == 1 && tail > 0) src(m - 1, j) = -0.0;
+        src(m, j) = src(m + 1, j) = 1.0;  // beyond the extent: never a column's last row
+      }
+      MatrixXd dst = MatrixXd::Zero(n + 1, m);
+      std::vector<int> last(n, -1);
+      kernels::transpose(m, n, src.data(), m + 2, dst.data(), n + 1, last.data());
+      for (int j = 0; j < n; ++j) {
+        int expected = m;
+        while (expected > 0 && src(expected - 1, j) == 0.0) --expected;
+        EXPECT_EQ(last[j], expected) << m << "x" << n << " column " << j;
+        for (int i = 0; i < m; ++i) {
+          if (std::isnan(src(i, j))) {
+            EXPECT_TRUE(std::isnan(dst(j, i)));
+          } else {
+            EXPECT_EQ(dst(j, i), src(i, j));
+          }
+        }
+      }
     }
   }
   for (const int m : {4, 40, 52}) {
