@@ -26,6 +26,7 @@ const char* to_string(DriverError e) {
     case DriverError::kBootTimeout: return "CANopen node did not boot";
     case DriverError::kUnexpectedNmtState: return "unexpected CANopen NMT state";
     case DriverError::kEnableTimeout: return "CiA 402 drive did not reach Operation enabled";
+    case DriverError::kCommandRefused: return "CSP target not finite or out of range: refused, drive held";
     case DriverError::kReplyTimeout: return "motor reply timeout";
     case DriverError::kMotorFault: return "motor reports a fault";
     case DriverError::kTransmissionUnsolved: return "transmission has no converged solution";

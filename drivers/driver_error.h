@@ -37,6 +37,7 @@ enum class DriverError : std::uint16_t {
   kBootTimeout = 45,       // no boot-up message after the NMT reset
   kUnexpectedNmtState = 46,
   kEnableTimeout = 47,     // 402 state machine did not reach Operation enabled
+  kCommandRefused = 48,    // CSP target non-finite or beyond the i32 counts: not sent, drive held
 
   // Ruiwo motors (60..69)
   kReplyTimeout = 60,  // a commanded motor did not answer in time

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "controllers/model/model.h"
+#include "controllers/wbc/wbc_config.h"
 #include "drivers/bus/open_buses.h"
 #include "drivers/config/drivers_config_json.h"
 #include "drivers/imu/serial_port.h"
@@ -33,8 +34,10 @@ namespace rtos = kuavo::rtos;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: kuavo_fw [--config FILE] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
+    "usage: kuavo_fw [--config FILE] [--csp-legs] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
+    "  --csp-legs           leg drives in CiA 402 CSP (drive-side PD, gains written at start-up;\n"
+    "                       firmware/README.md) instead of CST; needed to step\n"
     "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
     "                       and loads, exit\n"
     "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
@@ -60,6 +63,9 @@ void print_plan(const d::DriversConfig& c, const d::BusLoadReport& r) {
                 bus.interface.c_str(), bus.bitrate_bps / 1e3, bus.cycle_rate_hz, ruiwo, drives,
                 100.0 * r.load[b], r.frames_per_s[b]);
   }
+  int csp = 0;
+  for (const d::DriveEntry& e : c.drives) csp += e.config.mode == d::canopen::kModeCyclicSyncPosition;
+  std::printf("CiA 402 drives: %d in CSP, %d in CST\n", csp, static_cast<int>(c.drives.size()) - csp);
   std::printf("imu: %s at %d baud\n", c.imu_device.c_str(), c.imu_baud);
 }
 
@@ -121,7 +127,7 @@ struct PlannerTask {
 
 int main(int argc, char** argv) {
   std::string config_path, dance_path;
-  bool check = false, require_rt = false, stand = false;
+  bool check = false, require_rt = false, stand = false, csp_legs = false;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
@@ -130,6 +136,7 @@ int main(int argc, char** argv) {
     }
     if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
     else if (!std::strcmp(a, "--check")) check = true;
+    else if (!std::strcmp(a, "--csp-legs")) csp_legs = true;
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
     else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
@@ -155,6 +162,12 @@ int main(int argc, char** argv) {
   if (derr != d::DriverError::kOk) {
     std::fprintf(stderr, "kuavo_fw: configuration %s: %s (%s)\n", config_path.empty() ? "(defaults)" : config_path.c_str(),
                  msg.c_str(), d::to_string(derr));
+    return 2;
+  }
+  // The leg drives hold the WBC's output gains (the law the dance commands).
+  if (csp_legs && (!d::use_csp_leg_drives(drivers, kuavo::wbc::WbcConfig{}.leg_kp, kuavo::wbc::WbcConfig{}.leg_kd, msg) ||
+                   d::validate_drivers_config(drivers, loads, msg) != d::DriverError::kOk)) {
+    std::fprintf(stderr, "kuavo_fw: --csp-legs: %s\n", msg.c_str());
     return 2;
   }
   const fw::FirmwareConfig fw_config{};

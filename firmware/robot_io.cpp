@@ -121,9 +121,34 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
   // Leg joint torques -> motor torques (the ankle through its Jacobian).
   std::array<std::array<double, d::kLegActuators>, 2> motor_tau{};
   std::array<bool, 2> leg_ok{};
+  // CSP targets: the position references in motor space (PD joints only).
+  std::array<std::array<double, d::kLegActuators>, 2> motor_ref{};
+  std::array<std::array<bool, d::kLegActuators>, 2> has_ref{};
+  for (int side = 0; side < 2; ++side) {
+    const d::LegTransmission& t = io.legs[side];
+    const int j0 = kLegFirst[side];
+    const auto pd = [&](int k) { return command.joints[j0 + k].mode == hal::JointMode::kPdTorque; };
+    for (int k = 0; k < 4; ++k) {
+      has_ref[side][k] = pd(k);
+      if (pd(k)) motor_ref[side][k] = d::motor_position_rad(t.serial[k], command.joints[j0 + k].position_ref_rad);
+    }
+    d::Vec2 crank = d::Vec2::Zero();
+    if (pd(4) && pd(5) &&
+        d::ankle_motor_from_joint_rt(t.ankle,
+                                     d::Vec2(command.joints[j0 + 4].position_ref_rad, command.joints[j0 + 5].position_ref_rad),
+                                     crank)) {
+      for (int i = 0; i < 2; ++i) {
+        has_ref[side][4 + i] = true;
+        motor_ref[side][4 + i] = d::motor_position_rad(t.ankle_motor[i], crank[i]);
+      }
+    }
+  }
+  // CSP ankle pair: the feed-forward only (tau_ff, v_ref) in motor space; the feedback is
+  // the drives' own (see robot_io.h).
+  std::array<std::array<double, 2>, 2> ankle_ff_Nm{}, ankle_vref_rad_s{};
   for (int side = 0; side < 2; ++side) {
     std::array<hal::JointSample, d::kLegActuators> joints{};
-    std::array<double, d::kLegActuators> joint_tau{};
+    std::array<double, d::kLegActuators> joint_tau{}, ff_tau{}, ff_motor{};
     bool valid = true;
     for (int k = 0; k < d::kLegActuators; ++k) {
       const int j = kLegFirst[side] + k;
@@ -134,6 +159,24 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
     // Without a valid leg state the PD cannot be evaluated: zero torque.
     leg_ok[side] = valid && d::leg_motor_torques_rt(io.legs[side], joints, joint_tau, motor_tau[side]) ==
                                 d::DriverError::kOk;
+    const int j0 = kLegFirst[side];
+    if (!leg_ok[side] || !has_ref[side][4]) continue;  // ankle not in PD: no feed-forward
+    const d::LegTransmission& t = io.legs[side];
+    ff_tau[4] = command.joints[j0 + 4].torque_ff_Nm;
+    ff_tau[5] = command.joints[j0 + 5].torque_ff_Nm;
+    const d::Vec2 q(joints[4].position_rad, joints[5].position_rad);
+    d::Vec2 crank;
+    if (d::leg_motor_torques_rt(t, joints, ff_tau, ff_motor) != d::DriverError::kOk ||
+        !d::ankle_motor_from_joint_rt(t.ankle, q, crank)) {
+      continue;  // cannot happen after the solve above; zero feed-forward then
+    }
+    const d::Vec2 rate = d::ankle_motor_velocity_rt(
+        d::ankle_jacobian_rt(t.ankle, q, crank),
+        d::Vec2(command.joints[j0 + 4].velocity_ref_rad_s, command.joints[j0 + 5].velocity_ref_rad_s));
+    for (int i = 0; i < 2; ++i) {
+      ankle_ff_Nm[side][i] = ff_motor[4 + i];
+      ankle_vref_rad_s[side][i] = d::motor_velocity_rad_s(t.ankle_motor[i], rate[i]);
+    }
   }
   for (std::size_t b = 0; b < io.ports.size(); ++b) {
     d::CanPort& port = io.ports[b];
@@ -156,7 +199,25 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
       }
       for (int side = 0; side < 2; ++side) {
         const int k = slot - kLegFirst[side];
-        if (k >= 0 && k < d::kLegActuators) dc.torque_Nm = leg_ok[side] ? motor_tau[side][k] : 0.0;
+        if (k < 0 || k >= d::kLegActuators) continue;
+        const d::canopen::DriveConfig& cfg = c.cfg[i];
+        if (cfg.mode != d::canopen::kModeCyclicSyncPosition) {
+          dc.torque_Nm = leg_ok[side] ? motor_tau[side][k] : 0.0;
+          continue;
+        }
+        const d::canopen::MotorSample m = d::canopen::motor_sample(cfg, c.st[i]);
+        dc.position_rad = m.position_rad;  // hold: the last reported position
+        if (!leg_ok[side] || !m.valid) {
+          if (dc.enable) ++c.csp_holds;
+          continue;
+        }
+        if (has_ref[side][k]) dc.position_rad = motor_ref[side][k];
+        if (k >= 4) {  // the ankle pair: the drives' gains are the feedback law
+          dc.torque_Nm = ankle_ff_Nm[side][k - 4] + cfg.csp_kd_Nm_s_per_rad * ankle_vref_rad_s[side][k - 4];
+          continue;
+        }
+        dc.torque_Nm = motor_tau[side][k] - cfg.csp_kp_Nm_per_rad * (dc.position_rad - m.position_rad) +
+                       cfg.csp_kd_Nm_s_per_rad * m.velocity_rad_s;
       }
     }
     const d::CanopenSendReport r = d::canopen_send_rt(port, c.cfg, c.st, c.cmd, now_ns);

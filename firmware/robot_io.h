@@ -25,6 +25,9 @@ struct CanopenBusIo {
   std::vector<drivers::canopen::DriveState> st;
   std::vector<drivers::canopen::DriveCommand> cmd;
   std::vector<int> slot;  // actuator slot per drive
+  // CSP leg drives held at their last reported position (zero torque offset)
+  // because their leg's state was invalid: the drive-side PD needs a target.
+  std::uint64_t csp_holds = 0;
 };
 
 struct RobotIo {
@@ -53,7 +56,25 @@ void robot_receive_rt(RobotIo& io, std::uint64_t cycle, hal::TimeNs now_ns,
                       hal::TimeNs realtime_to_monotonic_ns) noexcept;
 
 // Send half: joint commands -> Ruiwo PTM frames and (through the leg
-// transmissions) CiA 402 target torques, then SYNC.
+// transmissions) CiA 402 targets, then SYNC. CST leg drives get the joint law's
+// torque at last tick's sample. CSP leg drives (drive loop tau = kp_d (target -
+// q) - kd_d v + offset, fixed gains) get the position reference through the
+// transmission as target (the sampled position for damping joints), and:
+// - hip roll/yaw/pitch, knee (1:1 motors): the offset that makes the drive's law
+//   equal the firmware's at the sample,
+//     offset = tau_law(sample) - kp_d (target - q_sample) + kd_d v_sample,
+//   exactly tau_ff + kd v_ref when the commanded gains equal the drive's (the
+//   dance); any gain difference (standing, ramps, fades, damping) is applied from
+//   the 500 Hz sample, as the CST binding applies all of it;
+// - the ankle pair: the motor-space PD of two drives with one gain each cannot
+//   realize the joint-space law (k J^T J ~ diag(2.0, 0.41) k), and correcting the
+//   difference from the 500 Hz sample is the delayed ankle loop that made CST
+//   unstable in swing. So the drives' gains ARE the ankle feedback law and the
+//   offset is the feed-forward only: J^-T tau_ff + kd_d J v_ref. Commanded ankle
+//   kp/kd (standing 150/3, dance 30/1.5, ramps, damping kd) are not applied.
+// An invalid leg state holds each drive at its last reported position with zero
+// offset (counted in csp_holds).
+
 void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& command, hal::TimeNs now_ns) noexcept;
 
 }  // namespace kuavo::firmware

@@ -59,6 +59,15 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
       if (saturated && in_->count_saturations) ++in_->saturations;
       b.applyOneMobilityForce(s, 0, tau, mobility_forces);
     }
+    if (in_->forces.torque_source != nullptr) {
+      std::array<double, model::kNumJoints> q{}, v{}, extra{};
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        q[j] = r.body(j + 1).getOneQ(s, 0);
+        v[j] = r.body(j + 1).getOneU(s, 0);
+      }
+      in_->forces.torque_source->add_joint_torques(q, v, extra);
+      for (int j = 0; j < model::kNumJoints; ++j) r.body(j + 1).applyOneMobilityForce(s, 0, extra[j], mobility_forces);
+    }
     in_->contact_wrench.setZero();
     if (in_->forces.contact) {
       for (int c = 0; c < model::kNumContactPoints; ++c) {
@@ -273,6 +282,15 @@ struct Plant::Impl {
       truth.joint_torque_Nm[j] =
           drive_torque(inputs.forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
     }
+    if (inputs.forces.torque_source != nullptr) {
+      std::array<double, model::kNumJoints> q{}, v{}, extra{};
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        q[j] = robot.body(j + 1).getOneQ(s, 0);
+        v[j] = robot.body(j + 1).getOneU(s, 0);
+      }
+      inputs.forces.torque_source->add_joint_torques(q, v, extra);
+      for (int j = 0; j < model::kNumJoints; ++j) truth.joint_torque_Nm[j] += extra[j];
+    }
     const SimTK::MobilizedBody& base = robot.body(0);
     const SimTK::Vec3 a = base.getBodyOriginAcceleration(s);
     const SimTK::Vec3 g(0, 0, config.gravity ? -model::kGravity_m_s2 : 0.0);
@@ -371,6 +389,7 @@ void Plant::reset(const dynamics::ConfigVector& q, const dynamics::VelocityVecto
 }
 
 void Plant::set_command(const hal::CommandFrame& command) { impl_->inputs.forces.command = command; }
+void Plant::set_torque_source(const JointTorqueSource* source) { impl_->inputs.forces.torque_source = source; }
 void Plant::set_push(const Push& push) { impl_->inputs.push = push; }
 
 PlantError Plant::advance(double dt_s) {

@@ -16,6 +16,7 @@
 #include "controllers/hal/types.h"
 #include "controllers/model/model.h"
 #include "sim/ground_contact.h"
+#include "sim/plant_dynamics.h"
 
 namespace kuavo::sim {
 
@@ -82,6 +83,9 @@ class Plant {
 
   void reset(const dynamics::ConfigVector& q, const dynamics::VelocityVector& v, double time_s = 0.0);
   void set_command(const hal::CommandFrame& command);
+  // Torques added to the command's at every force evaluation (see JointTorqueSource in
+  // plant_dynamics.h); nullptr: none. The source must outlive its use.
+  void set_torque_source(const JointTorqueSource* source);
   void set_push(const Push& push);
 
   // Integrates over [time, time + dt_s] with the command held; contact anchors

@@ -55,6 +55,18 @@ void solve_ltl(const dynamics::MassMatrix& l, const std::array<int, model::kNv>&
   }
 }
 
+// The torque source's joint torques at the state (q: base 7 then joints, v: base 6 then joints).
+template <class Q, class V>
+std::array<double, model::kNumJoints> source_torques(const PlantForceInputs& in, const Q& q, const V& v) {
+  std::array<double, model::kNumJoints> qj{}, vj{}, tau{};
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    qj[j] = q[7 + j];
+    vj[j] = v[6 + j];
+  }
+  in.torque_source->add_joint_torques(qj, vj, tau);
+  return tau;
+}
+
 }  // namespace
 
 PlantDynamics::PlantDynamics(const model::Model& model, const SimbodyLayout& layout)
@@ -98,6 +110,10 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   w.rhs = -d.tau;
   for (int j = 0; j < model::kNumJoints; ++j) {
     w.rhs[6 + j] += drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
+  }
+  if (in.torque_source != nullptr) {
+    const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
+    for (int j = 0; j < model::kNumJoints; ++j) w.rhs[6 + j] += extra[j];
   }
 
   // External point forces as spatial forces at the reference point, summed per body.
@@ -198,6 +214,10 @@ bool PlantDynamics::truth(double t_s, const double* y, const PlantForceInputs& i
     out.joint_torque_Nm[j] =
         drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], &clipped);
     saturations += clipped;
+  }
+  if (in.torque_source != nullptr) {
+    const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
+    for (int j = 0; j < model::kNumJoints; ++j) out.joint_torque_Nm[j] += extra[j];
   }
   const Vec3 g(0.0, 0.0, in.gravity ? -model::kGravity_m_s2 : 0.0);
   out.base_specific_force_m_s2 = d.rotation[0].transpose() * (w.base_acceleration_world - g);

@@ -47,12 +47,25 @@ struct SimbodyLayout {
   std::array<int, model::kNumJoints> joint_u{};
 };
 
+// Actuators whose law the hal::JointCommand cannot express (a drive's PD in motor
+// space behind a closed-chain transmission): evaluated at every force evaluation
+// from the instantaneous joint state, like a drive's fast loop. Must be
+// deterministic, noexcept and heap-free; it adds to tau (joint space).
+class JointTorqueSource {
+ public:
+  virtual ~JointTorqueSource() = default;
+  virtual void add_joint_torques(const std::array<double, model::kNumJoints>& q_rad,
+                                 const std::array<double, model::kNumJoints>& v_rad_s,
+                                 std::array<double, model::kNumJoints>& tau_Nm) const noexcept = 0;
+};
+
 // Everything the forces read besides the state; the plant updates it between intervals.
 struct PlantForceInputs {
   GroundParams ground = kFloor;
   bool contact = true;
   bool gravity = true;
   hal::CommandFrame command{};
+  const JointTorqueSource* torque_source = nullptr;  // added to the command's torques
   std::array<ContactPointState, model::kNumContactPoints> points{};
   const Push* push = nullptr;
 };

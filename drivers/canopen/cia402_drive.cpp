@@ -48,9 +48,27 @@ std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& 
   return static_cast<std::int16_t>(pm);
 }
 
+DriverError position_to_counts_rt(const DriveConfig& cfg, double rad, std::int32_t& counts) {
+  const double c = rad * cfg.counts_per_rev / (2.0 * std::numbers::pi);
+  if (!(std::abs(c) <= 2147483647.0)) return DriverError::kCommandRefused;  // NaN fails too
+  counts = static_cast<std::int32_t>(std::lround(c));
+  return DriverError::kOk;
+}
+
+bool drive_loop(const DriveConfig& cfg, DriveLoop& out) {
+  out = DriveLoop{};
+  out.mode = cfg.mode;
+  if (cfg.mode == kModeCyclicSyncTorque) return true;
+  if (cfg.mode != kModeCyclicSyncPosition) return false;
+  return gain_to_register(cfg.csp_kp_Nm_per_rad, out.kp_register) &&
+         gain_to_register(cfg.csp_kd_Nm_s_per_rad, out.kd_register);
+}
+
 void start_drive(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, can_frame& out) {
   st = DriveState{};
-  st.config = pdo_config_sequence(cfg.node_id, cfg.heartbeat_period_ms, cfg.cycle_period_us);
+  DriveLoop loop;
+  if (!drive_loop(cfg, loop)) loop.kp_register = loop.kd_register = 0;  // refused at validation before
+  st.config = pdo_config_sequence(cfg.node_id, cfg.heartbeat_period_ms, cfg.cycle_period_us, loop);
   enter(st, DrivePhase::kWaitBoot, now_ns);
   encode_nmt_rt(NmtCommand::kResetCommunication, cfg.node_id, out);
 }
@@ -185,6 +203,25 @@ bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const D
   // Torque only once the drive is really enabled; otherwise 0.
   bool clamped = false;
   const bool torque_on = cmd.enable && st.power == Cia402State::kOperationEnabled;
+  if (cfg.mode == kModeCyclicSyncPosition) {
+    // Held (last reported position, no offset) unless torque is on and the target is good.
+    pdo.target_position_counts = st.tpdo1.actual_position_counts;
+    pdo.target_torque_permille = 0;
+    if (torque_on) {
+      std::int32_t counts = 0;
+      if (position_to_counts_rt(cfg, cmd.position_rad, counts) != DriverError::kOk ||
+          !std::isfinite(cmd.torque_Nm)) {
+        ++st.refused_commands;
+        st.error = DriverError::kCommandRefused;
+      } else {
+        pdo.target_position_counts = counts;
+        pdo.target_torque_permille = torque_to_permille(cfg, cmd.torque_Nm, clamped);
+        if (clamped) ++st.torque_clamps;
+      }
+    }
+    encode_rpdo1_rt(cfg.node_id, pdo, out);
+    return true;
+  }
   pdo.target_torque_permille = torque_to_permille(cfg, torque_on ? cmd.torque_Nm : 0.0, clamped);
   if (clamped) ++st.torque_clamps;
   pdo.target_position_counts = rad_to_counts(cfg, cmd.position_rad);

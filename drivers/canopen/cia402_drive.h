@@ -43,6 +43,13 @@ struct DriveConfig {
   // TPDOs answer every SYNC; 3 missing cycles (6 ms at 500 Hz) make the drive
   // silent, well inside the 20 ms budget to reach damping.
   hal::TimeNs tpdo_timeout_ns = 6'000'000;
+  // Cyclic mode: kModeCyclicSyncTorque (CST, the master sends the torque) or
+  // kModeCyclicSyncPosition (CSP: the drive closes
+  //   tau = csp_kp (target - position) - csp_kd velocity + torque offset
+  // in its own fast loop; the gains are written once at start-up, motor side).
+  std::int8_t mode = kModeCyclicSyncTorque;
+  double csp_kp_Nm_per_rad = 0.0;
+  double csp_kd_Nm_s_per_rad = 0.0;
 };
 
 enum class DrivePhase : std::uint8_t {
@@ -58,8 +65,8 @@ enum class DrivePhase : std::uint8_t {
 
 struct DriveCommand {
   bool enable = false;      // false: walk to switch-on disabled, zero torque
-  double torque_Nm = 0.0;   // motor side, CST target
-  double position_rad = 0.0;  // motor side, sent as 0x607A for drives in CSP
+  double torque_Nm = 0.0;   // motor side: CST target torque; CSP torque offset
+  double position_rad = 0.0;  // motor side, sent as 0x607A (the CSP target)
 };
 
 struct MotorSample {
@@ -94,6 +101,7 @@ struct DriveState {
   Emergency last_emergency{};
   std::uint32_t emergencies = 0;
   std::uint32_t torque_clamps = 0;
+  std::uint32_t refused_commands = 0;  // CSP targets refused (kCommandRefused), drive held instead
 };
 
 // Begins (or restarts) the boot sequence; fills `out` with the NMT reset.
@@ -105,7 +113,9 @@ DriverError handle_frame_rt(const DriveConfig& cfg, DriveState& st, const can_fr
 
 // Advances the supervisor; returns true with `out` filled when a frame is owed.
 // In kOperational it always emits RPDO1 (disabled drives get zero torque); in
-// kFailed after operational, RPDO1 with controlword 0 and zero torque.
+// kFailed after operational, RPDO1 with controlword 0 and zero torque. In CSP
+// the target is the drive's last reported position with zero offset whenever
+// torque is not on (so enabling never jumps) and when the command is refused.
 bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const DriveCommand& cmd,
              can_frame& out);
 
@@ -116,5 +126,11 @@ double counts_to_rad(const DriveConfig& cfg, double counts);
 std::int32_t rad_to_counts(const DriveConfig& cfg, double rad);
 // Clamps to +-torque_limit_Nm (NaN -> 0) and converts; `clamped` set if changed.
 std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& clamped);
+// Checked position for a CSP target: kCommandRefused (counts untouched) if not
+// finite or beyond the i32 range; never clamps.
+DriverError position_to_counts_rt(const DriveConfig& cfg, double rad, std::int32_t& counts);
+// The loop configuration start_drive writes (mode, gain registers); gains that
+// gain_to_register refuses give false (validate_drivers_config checks this).
+bool drive_loop(const DriveConfig& cfg, DriveLoop& out);
 
 }  // namespace kuavo::drivers::canopen

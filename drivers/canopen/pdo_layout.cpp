@@ -1,5 +1,7 @@
 #include "drivers/canopen/pdo_layout.h"
 
+#include <cmath>
+
 namespace kuavo::drivers::canopen {
 
 namespace {
@@ -29,6 +31,21 @@ void encode_rpdo1_rt(std::uint8_t node, const RxPdo1& pdo, can_frame& out) {
   put_u32(&out.data[4], static_cast<std::uint32_t>(pdo.target_position_counts));
 }
 
+DriverError decode_rpdo1_rt(const can_frame& f, std::uint8_t node, RxPdo1& out) {
+  if (const DriverError e = check_pdo(f, kCobRpdo1 + node, 8); e != DriverError::kOk) return e;
+  if (f.len != 8) return DriverError::kWrongLength;
+  out.controlword = get_u16(&f.data[0]);
+  out.target_torque_permille = static_cast<std::int16_t>(get_u16(&f.data[2]));
+  out.target_position_counts = static_cast<std::int32_t>(get_u32(&f.data[4]));
+  return DriverError::kOk;
+}
+
+bool gain_to_register(double gain, std::uint32_t& reg) {
+  if (!(gain >= 0.0) || !(gain <= 4.0e6 / kGainRegisterPerUnit)) return false;  // NaN fails both
+  reg = static_cast<std::uint32_t>(std::lround(gain * kGainRegisterPerUnit));
+  return true;
+}
+
 DriverError decode_tpdo1_rt(const can_frame& f, std::uint8_t node, TxPdo1& out) {
   if (const DriverError e = check_pdo(f, kCobTpdo1 + node, 8); e != DriverError::kOk) return e;
   out.statusword = get_u16(&f.data[0]);
@@ -46,7 +63,8 @@ DriverError decode_tpdo2_rt(const can_frame& f, std::uint8_t node, TxPdo2& out) 
 }
 
 ConfigSequence pdo_config_sequence(std::uint8_t node, std::uint16_t heartbeat_period_ms,
-                                   std::uint32_t cycle_period_us) {
+                                   std::uint32_t cycle_period_us, const DriveLoop& loop) {
+  const bool csp = loop.mode == kModeCyclicSyncPosition;
   ConfigSequence s;
   auto add = [&](std::uint16_t index, std::uint8_t sub, std::uint8_t size, std::uint32_t value) {
     s.writes[s.count++] = SdoWrite{index, sub, size, value};
@@ -62,7 +80,8 @@ ConfigSequence pdo_config_sequence(std::uint8_t node, std::uint16_t heartbeat_pe
     add(comm, 1, 4, cob);
   };
   map_pdo(0x1400, 0x1600, kCobRpdo1 + node,
-          {map_entry(0x6040, 0, 16), map_entry(0x6071, 0, 16), map_entry(0x607A, 0, 32)});
+          {map_entry(0x6040, 0, 16), map_entry(csp ? kObjTorqueOffset : kObjTargetTorque, 0, 16),
+           map_entry(0x607A, 0, 32)});
   map_pdo(0x1800, 0x1A00, kCobTpdo1 + node,
           {map_entry(0x6041, 0, 16), map_entry(0x6077, 0, 16), map_entry(0x6064, 0, 32)});
   map_pdo(0x1801, 0x1A01, kCobTpdo2 + node,
@@ -73,7 +92,11 @@ ConfigSequence pdo_config_sequence(std::uint8_t node, std::uint16_t heartbeat_pe
   add(0x1403, 1, 4, kPdoInvalid | (0x500u + node));
   add(0x1802, 1, 4, kPdoInvalid | (0x380u + node));
   add(0x1803, 1, 4, kPdoInvalid | (0x480u + node));
-  add(0x6060, 0, 1, static_cast<std::uint8_t>(kModeCyclicSyncTorque));
+  if (csp) {  // the gains before the mode: the loop never runs on stale gains
+    add(kObjPositionLoopGains, 1, 4, loop.kp_register);
+    add(kObjPositionLoopGains, 2, 4, loop.kd_register);
+  }
+  add(0x6060, 0, 1, static_cast<std::uint8_t>(csp ? kModeCyclicSyncPosition : kModeCyclicSyncTorque));
   add(0x1017, 0, 2, heartbeat_period_ms);
   add(0x1006, 0, 4, cycle_period_us);
   return s;

@@ -35,6 +35,9 @@ void sync_drives_with_plan(DriversConfig& config) {
       e.config.counts_per_rev = o.config.counts_per_rev;
       e.config.rated_torque_Nm = o.config.rated_torque_Nm;
       e.config.torque_limit_Nm = o.config.torque_limit_Nm;
+      e.config.mode = o.config.mode;
+      e.config.csp_kp_Nm_per_rad = o.config.csp_kp_Nm_per_rad;
+      e.config.csp_kd_Nm_s_per_rad = o.config.csp_kd_Nm_s_per_rad;
     }
     config.drives.push_back(e);
   }
@@ -114,6 +117,15 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
                           "limit within the int16 per-mille range";
         return DriverError::kBadConfig;
       }
+      canopen::DriveLoop loop;
+      if (!canopen::drive_loop(k, loop)) {
+        message = where + ": mode must be CST (10) or CSP (8), CSP gains finite, >= 0 and <= 4000";
+        return DriverError::kBadConfig;
+      }
+      if (k.mode == canopen::kModeCyclicSyncPosition && !(d.slot >= 0 && d.slot < 2 * model::kLegJoints)) {
+        message = where + ": CSP is bound for the leg drives only (the shoulder pitch runs CST)";
+        return DriverError::kBadConfig;
+      }
     }
   }
   if (c.ruiwo_motors.size() != static_cast<std::size_t>(std::count_if(
@@ -129,6 +141,45 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
   }
   message.clear();
   return DriverError::kOk;
+}
+
+bool use_csp_leg_drives(DriversConfig& config, const std::array<double, kLegActuators>& joint_kp,
+                        const std::array<double, kLegActuators>& joint_kd, std::string& message) {
+  for (int side = 0; side < 2; ++side) {
+    const LegTransmission& t = config.legs[side];
+    const int first = side == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+    // Ankle: crank-space gain k with k * trace(J^T J) = kp_pitch + kp_roll at the zero pose.
+    Vec2 crank;
+    if (!ankle_motor_from_joint_rt(t.ankle, Vec2::Zero(), crank)) {
+      message = "ankle linkage has no solution at the zero pose";
+      return false;
+    }
+    const Mat2 J = ankle_jacobian_rt(t.ankle, Vec2::Zero(), crank);
+    const double tr = (J.transpose() * J).trace();
+    for (DriveEntry& e : config.drives) {
+      const int k = e.slot - first;
+      if (k < 0 || k >= kLegActuators) continue;
+      double kp = 0.0, kd = 0.0, r = 1.0;
+      if (k < 4) {
+        r = t.serial[k].ratio_motor_per_joint;
+        kp = joint_kp[k];
+        kd = joint_kd[k];
+      } else {
+        r = t.ankle_motor[k - 4].ratio_motor_per_joint;
+        kp = (joint_kp[4] + joint_kp[5]) / tr;
+        kd = (joint_kd[4] + joint_kd[5]) / tr;
+      }
+      e.config.mode = canopen::kModeCyclicSyncPosition;
+      e.config.csp_kp_Nm_per_rad = kp / (r * r);  // motor side: tau_j = r tau_m, q_m = r q_j
+      e.config.csp_kd_Nm_s_per_rad = kd / (r * r);
+      canopen::DriveLoop loop;
+      if (!canopen::drive_loop(e.config, loop)) {
+        message = "CSP gains of slot " + std::to_string(e.slot) + " not representable";
+        return false;
+      }
+    }
+  }
+  return true;
 }
 
 std::vector<ruiwo::MotorConfig> ruiwo_motors_on_bus(const DriversConfig& config, int bus) {

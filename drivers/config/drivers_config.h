@@ -48,6 +48,16 @@ void sync_drives_with_plan(DriversConfig& config);
 // ankle zero. Fills `report` with the bus loads.
 DriverError validate_drivers_config(const DriversConfig& config, BusLoadReport& report, std::string& message);
 
+// Start-up: switches every leg drive to CSP with fixed position-loop gains, from
+// joint-space gains (slot order) mapped to motor side: serial joints kp / r^2;
+// the two ankle motors share one gain k with k trace(J^T J) = kp_pitch + kp_roll
+// at the zero pose (the linkage couples them; the firmware's torque offset makes
+// up the difference at each sample, robot_io.h). false + message if the ankle
+// has no zero-pose solution or a gain is not representable. The shoulder pitch
+// drives stay CST.
+bool use_csp_leg_drives(DriversConfig& config, const std::array<double, kLegActuators>& joint_kp,
+                        const std::array<double, kLegActuators>& joint_kd, std::string& message);
+
 // The Ruiwo motors of one bus, for ruiwo::build_bus.
 std::vector<ruiwo::MotorConfig> ruiwo_motors_on_bus(const DriversConfig& config, int bus);
 

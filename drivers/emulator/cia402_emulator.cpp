@@ -87,7 +87,8 @@ void handle_sdo(Cia402Emulator& emu, CanPort& port, EmulatedDrive& d, const can_
   const bool download = (f.data[0] & 0xE0) == 0x20;
   const bool known = (index >= 0x1400 && index <= 0x1403) || (index >= 0x1600 && index <= 0x1603) ||
                      (index >= 0x1800 && index <= 0x1803) || (index >= 0x1A00 && index <= 0x1A03) ||
-                     index == 0x6060 || index == 0x1017 || index == 0x1006;
+                     index == 0x6060 || index == 0x1017 || index == 0x1006 ||
+                     (index == kObjPositionLoopGains && (sub == 1 || sub == 2));
   if (!download || !known || d.nmt != NmtState::kPreOperational) {
     r.data[0] = 0x80;
     put_u32(&r.data[4], download && known ? 0x08000022u   // not in this device state
@@ -103,6 +104,8 @@ void handle_sdo(Cia402Emulator& emu, CanPort& port, EmulatedDrive& d, const can_
   if (index == 0x1801) d.tpdo2_mapped = valid_cob;
   if (index == 0x1017) d.heartbeat_period_ms = static_cast<std::uint16_t>(value);
   if (index == 0x6060) d.mode = static_cast<std::int8_t>(value);
+  if (index == 0x1600 && sub == 2) d.rpdo1_torque_object = static_cast<std::uint16_t>(value >> 16);
+  if (index == kObjPositionLoopGains) (sub == 1 ? d.kp_register : d.kd_register) = value;
   r.data[0] = 0x60;
   send(emu, port, d, r);
 }
@@ -138,6 +141,9 @@ void boot(Cia402Emulator& emu, CanPort& port, EmulatedDrive& d, hal::TimeNs now_
   d.rpdo1_mapped = d.tpdo1_mapped = d.tpdo2_mapped = false;
   d.heartbeat_period_ms = 0;
   d.target_torque_permille = 0;
+  d.target_position_counts = 0;
+  d.rpdo1_torque_object = 0;
+  d.kp_register = d.kd_register = 0;
   d.power = d.power == Cia402State::kFault ? Cia402State::kFault : Cia402State::kSwitchOnDisabled;
   d.nmt = NmtState::kBootUp;
   send_heartbeat(emu, port, d);  // boot-up message
@@ -154,10 +160,25 @@ void add_drive(Cia402Emulator& emu, const DriveConfig& config) {
   emu.drives[emu.count++] = d;
 }
 
-double drive_torque_Nm(const EmulatedDrive& d) {
+double drive_torque_at_Nm(const EmulatedDrive& d, double position_rad, double velocity_rad_s, bool* saturated) {
+  if (saturated != nullptr) *saturated = false;
   if (d.power != Cia402State::kOperationEnabled || d.nmt != NmtState::kOperational) return 0.0;
-  return d.target_torque_permille * d.config.rated_torque_Nm / 1000.0;
+  const double field_Nm = d.target_torque_permille * d.config.rated_torque_Nm / 1000.0;
+  if (d.mode == kModeCyclicSyncTorque) return d.rpdo1_torque_object == kObjTargetTorque ? field_Nm : 0.0;
+  if (d.mode != kModeCyclicSyncPosition) return 0.0;
+  const double offset_Nm = d.rpdo1_torque_object == kObjTorqueOffset ? field_Nm : 0.0;
+  const double target_rad = counts_to_rad(d.config, d.target_position_counts);
+  const double tau = register_to_gain(d.kp_register) * (target_rad - position_rad) -
+                     register_to_gain(d.kd_register) * velocity_rad_s + offset_Nm;
+  const double lim = d.config.torque_limit_Nm;
+  if (tau > lim || tau < -lim) {
+    if (saturated != nullptr) *saturated = true;
+    return tau > lim ? lim : -lim;
+  }
+  return tau;
 }
+
+double drive_torque_Nm(const EmulatedDrive& d) { return drive_torque_at_Nm(d, d.position_rad, d.velocity_rad_s); }
 
 bool set_drive_silent(Cia402Emulator& emu, std::uint8_t node, bool silent) {
   EmulatedDrive* d = find(emu, node);
@@ -202,9 +223,12 @@ int serve_rt(Cia402Emulator& emu, CanPort& port, hal::TimeNs now_ns) {
       if (EmulatedDrive* d = find(emu, static_cast<std::uint8_t>(id - kCobSdoClientToServer))) handle_sdo(emu, port, *d, f);
     } else if (id > kCobRpdo1 && id <= kCobRpdo1 + 0x7F && f.len == 8) {
       EmulatedDrive* d = find(emu, static_cast<std::uint8_t>(id - kCobRpdo1));
-      if (d != nullptr && d->rpdo1_mapped && d->nmt == NmtState::kOperational) {
-        apply_controlword(*d, get_u16(&f.data[0]));
-        d->target_torque_permille = static_cast<std::int16_t>(get_u16(&f.data[2]));
+      RxPdo1 pdo;
+      if (d != nullptr && d->rpdo1_mapped && d->nmt == NmtState::kOperational &&
+          decode_rpdo1_rt(f, d->config.node_id, pdo) == DriverError::kOk) {
+        apply_controlword(*d, pdo.controlword);
+        d->target_torque_permille = pdo.target_torque_permille;
+        d->target_position_counts = pdo.target_position_counts;
       }
     }
   }

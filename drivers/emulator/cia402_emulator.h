@@ -1,8 +1,11 @@
 // Emulated CiA 402 drives on one CANopen bus (far end of a socketpair): NMT,
 // boot-up and heartbeat production, expedited SDO downloads into a small
 // object dictionary, the 402 power state machine driven by RPDO1's
-// controlword, CST target torque, and TPDO1/TPDO2 answered on every SYNC once
-// mapped. The simulator writes the motor state and reads the applied torque.
+// controlword, CST target torque or CSP (target position, torque offset and
+// the position-loop gains 0x2010 written by SDO), and TPDO1/TPDO2 answered on
+// every SYNC once mapped. The simulator writes the motor state and reads the
+// applied torque; in CSP it evaluates drive_torque_at_Nm at its own states
+// (the drive's fast loop, continuous). Everything comes from decoded frames.
 // Heap-free; `serve_rt` never blocks.
 #pragma once
 
@@ -27,7 +30,10 @@ struct EmulatedDrive {
   bool rpdo1_mapped = false, tpdo1_mapped = false, tpdo2_mapped = false;
   std::uint16_t heartbeat_period_ms = 0;  // 0x1017
   std::int8_t mode = 0;                   // 0x6060
-  std::int16_t target_torque_permille = 0;
+  std::int16_t target_torque_permille = 0;  // the RPDO1 i16: target torque or torque offset
+  std::int32_t target_position_counts = 0;  // 0x607A (CSP)
+  std::uint16_t rpdo1_torque_object = 0;    // what RPDO1 maps there: 0x6071 or 0x60B2
+  std::uint32_t kp_register = 0, kd_register = 0;  // 0x2010 sub 1, 2
   std::uint16_t error_code = 0;           // 0x603F
   hal::TimeNs next_heartbeat_ns = 0;
   double position_rad = 0.0;   // plant state, motor side
@@ -51,7 +57,16 @@ void add_drive(Cia402Emulator& emu, const canopen::DriveConfig& config);
 // Handles every waiting frame and produces due heartbeats. Returns frames handled.
 int serve_rt(Cia402Emulator& emu, CanPort& port, hal::TimeNs now_ns);
 
-// Torque the plant applies (motor side): target torque while operation enabled.
+// Torque the drive produces (motor side) at motor state (position, velocity),
+// 0 unless operation enabled and NMT operational:
+//   CST (mode 10): the target torque (0x6071 mapped), whatever the state;
+//   CSP (mode 8):  kp (target - position) - kd velocity + torque offset (0x60B2
+//                  mapped, else 0), limited to +-config.torque_limit_Nm (the
+//                  drive's max torque; `saturated` reports it).
+// Any other mode: 0.
+double drive_torque_at_Nm(const EmulatedDrive& d, double position_rad, double velocity_rad_s,
+                          bool* saturated = nullptr);
+// At the drive's own last written state (what TPDO1 reports).
 double drive_torque_Nm(const EmulatedDrive& d);
 
 // Fault injection (refused while disarmed): silence a drive or latch a fault.

@@ -56,30 +56,43 @@ DriverError write_leg_drives(const LegWiring& leg, const PlantJoints& plant, Cia
 }
 
 DriverError add_leg_torques(const LegWiring& leg, const PlantJoints& plant, const Cia402Emulator& emu,
-                            std::array<double, model::kNumJoints>& joint_torque_Nm) {
-  std::array<double, kLegActuators> motor_tau{};
-  std::array<bool, kLegActuators> present{};
+                            std::array<double, model::kNumJoints>& joint_torque_Nm, std::uint32_t* saturations) {
+  std::array<const EmulatedDrive*, kLegActuators> d{};
   for (int k = 0; k < kLegActuators; ++k) {
     for (int i = 0; i < emu.count; ++i) {
-      if (emu.drives[i].config.node_id == leg.node_ids[k]) {
-        motor_tau[k] = drive_torque_Nm(emu.drives[i]);
-        present[k] = true;
-      }
+      if (emu.drives[i].config.node_id == leg.node_ids[k]) d[k] = &emu.drives[i];
     }
   }
-  if (present[4] != present[5]) return DriverError::kBadConfig;
+  if ((d[4] == nullptr) != (d[5] == nullptr)) return DriverError::kBadConfig;
   const LegTransmission& t = leg.transmission;
   const int j0 = leg.first_joint;
+  // Each drive's torque at the motor state this plant state gives (the drive's
+  // own encoder, not the last TPDO): CST ignores it, CSP closes its loop on it.
+  auto torque = [&](const EmulatedDrive& drive, double pos, double vel) {
+    bool sat = false;
+    const double tau = drive_torque_at_Nm(drive, pos, vel, &sat);
+    if (sat && saturations != nullptr) ++*saturations;
+    return tau;
+  };
   for (int k = 0; k < 4; ++k) {
-    if (present[k]) joint_torque_Nm[j0 + k] += drivers::joint_torque_Nm(t.serial[k], motor_tau[k]);
+    if (d[k] == nullptr) continue;
+    const double tau = torque(*d[k], motor_position_rad(t.serial[k], plant.position_rad[j0 + k]),
+                              motor_velocity_rad_s(t.serial[k], plant.velocity_rad_s[j0 + k]));
+    joint_torque_Nm[j0 + k] += drivers::joint_torque_Nm(t.serial[k], tau);
   }
-  if (!present[4]) return DriverError::kOk;
+  if (d[4] == nullptr) return DriverError::kOk;
   const Vec2 q(plant.position_rad[j0 + 4], plant.position_rad[j0 + 5]);
   Vec2 crank;
   if (!ankle_motor_from_joint_rt(t.ankle, q, crank)) return DriverError::kTransmissionUnsolved;
-  const Vec2 crank_tau(drivers::joint_torque_Nm(t.ankle_motor[0], motor_tau[4]),
-                       drivers::joint_torque_Nm(t.ankle_motor[1], motor_tau[5]));
-  const Vec2 tau = ankle_joint_torque_rt(ankle_jacobian_rt(t.ankle, q, crank), crank_tau);
+  const Mat2 J = ankle_jacobian_rt(t.ankle, q, crank);
+  const Vec2 rate = ankle_motor_velocity_rt(J, Vec2(plant.velocity_rad_s[j0 + 4], plant.velocity_rad_s[j0 + 5]));
+  Vec2 crank_tau;
+  for (int k = 0; k < 2; ++k) {
+    const LinearTransmission& m = t.ankle_motor[k];
+    crank_tau[k] = drivers::joint_torque_Nm(
+        m, torque(*d[4 + k], motor_position_rad(m, crank[k]), motor_velocity_rad_s(m, rate[k])));
+  }
+  const Vec2 tau = ankle_joint_torque_rt(J, crank_tau);
   joint_torque_Nm[j0 + 4] += tau[0];
   joint_torque_Nm[j0 + 5] += tau[1];
   return DriverError::kOk;

@@ -43,7 +43,12 @@ struct LegWiring {
 // on the same emulator (kBadConfig otherwise); kTransmissionUnsolved if the
 // plant's ankle pose has no linkage solution.
 DriverError write_leg_drives(const LegWiring& leg, const PlantJoints& plant, Cia402Emulator& emu);
+// Adds the leg drives' torques, each evaluated at the motor state `plant` gives
+// (CST: the target torque; CSP: the drive's PD on that state, so a simulator
+// calling this at every force evaluation runs the drive loop continuously).
+// `saturations` (optional) counts drives at their torque limit.
 DriverError add_leg_torques(const LegWiring& leg, const PlantJoints& plant, const Cia402Emulator& emu,
-                            std::array<double, model::kNumJoints>& joint_torque_Nm);
+                            std::array<double, model::kNumJoints>& joint_torque_Nm,
+                            std::uint32_t* saturations = nullptr);
 
 }  // namespace kuavo::drivers::emulator

@@ -156,3 +156,54 @@ TEST_F(DriversConfigTest, LoadFromFile) {
 
 }  // namespace
 }  // namespace kuavo::drivers
+
+namespace kuavo::drivers {
+namespace {
+
+// The CSP leg binding's start-up mapping: every leg drive in CSP with its joint gain on the
+// motor side (serial joints kp / r^2: the knee's r = -1 keeps it), the ankle motors sharing
+// k = (kp_pitch + kp_roll) / trace(J^T J) at the zero pose; the shoulders stay CST; the
+// validation refuses CSP on a shoulder and gains the registers cannot hold.
+TEST_F(DriversConfigTest, CspLegDrivesGetMotorSideGainsAndOnlyLegsMayRunCsp) {
+  const std::array<double, kLegActuators> kp{60, 61, 62, 63, 30, 30}, kd{3, 3.1, 3.2, 3.3, 1.5, 1.5};
+  ASSERT_TRUE(use_csp_leg_drives(config, kp, kd, msg)) << msg;
+  ASSERT_EQ(validate_drivers_config(config, report, msg), DriverError::kOk) << msg;
+  std::array<double, 2> tr{};  // trace(J^T J) = sum of J's squared entries, per leg (they differ a little)
+  for (int side = 0; side < 2; ++side) {
+    Vec2 crank;
+    ASSERT_TRUE(ankle_motor_from_joint_rt(config.legs[side].ankle, Vec2::Zero(), crank));
+    const Mat2 J = ankle_jacobian_rt(config.legs[side].ankle, Vec2::Zero(), crank);
+    tr[side] = J(0, 0) * J(0, 0) + J(0, 1) * J(0, 1) + J(1, 0) * J(1, 0) + J(1, 1) * J(1, 1);
+  }
+  int csp = 0;
+  for (const DriveEntry& e : config.drives) {
+    if (e.slot >= 2 * model::kLegJoints) {
+      EXPECT_EQ(e.config.mode, canopen::kModeCyclicSyncTorque) << e.slot;
+      continue;
+    }
+    ++csp;
+    const int k = e.slot % model::kLegJoints;
+    EXPECT_EQ(e.config.mode, canopen::kModeCyclicSyncPosition);
+    if (k < 4) {
+      EXPECT_DOUBLE_EQ(e.config.csp_kp_Nm_per_rad, kp[k]);  // |r| = 1 on the 4Pro (knee -1)
+      EXPECT_DOUBLE_EQ(e.config.csp_kd_Nm_s_per_rad, kd[k]);
+    } else {
+      EXPECT_NEAR(e.config.csp_kp_Nm_per_rad, 60.0 / tr[e.slot / model::kLegJoints], 1e-12);
+      EXPECT_NEAR(e.config.csp_kd_Nm_s_per_rad, 3.0 / tr[e.slot / model::kLegJoints], 1e-12);
+    }
+  }
+  EXPECT_EQ(csp, 12);
+  for (DriveEntry& e : config.drives) {
+    if (e.slot == model::kLeftArmFirst) e.config.mode = canopen::kModeCyclicSyncPosition;
+  }
+  EXPECT_EQ(validate_drivers_config(config, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("CSP is bound for the leg drives only"), std::string::npos) << msg;
+  for (DriveEntry& e : config.drives) {
+    if (e.slot == model::kLeftArmFirst) e.config.mode = canopen::kModeCyclicSyncTorque;
+    if (e.slot == 3) e.config.csp_kd_Nm_s_per_rad = -1.0;
+  }
+  EXPECT_EQ(validate_drivers_config(config, report, msg), DriverError::kBadConfig);
+}
+
+}  // namespace
+}  // namespace kuavo::drivers

@@ -15,14 +15,16 @@
 // lift-off (ankle roll ±90 rad/s at ~125 Hz, then a reference past its stop: fault 31).
 // Tried, none enough: ankle output kd ×0…2, kp ×0…1, all leg kd ×0.3 (fails at 2.2–2.7 s);
 // ankle kp = kd = 0 (gets to 4.2 s, tilting 19°); the RPDO torque applied in the same tick
-// (no change); the PD extrapolated over the sample's age (no change). With the leg PD run
-// by the drive (continuous, as the simulator's drive model and ARCHITECTURE.md's 2 kHz
-// drive loop) the steps are danced. So the stepping test runs with set_leg_pd_in_drive,
-// and its CST twin stays DISABLED_ until the drivers offer a drive-side PD (e.g. CiA 402
-// CSP with torque offset) or a shorter leg loop.
+// (no change); the PD extrapolated over the sample's age (no change). The cure is the CSP
+// binding: the leg drives close the PD in their own loop (gains written by SDO at start-up),
+// the firmware sends target position + torque offset on RPDO1, the emulated drives decode
+// them and the plant runs their loop continuously. The side steps are danced through it;
+// the CST twin stays DISABLED_ as the record, and the test-only shortcut
+// set_leg_pd_in_drive (the joint law copied into the plant) is kept for comparison.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -115,10 +117,12 @@ void start_dance(FirmwareLoop& loop, const planner::MotionPlan& motion) {
 }
 
 // Stand up, ready, dance to the end, finish, damping; every assertion of a good dance.
-void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool leg_pd_in_drive) {
+void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool leg_pd_in_drive,
+                      test_support::LegBinding legs = test_support::LegBinding::kCst) {
   const model::Model& m = test_support::test_model();
-  FirmwareLoop loop;
+  FirmwareLoop loop(FirmwareConfig{}, legs);
   ASSERT_TRUE(loop.ok());
+  ASSERT_EQ(loop.csp_legs(), legs == test_support::LegBinding::kCsp);
   loop.set_leg_pd_in_drive(leg_pd_in_drive);
   ASSERT_TRUE(loop.enable_dance(motion, mpc_stack()));
   ASSERT_TRUE(loop.bring_up()) << to_string(FirmwareLoop::fw().mode.latched);
@@ -216,6 +220,45 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
   EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kNone);
   EXPECT_FALSE(FirmwareLoop::dance().running);
   expect_clean_wire(loop);
+  // The leg drives: what the wire carried and what they did with it.
+  // Torque (CST) or torque offset (CSP) clamped at the motor limit before packing, per leg
+  // slot 0..5 summed over both legs (counted by the drivers, never silent).
+  std::uint64_t refused = 0;
+  std::array<std::uint64_t, 6> clamps{};
+  for (const auto& c : loop.io().canopen) {
+    for (std::size_t i = 0; i < c.st.size(); ++i) {
+      if (c.slot[i] < 2 * model::kLegJoints) clamps[static_cast<std::size_t>(c.slot[i] % model::kLegJoints)] += c.st[i].torque_clamps;
+      refused += c.st[i].refused_commands;
+    }
+  }
+  std::printf("[ figures  ] %s, drives: torque (offset) clamps per leg slot %llu %llu %llu %llu %llu %llu, drive loop at "
+              "its limit in %llu force evaluations, refused targets %llu, CSP holds %llu, binding failures %llu\n",
+              name, static_cast<unsigned long long>(clamps[0]), static_cast<unsigned long long>(clamps[1]),
+              static_cast<unsigned long long>(clamps[2]), static_cast<unsigned long long>(clamps[3]),
+              static_cast<unsigned long long>(clamps[4]), static_cast<unsigned long long>(clamps[5]),
+              static_cast<unsigned long long>(loop.drive_loop_saturations()), static_cast<unsigned long long>(refused),
+              static_cast<unsigned long long>(loop.csp_holds()), static_cast<unsigned long long>(loop.binding_failures()));
+  EXPECT_EQ(refused, 0u);
+  EXPECT_EQ(loop.csp_holds(), 0u);
+  EXPECT_EQ(loop.binding_failures(), 0u);
+  if (legs == test_support::LegBinding::kCsp) {
+    // Every leg drive really runs CSP with the gains from the wire (the emulator's decoded
+    // object dictionary, not the firmware's configuration).
+    int csp_drives = 0;
+    for (std::size_t b = 0; b < loop.buses(); ++b) {
+      const auto* e = loop.drives(b);
+      if (e == nullptr) continue;
+      for (int i = 0; i < e->count; ++i) {
+        const auto& dr = e->drives[i];
+        if (dr.config.node_id > 12) continue;  // shoulder pitch: CST
+        EXPECT_EQ(dr.mode, drivers::canopen::kModeCyclicSyncPosition);
+        EXPECT_EQ(dr.rpdo1_torque_object, drivers::canopen::kObjTorqueOffset);
+        EXPECT_GT(dr.kp_register, 0u);
+        ++csp_drives;
+      }
+    }
+    EXPECT_EQ(csp_drives, 12);
+  }
 }
 
 TEST(FirmwareDance, DancesThroughTheDriversUntilTheFirstStep) {
@@ -226,7 +269,15 @@ TEST(FirmwareDance, DancesTheSideStepsWithThePdInTheLegDrives) {
   dance_end_to_end("FIL dance, 5.95 s, leg PD in the drives", with_side_steps(), true);
 }
 
-// The firmware's leg binding as it is: fails at the first lift-off (see the file comment).
+// The leg drives in CSP: the firmware's leg law reaches the plant only through RPDO1
+// (target position, torque offset) and the position-loop gains written by SDO at start-up;
+// the emulated drives close their loop on the plant continuously.
+TEST(FirmwareDance, DancesTheSideStepsThroughTheCspLegDrives) {
+  dance_end_to_end("FIL dance, 5.95 s, CSP legs", with_side_steps(), false, test_support::LegBinding::kCsp);
+}
+
+// The CST leg binding: fails at the first lift-off (see the file comment). Kept, disabled,
+// as the record of the finding.
 TEST(FirmwareDance, DISABLED_DancesTheSideStepsThroughTheCstLegDrives) {
   dance_end_to_end("FIL dance, 5.95 s, CST legs", with_side_steps(), false);
 }

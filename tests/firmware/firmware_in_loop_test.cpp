@@ -5,6 +5,7 @@
 // emulators decoded, and bounded loops (each run has a fixed tick budget).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -237,6 +238,64 @@ TEST(FirmwareInLoop, OnePercentCorruptedFrames) {
   if (mode == Mode::kDamping) {
     EXPECT_TRUE(test_support::all_damping(loop.command()));
   }
+  expect_clean_wire(loop);
+}
+
+}  // namespace
+}  // namespace kuavo::firmware
+
+namespace kuavo::firmware {
+namespace {
+
+// The CSP leg binding: stands up and stands through it, then a controller fault (NaN on the
+// left knee) is refused in the same cycle and damping reaches the leg drives on the wire:
+// every leg drive decodes a zero torque offset (damping kd 3 = the hip/knee drives' kd, the
+// ankle's feedback is its own) and a target at a position it reported, so the drive's loop
+// only damps. Checked on what the emulated drives decoded, against the plant's motion.
+TEST(FirmwareInLoop, CspLegDrivesStandAndFaultToDampingOnTheWire) {
+  FirmwareLoop loop(FirmwareConfig{}, test_support::LegBinding::kCsp);
+  ASSERT_TRUE(loop.ok());
+  ASSERT_TRUE(loop.csp_legs());
+  ASSERT_TRUE(loop.bring_up(1'000'000'000)) << to_string(FirmwareLoop::fw().mode.latched);
+  EXPECT_LT(loop.tilt_deg(), 5.0);
+  // Standing on the standing controller's stiff gains (400/150), made up from the sample on
+  // the hips and knees, the ankle on its drives' own gains: the plant's legs at the pose.
+  double worst_rad = 0.0;
+  for (int j = 0; j < 2 * model::kLegJoints; ++j) {
+    worst_rad = std::max(worst_rad, std::abs(loop.plant().truth().q[7 + j] - loop.command().joints[j].position_ref_rad));
+  }
+  std::printf("[ figures  ] CSP legs standing: tilt %.2f deg, base z %.3f m, worst leg joint off its reference %.4f rad\n",
+              loop.tilt_deg(), loop.plant().truth().q[2], worst_rad);
+  EXPECT_LT(worst_rad, 0.01);
+  const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) {
+    l.controller().joint = 3;
+    l.controller().field = &hal::JointCommand::torque_ff_Nm;
+    l.controller().value = std::numeric_limits<double>::quiet_NaN();
+  });
+  report("CSP legs: NaN command", loop, t);
+  EXPECT_EQ(t, 0);
+  EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kCommandNonFinite);
+  loop.tick();  // the damping frames sent at the fault are decoded at this tick's start
+  int leg_drives = 0;
+  for (std::size_t b = 0; b < loop.buses(); ++b) {
+    const emu::Cia402Emulator* e = loop.drives(b);
+    if (e == nullptr) continue;
+    for (int i = 0; i < e->count; ++i) {
+      const emu::EmulatedDrive& d = e->drives[i];
+      if (d.config.mode != drivers::canopen::kModeCyclicSyncPosition) continue;
+      ++leg_drives;
+      EXPECT_EQ(d.target_torque_permille, 0) << "node " << int(d.config.node_id);
+      // The target is where the drive was one tick ago: within a tick's motion (+ a count).
+      const double target = drivers::canopen::counts_to_rad(d.config, d.target_position_counts);
+      EXPECT_LE(std::abs(target - d.position_rad), std::abs(d.velocity_rad_s) * 4e-3 + 1e-4) << "node " << int(d.config.node_id);
+    }
+  }
+  EXPECT_EQ(leg_drives, 12);
+  for (const auto& c : loop.io().canopen) {
+    for (const auto& st : c.st) EXPECT_EQ(st.refused_commands, 0u);
+  }
+  EXPECT_EQ(loop.csp_holds(), 0u);
+  expect_standing_binding(loop);
   expect_clean_wire(loop);
 }
 

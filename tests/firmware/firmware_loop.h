@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/wbc/wbc_config.h"
 #include "drivers/emulator/bus_fault.h"
 #include "drivers/emulator/plant_binding.h"
 #include "firmware/control_cycle.h"
@@ -77,13 +78,57 @@ struct WireCheck {
   std::string first_bad;
 };
 
+// The leg drives' CSP loop, closed by the emulated drives on the plant's state at every
+// force evaluation (continuous, as a drive's fast loop): the targets, offsets and gains are
+// those the emulator decoded from the wire (RPDO1, SDO 0x2010).
+class LegDriveLoop : public sim::JointTorqueSource {
+ public:
+  LegDriveLoop(const std::array<emu::LegWiring, 2>& legs, const std::vector<std::unique_ptr<emu::Cia402Emulator>>& drives)
+      : legs_(legs), drives_(drives) {}
+  void add_joint_torques(const std::array<double, model::kNumJoints>& q, const std::array<double, model::kNumJoints>& v,
+                         std::array<double, model::kNumJoints>& tau) const noexcept override {
+    emu::PlantJoints pj;
+    pj.position_rad = q;
+    pj.velocity_rad_s = v;
+    for (const auto& e : drives_) {
+      if (!e) continue;
+      for (const auto& leg : legs_) {
+        if (emu::add_leg_torques(leg, pj, *e, tau, &saturations) != d::DriverError::kOk) ++failures;
+      }
+    }
+  }
+  mutable std::uint64_t failures = 0;  // force evaluations at an unsolvable ankle
+  mutable std::uint32_t saturations = 0;  // drive-evaluations at the drive's torque limit
+
+ private:
+  const std::array<emu::LegWiring, 2>& legs_;
+  const std::vector<std::unique_ptr<emu::Cia402Emulator>>& drives_;
+};
+
+enum class LegBinding { kCst, kCsp };
+inline constexpr double kAnkleMotorMax_Nm = 18.0 * 2.1;  // CK: max current x torque constant
+
 class FirmwareLoop {
  public:
-  explicit FirmwareLoop(const FirmwareConfig& fw_config = FirmwareConfig{}) {
+  explicit FirmwareLoop(const FirmwareConfig& fw_config = FirmwareConfig{}, LegBinding legs = LegBinding::kCst) {
     const model::Model& m = test_model();
     config_ = d::default_drivers_config(m);
     d::BusLoadReport report;
     std::string msg;
+    if (legs == LegBinding::kCsp) {
+      // The drives hold the WBC's output gains, the law the dance commands.
+      const wbc::WbcConfig w;
+      csp_legs_ = d::use_csp_leg_drives(config_, w.leg_kp, w.leg_kd, msg);
+      EXPECT_TRUE(csp_legs_) << msg;
+      // The ankle motors clamp at the CK motor's electrical maximum (18 A x 2.1 N m/A,
+      // FACTS.md §5.1) instead of the default 27 N m (kuavo.json's ankle peak, applied per
+      // motor): through the linkage roll = 0.46 (tau_A - tau_B), so two 27 N m motors give
+      // less roll torque than the model's 27 N m per ankle joint the WBC plans with, and the
+      // side steps fail (4.2 s) on that clamp. firmware/README.md, known limits.
+      for (d::DriveEntry& e : config_.drives) {
+        if (e.slot < 2 * model::kLegJoints && e.slot % model::kLegJoints >= 4) e.config.torque_limit_Nm = kAnkleMotorMax_Nm;
+      }
+    }
     ok_ = d::validate_drivers_config(config_, report, msg) == d::DriverError::kOk;
     EXPECT_TRUE(ok_) << msg;
     io_ = std::make_unique<RobotIo>();
@@ -168,8 +213,8 @@ class FirmwareLoop {
     return true;
   }
   void stop_planner(bool stopped = true) { planner_stopped_ = stopped; }
-  // A binding the drivers do not offer yet (see advance_plant): legs driven by a PD law the
-  // drive runs itself rather than by the firmware's 500 Hz CST torque.
+  // Test-only shortcut, kept for comparison with the CSP binding (LegBinding::kCsp): the
+  // firmware's joint law copied into the plant's drive model, bypassing the wire.
   void set_leg_pd_in_drive(bool on) { leg_pd_in_drive_ = on; }
   // From now on every plan published carries a NaN (in one knot's joint reference); once:
   // only the next one.
@@ -195,7 +240,14 @@ class FirmwareLoop {
   bool plant_failed() const { return plant_failed_; }
   void stop_imu() { imu_stopped_ = true; }  // the IMU stream ends (cable, device)
   hal::TimeNs ready_at_ns() const { return ready_at_ns_; }
-  std::uint64_t binding_failures() const { return binding_failures_; }
+  std::uint64_t binding_failures() const { return binding_failures_ + leg_loop_.failures; }
+  bool csp_legs() const { return csp_legs_; }
+  std::uint64_t drive_loop_saturations() const { return leg_loop_.saturations; }
+  std::uint64_t csp_holds() const {
+    std::uint64_t n = 0;
+    for (const auto& c : io_->canopen) n += c.csp_holds;
+    return n;
+  }
 
   // One 2 ms tick of the whole loop.
   void tick(CycleInputs in = {}) {
@@ -249,6 +301,7 @@ class FirmwareLoop {
       robot_send_rt(*io_, cycle_, out_, now_);
       allocations_ += trap.count();
     }
+
     const rtos::TimeNs wall1_ns = rtos::now_ns();
     if (FirmwareLoop::fw().mode.mode == Mode::kDance) cycle_us_.push_back(1e-3 * static_cast<double>(wall1_ns - wall0_ns));
     // The planning task, released on its period with the latest request.
@@ -341,7 +394,10 @@ class FirmwareLoop {
         }
         continue;
       }
-      for (const auto& leg : legs_) binding_failures_ += emu::add_leg_torques(leg, pj, *drives_[b], tau) != d::DriverError::kOk;
+      // CSP legs: the plant runs the drives' loop itself (leg_loop_), nothing held here.
+      if (!csp_legs_) {
+        for (const auto& leg : legs_) binding_failures_ += emu::add_leg_torques(leg, pj, *drives_[b], tau) != d::DriverError::kOk;
+      }
       for (int i = 0; i < drives_[b]->count; ++i) {
         const int slot = io_->canopen[b].slot[i];
         if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) tau[slot] += emu::drive_torque_Nm(drives_[b]->drives[i]);
@@ -352,7 +408,8 @@ class FirmwareLoop {
       if (!drives_[b]) continue;
       for (int i = 0; i < drives_[b]->count; ++i) {
         for (int j : drive_joints(b, i)) {
-          applied.joints[j] = hal::JointCommand{};
+          applied.joints[j] = hal::JointCommand{};  // kDisabled: CSP leg torques come from leg_loop_
+          if (csp_legs_ && j < 2 * model::kLegJoints) continue;
           applied.joints[j].mode = hal::JointMode::kPdTorque;
           applied.joints[j].torque_ff_Nm = tau[j];
         }
@@ -361,10 +418,11 @@ class FirmwareLoop {
     if (leg_pd_in_drive_) {
       // The leg drives as impedance drives: the firmware's joint PD law, run continuously by
       // the drive (as the sim's drive model does), instead of the CST torque the firmware
-      // evaluated from last tick's sample. Not on the wire yet: the drivers speak CST only.
+      // evaluated from last tick's sample. Bypasses the wire: the CSP binding is the real one.
       for (int j = 0; j < 2 * model::kLegJoints; ++j) applied.joints[j] = out_.joints[j];
     }
     plant_->set_command(applied);
+    plant_->set_torque_source(csp_legs_ ? &leg_loop_ : nullptr);
     if (plant_->advance(1e-9 * static_cast<double>(kTick_ns)) != sim::PlantError::kOk) plant_failed_ = true;
   }
 
@@ -443,6 +501,8 @@ class FirmwareLoop {
   bool planner_stopped_ = false;
   int corrupt_ = 0;
   bool leg_pd_in_drive_ = false;
+  bool csp_legs_ = false;
+  LegDriveLoop leg_loop_{legs_, drives_};
   std::size_t planner_allocations_ = 0;
   std::vector<double> cycle_us_, plan_ms_;
 };

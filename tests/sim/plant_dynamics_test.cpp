@@ -3,6 +3,7 @@
 // two as CVODE's right-hand side over a trajectory through touchdown.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "controllers/dynamics/rigid_body.h"
@@ -123,6 +124,54 @@ TEST(PlantDynamics, LiveCrossCheckRunsAndAgrees) {
   for (int k = 0; k < 150; ++k) ASSERT_EQ(plant.advance(2e-3), sim::PlantError::kOk) << plant.last_error();
   EXPECT_GT(plant.max_derivative_mismatch(), 0.0) << "never checked";
   EXPECT_LE(plant.max_derivative_mismatch(), kDerivativeTolerance);
+}
+
+// A torque source (the firmware-in-the-loop drives' continuous loop) enters every force
+// evaluation: a source running the same PD law as a JointCommand gives the same trajectory
+// as the command, and the derivative still matches Simbody's with the source in both.
+class HoldPd : public sim::JointTorqueSource {
+ public:
+  explicit HoldPd(const model::Model& m) : m_(m) {}
+  void add_joint_torques(const std::array<double, model::kNumJoints>& q, const std::array<double, model::kNumJoints>& v,
+                         std::array<double, model::kNumJoints>& tau) const noexcept override {
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const double peak = m_.limits.peak_torque_Nm[j];  // the drives clip there too
+      tau[j] += std::clamp(200.0 * (0.0 - q[j]) + 5.0 * (0.0 - v[j]), -peak, peak);
+    }
+  }
+
+ private:
+  const model::Model& m_;
+};
+
+TEST(PlantDynamics, TorqueSourceActsLikeTheSameCommandLaw) {
+  const model::Model m = robot();
+  sim::PlantConfig cfg;
+  cfg.relative_tolerance = 1e-8;
+  cfg.absolute_tolerance = 1e-9;
+  sim::Plant a(m, cfg), b(m, cfg);
+  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
+  q[2] += 0.01;
+  q[3] = 0.03;
+  q.segment<4>(3).normalize();
+  hal::CommandFrame hold;
+  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  const HoldPd source(m);
+  a.reset(q, dynamics::VelocityVector::Zero());
+  a.set_command(hold);
+  b.reset(q, dynamics::VelocityVector::Zero());
+  b.set_command(hal::CommandFrame{});  // all disabled: the source alone drives b
+  b.set_torque_source(&source);
+  EXPECT_LE(b.derivative_mismatch(), kDerivativeTolerance);
+  for (int k = 0; k < 50; ++k) {  // 0.1 s through touchdown
+    ASSERT_EQ(a.advance(2e-3), sim::PlantError::kOk) << a.last_error();
+    ASSERT_EQ(b.advance(2e-3), sim::PlantError::kOk) << b.last_error();
+  }
+  EXPECT_LE(b.derivative_mismatch(), kDerivativeTolerance);
+  EXPECT_GT((a.truth().q - q).cwiseAbs().maxCoeff(), 1e-3) << "the robot must have moved";
+  EXPECT_LE((a.truth().q - b.truth().q).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LE((a.truth().v - b.truth().v).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_LE((a.truth().joint_torque_Nm - b.truth().joint_torque_Nm).cwiseAbs().maxCoeff(), 1e-3);
 }
 
 }  // namespace
