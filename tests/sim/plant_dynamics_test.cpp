@@ -78,6 +78,21 @@ void expect_derivatives_agree(const sim::GroundParams& ground) {
 TEST(PlantDynamics, DerivativeMatchesSimbodyOnTheFloor) { expect_derivatives_agree(sim::kFloor); }
 TEST(PlantDynamics, DerivativeMatchesSimbodyOnCarpet) { expect_derivatives_agree(sim::kCarpet); }
 
+// Neutral pose 1 cm up and rolled a little, to be dropped; and every drive holding zero with
+// kp 200, kd 5.
+dynamics::ConfigVector dropped_pose(const model::Model& m) {
+  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
+  q[2] += 0.01;
+  q[3] = 0.03;
+  q.segment<4>(3).normalize();
+  return q;
+}
+hal::CommandFrame holding_drives() {
+  hal::CommandFrame hold;
+  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  return hold;
+}
+
 // The same CVODE run with either derivative: dropped with the drives holding,
 // through touchdown, at a tight tolerance.
 TEST(PlantDynamics, CvodeTrajectoryMatchesSimbodyDerivative) {
@@ -87,12 +102,8 @@ TEST(PlantDynamics, CvodeTrajectoryMatchesSimbodyDerivative) {
   a_cfg.absolute_tolerance = b_cfg.absolute_tolerance = 1e-9;
   b_cfg.derivatives = sim::DerivativeEngine::kSimbody;
   sim::Plant a(m, a_cfg), b(m, b_cfg);
-  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
-  q[2] += 0.01;
-  q[3] = 0.03;
-  q.segment<4>(3).normalize();
-  hal::CommandFrame hold;
-  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  const dynamics::ConfigVector q = dropped_pose(m);
+  const hal::CommandFrame hold = holding_drives();
   for (sim::Plant* p : {&a, &b}) {
     p->reset(q, dynamics::VelocityVector::Zero());
     p->set_command(hold);
@@ -117,10 +128,8 @@ TEST(PlantDynamics, LiveCrossCheckRunsAndAgrees) {
   sim::Plant plant(m, cfg);
   dynamics::ConfigVector q = dynamics::neutral_configuration(m);
   q[2] += 0.005;
-  hal::CommandFrame hold;
-  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
   plant.reset(q, dynamics::VelocityVector::Zero());
-  plant.set_command(hold);
+  plant.set_command(holding_drives());
   for (int k = 0; k < 150; ++k) ASSERT_EQ(plant.advance(2e-3), sim::PlantError::kOk) << plant.last_error();
   EXPECT_GT(plant.max_derivative_mismatch(), 0.0) << "never checked";
   EXPECT_LE(plant.max_derivative_mismatch(), kDerivativeTolerance);
@@ -150,12 +159,8 @@ TEST(PlantDynamics, TorqueSourceActsLikeTheSameCommandLaw) {
   cfg.relative_tolerance = 1e-8;
   cfg.absolute_tolerance = 1e-9;
   sim::Plant a(m, cfg), b(m, cfg);
-  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
-  q[2] += 0.01;
-  q[3] = 0.03;
-  q.segment<4>(3).normalize();
-  hal::CommandFrame hold;
-  for (auto& j : hold.joints) j = {hal::JointMode::kPdTorque, 0.0, 0.0, 0.0, 200.0, 5.0};
+  const dynamics::ConfigVector q = dropped_pose(m);
+  const hal::CommandFrame hold = holding_drives();
   const HoldPd source(m);
   a.reset(q, dynamics::VelocityVector::Zero());
   a.set_command(hold);
