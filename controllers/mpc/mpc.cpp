@@ -169,13 +169,18 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
     const int n = contacts_of_foot(knot.in_contact, foot);
     for (int c = first; c < first + kPointsPerFoot; ++c) {
       if (knot.in_contact[c]) continue;
+      // Force fixed at zero (mpc.h): δf = −f̄. Its R block is diagonal off contact (no friction
+      // barrier) and S is zero, so only B couples it: folded into b, then zeroed. This runs
+      // after the stage's dynamics and cost; the next build rewrites B's rows, R's diagonal
+      // and r.
       for (int i = 0; i < 3; ++i) {
-        st.C.row(rows).setZero();
-        st.D.row(rows).setZero();
-        st.D(rows, kUForces + 3 * c + i) = 1.0;
-        st.e[rows] = -u[kUForces + 3 * c + i];
-        violation = std::max(violation, std::abs(st.e[rows]));
-        ++rows;
+        const int col = kUForces + 3 * c + i;
+        const double step = -u[col];
+        st.b.noalias() += step * st.B.col(col);
+        st.B.col(col).setZero();
+        st.R(col, col) = 1.0;
+        st.r[col] = -step;
+        violation = std::max(violation, std::abs(step));
       }
     }
     if (n > 0) {

@@ -20,7 +20,11 @@
 //     - 2 corners in contact (toe or heel phases): the velocity of their centroid = 0 and the
 //       foot's angular velocity across the line through them = 0 (5 rows: it may roll about it).
 //     - 1 corner in contact: its velocity = 0 (3 rows).
-//     - each corner not in contact: force = 0 (3 rows).
+//     - each corner not in contact: force = 0, not as equality rows but by fixing those inputs:
+//       δf = −f̄ exactly (B's 3 columns folded into b then zeroed, R_ii = 1, r_i = f̄_i: the
+//       Riccati's pivot for each is an exact 1, so the solve returns δf = −f̄ bit for bit). As
+//       rows they were 12 of a swing stage's 21 (and 30 of a flight stage's), doubling the
+//       Riccati's ν block and the factor storage's capacity (kMaxEqualities 30 → 12).
 //     - a foot with no corner in contact: normal-velocity rows (OCS2) on 3 of its 4 corners,
 //       v_z = v_z,ref + k_swing (z_ref − z); the 4th follows by rigidity. x-y is soft only
 //       (weight_swing_xy on the corners' x-y, and the leg joint cost), so the optimizer may
@@ -64,7 +68,7 @@
 namespace kuavo::mpc {
 
 inline constexpr int kMaxStages = 70;        // 1.4 s at 0.02 s
-inline constexpr int kMaxEqualities = 30;    // both feet in swing: 2 × (4 × 3 zero force + 3 normal velocity)
+inline constexpr int kMaxEqualities = 12;    // both feet flat: 2 × 6 twist rows (a swing foot has 3)
                                              // (≥ 2 × (2 × 3 + 5) for two-corner contacts)
 inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s at dt 0.02)
 

@@ -1,4 +1,5 @@
-// Stepping in place: the swing rows (zero force, normal velocity) and the shifted warm start.
+// Stepping in place: the swing rows (normal velocity), the swing corners' fixed zero force and
+// the shifted warm start.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -153,7 +154,8 @@ namespace {
 
 // The equality rows as the QP holds them (C, D, e of a stage), against an independent
 // evaluation with the rigid-body library's world kinematics, differentiated by central
-// differences: stance foot twist rows, swing zero-force and normal-velocity rows.
+// differences: stance foot twist rows, swing normal-velocity rows. (The swing corners' zero
+// force is not a row: those inputs are fixed, checked in the test below.)
 struct RowOracle {
   MpcFixture* f;
   const planner::PlanKnot* knot;
@@ -178,10 +180,6 @@ struct RowOracle {
       const int first = 4 * foot;
       int n = 0;
       for (int c = first; c < first + 4; ++c) n += knot->in_contact[c] ? 1 : 0;
-      for (int c = first; c < first + 4; ++c) {
-        if (knot->in_contact[c]) continue;
-        for (int i = 0; i < 3; ++i) out[n_rows++] = u[3 * c + i];
-      }
       if (n == 4) {
         dynamics::Vec3 centre = dynamics::Vec3::Zero();
         for (int c = first; c < first + 4; ++c) centre += dynamics::frame_position(m, data, c) / 4.0;
@@ -244,8 +242,8 @@ TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
     oracle.head = f.ws.head_rad[k];
     const Eigen::VectorXd value = oracle.rows(f.ws.x[k], f.ws.u[k]);
     ASSERT_EQ(value.size(), st.num_eq) << k;
-    swing_stages += st.num_eq == 21 ? 1 : 0;
-    partial_stages += st.num_eq == 17 ? 1 : 0;  // 6 zero-force + 3 centroid + 2 across the toe line + 6 twist
+    swing_stages += st.num_eq == 9 ? 1 : 0;     // 3 normal velocity + 6 twist
+    partial_stages += st.num_eq == 11 ? 1 : 0;  // 3 centroid + 2 across the toe line + 6 twist
     const int ne = st.num_eq;
     EXPECT_LT((value + st.e.head(ne)).cwiseAbs().maxCoeff(), 1e-9) << k;
     Eigen::MatrixXd cx(ne, mpc::kNx), du(ne, mpc::kNu);
@@ -338,13 +336,71 @@ TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
       um[i] -= kStep;
       gu[i] = (stage_cost(f, k, f.ws.x[k], up, data) - stage_cost(f, k, f.ws.x[k], um, data)) / (2 * kStep);
     }
+    // A swing corner's force is a fixed input (mpc.h): its r entry is the fixing term, not the
+    // cost gradient; checked in SwingForcesAreFixedInputsWithExactZeroResult.
+    mpc::InputVector r = st.r;
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      if (!f.window.knots[k].in_contact[c]) {
+        r.segment<3>(3 * c).setZero();
+        gu.segment<3>(3 * c).setZero();
+      }
+    }
     const double ex = (st.q - gx).cwiseAbs().maxCoeff() / std::max(1e-3, gx.cwiseAbs().maxCoeff());
-    const double eu = (st.r - gu).cwiseAbs().maxCoeff() / std::max(1e-3, gu.cwiseAbs().maxCoeff());
+    const double eu = (r - gu).cwiseAbs().maxCoeff() / std::max(1e-3, gu.cwiseAbs().maxCoeff());
     std::printf("stage %d: gradient relative error x %.1e (max %.2e), u %.1e (max %.2e)\n", k, ex, gx.cwiseAbs().maxCoeff(), eu,
                 gu.cwiseAbs().maxCoeff());
     EXPECT_LT(ex, 1e-5) << k;
     EXPECT_LT(eu, 1e-5) << k;
   }
+}
+
+// The swing corners' zero force as fixed inputs: in the QP their B columns are zero (folded into
+// b: the dynamics' constant term equals the unfixed one plus B's columns times the step), R's
+// row and column are the unit vector, r = f̄; after the solve every swing corner's force is
+// exactly zero (f̄ + δf, δf = −f̄ bit for bit) while stance corners carry the weight.
+TEST(MpcStepping, SwingForcesAreFixedInputsWithExactZeroResult) {
+  MpcFixture& f = mpc_fixture();
+  stepping_window(f, 0, SteppingPlan{});
+  dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
+  v0[1] = 0.1;
+  for (int it = 0; it < 2; ++it) mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan);
+  // A warm start whose swing forces are not zero: the fixed step must cancel them.
+  for (int k = 0; k <= f.ws.horizon; ++k) f.ws.u[k].segment<3 * mpc::kNumPoints>(0).array() += 0.5;
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
+  int fixed = 0;
+  for (int k = 0; k < f.ws.horizon; ++k) {
+    const auto& st = f.ws.qp.stages[k];
+    // The unfixed dynamics from the model, as mpc_build_qp_rt forms them before fixing.
+    static mpc::CentroidalPoint point;
+    mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], point);
+    mpc::StateVector b = f.ws.x[k] + f.config.dt_s * point.f - f.ws.x[k + 1];
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      if (f.window.knots[k].in_contact[c]) continue;
+      for (int i = 0; i < 3; ++i) {
+        const int col = 3 * c + i;
+        b += f.config.dt_s * point.fu.col(col) * (-f.ws.u[k][col]);
+        EXPECT_EQ(st.B.col(col).cwiseAbs().maxCoeff(), 0.0) << k;
+        EXPECT_EQ(st.R(col, col), 1.0) << k;
+        EXPECT_EQ(st.R.row(col).cwiseAbs().sum(), 1.0) << k;
+        EXPECT_EQ(st.r[col], f.ws.u[k][col]) << k;
+        ++fixed;
+      }
+    }
+    EXPECT_LT((st.b - b).cwiseAbs().maxCoeff(), 1e-12) << k;
+  }
+  EXPECT_GT(fixed, 0);
+  ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), mpc::MpcStatus::kOk);
+  double stance_fz = 0.0;
+  for (int k = 0; k < f.ws.horizon; ++k) {
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      if (!f.window.knots[k].in_contact[c]) {
+        EXPECT_EQ(f.ws.u[k].segment<3>(3 * c).cwiseAbs().maxCoeff(), 0.0) << k << " " << c;
+      } else if (k == 0) {
+        stance_fz += f.ws.u[k][3 * c + 2];
+      }
+    }
+  }
+  EXPECT_GT(stance_fz, 0.5 * f.model.total_mass_kg * model::kGravity_m_s2);
 }
 
 }  // namespace
