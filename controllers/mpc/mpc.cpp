@@ -414,7 +414,7 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.qp.horizon = ws.horizon;
   ws.qp.x_initial.setZero();
   ws.qp_settings = qp::OcpSettings{};
-  ws.qp_settings.lq_residual = false;  // mpc_solve_qp_rt checks the step finite; no one reads it
+  ws.qp_settings.lq_residual = false;  // no one reads it; the solver still checks the step finite
   ws.initialized = true;
 }
 
@@ -556,9 +556,7 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
 MpcStatus mpc_solve_qp_rt(MpcWorkspace& ws) {
   const int T = ws.horizon;
   ws.qp_status = qp::solve_ocp_qp(ws.qp, ws.qp_settings, ws.qp_workspace, ws.solution);
-  bool finite = true;
-  for (int k = 0; k <= T && finite; ++k) finite = ws.solution.x[k].allFinite() && ws.solution.u[k].allFinite();
-  if (ws.qp_status != qp::QpStatus::kSolved || !finite) {
+  if (ws.qp_status != qp::QpStatus::kSolved) {  // kSolved: x and u finite (ocp_solver.h)
     ws.warm = false;
     return MpcStatus::kQpFailed;
   }

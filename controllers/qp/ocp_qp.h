@@ -69,7 +69,7 @@ struct OcpSettings {
   bool warm_start = false;
   // Problems without inequalities (one factorization and one solve): whether to compute the
   // KKT residual of the result, one more pass over all the data (~7 % of an MPC iteration at
-  // 1.2 s). false: sol.residual = −1 (not computed) and the result is only checked finite
+  // 1.2 s). false: sol.residual = −1 (not computed); the result is checked finite either way
   // (kBadInput otherwise). The MPC's real-time iteration sets false: nothing in the loop reads
   // the residual, and its RTI QPs are checked against an independent KKT residual in the tests.
   bool lq_residual = true;

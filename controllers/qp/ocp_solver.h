@@ -201,11 +201,14 @@ QpStatus solve_ocp_qp(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpSettings& set
     copy_vectors(qp, ws.vec);
     const QpStatus f = riccati_factor_solve(qp, ws.riccati, ws.vec, sol);
     if (f != QpStatus::kSolved) return finish(f);
+    // kSolved promises a finite x and u (data with NaN or ∞ get past the factorization's pivot
+    // tests); callers need not check again.
+    bool finite = true;
+    for (int k = 0; k <= T && finite; ++k) finite = sol.x[k].allFinite() && sol.u[k].allFinite();
+    if (!finite) return finish(QpStatus::kBadInput);
     if (!settings.lq_residual) {
       sol.residual = -1.0;  // not computed
-      bool finite = true;
-      for (int k = 0; k <= T && finite; ++k) finite = sol.x[k].allFinite() && sol.u[k].allFinite();
-      return finish(finite ? QpStatus::kSolved : QpStatus::kBadInput);
+      return finish(QpStatus::kSolved);
     }
     sol.residual = linearize(qp, ws, sol);
     if (!std::isfinite(sol.residual)) return finish(QpStatus::kBadInput);
