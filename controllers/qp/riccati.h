@@ -65,6 +65,10 @@ struct RiccatiStage {
   Eigen::Matrix<double, NX, 1> p = Eigen::Matrix<double, NX, 1>::Zero();
   Eigen::Matrix<double, NU, 1> k0 = Eigen::Matrix<double, NU, 1>::Zero();   // Lu⁻¹ qu
   Eigen::Matrix<double, NC, 1> gm = Eigen::Matrix<double, NC, 1>::Zero();   // Lm⁻¹γ
+  // Inverses of L's 4×4 diagonal blocks in the u and ν columns and their transposes
+  // (kernels::invert_diag4; block b at 16·b), for the vector pass's triangular solves.
+  alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinv{};
+  alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinvT{};
   // Barrier terms set by the caller: Hessian weight W = diag(w) and linear term Gᵀρ.
   Eigen::Matrix<double, NG, 1> w = Eigen::Matrix<double, NG, 1>::Zero();
   Eigen::Matrix<double, NG, 1> rho = Eigen::Matrix<double, NG, 1>::Zero();
@@ -314,9 +318,10 @@ void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, 
 }
 
 // Signed left-looking Cholesky of the u and ν columns (see the file comment), including their
-// x rows. Returns kNotConvex / kRankDeficient / kSolved.
+// x rows. Returns kNotConvex / kRankDeficient / kSolved. With dinv, dinvT: also the inverses
+// of the factored columns' 4×4 diagonal blocks (kernels::invert_diag4) for the vector pass.
 template <int NX, int NU, int NC>
-QpStatus factor_stage(double* L, int ne, int ne_padded) {
+QpStatus factor_stage(double* L, int ne, int ne_padded, double* dinv = nullptr, double* dinvT = nullptr) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
   using kernels::Update;
@@ -336,6 +341,8 @@ QpStatus factor_stage(double* L, int ne, int ne_padded) {
     if (!kernels::factor_panel4(L, kLd, j, row_end, kXo, kLd, input ? 1.0 : -1.0)) {
       return input ? QpStatus::kNotConvex : QpStatus::kRankDeficient;
     }
+    // Padding pivots are identity (u) and −1 pivots (ν, factored as 1): whole 4×4 blocks.
+    if (dinv != nullptr) kernels::invert_diag4(L, kLd, j, 4, dinv + 4 * j, dinvT + 4 * j);
   }
   if (ne > 0) {
     // Relative pivot test: D rows (nearly) dependent in the Quu⁻¹ metric.
@@ -477,7 +484,7 @@ void backward_vector_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<
     }
   }
   w.k0 = ws.qu;
-  kernels::trsv_lower(NU, L, kLd, w.k0.data());                                        // Lu⁻¹qu
+  kernels::trsv_lower(NU, L, kLd, w.dinv.data(), w.k0.data());                         // Lu⁻¹qu
   kernels::gemv_n<Update::kSub>(NX, NU, L + kXo, kLd, w.k0.data(), w.p.data());        // − X k0
   if constexpr (NC > 0) {
     const int ne = s.num_eq;
@@ -485,7 +492,7 @@ void backward_vector_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<
       double* gm = w.gm.data();
       for (int i = 0; i < ne; ++i) gm[i] = -vec.e[k](i);
       kernels::gemv_n<Update::kSub>(ne, NU, L + kUp, kLd, w.k0.data(), gm);             // − Yᵀk0
-      kernels::trsv_lower(ne, L + kUp * (kLd + 1), kLd, gm);
+      kernels::trsv_lower(ne, L + kUp * (kLd + 1), kLd, w.dinv.data() + 4 * kUp, gm);
       kernels::gemv_n<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, gm, w.p.data());  // + (Lm⁻¹G)ᵀ gm
     }
   }
@@ -556,7 +563,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);
 
-    const QpStatus f = factor_stage<NX, NU, NC>(L, ne, ne_padded);
+    const QpStatus f = factor_stage<NX, NU, NC>(L, ne, ne_padded, w.dinv.data(), w.dinvT.data());
     if (f != QpStatus::kSolved) return f;
     w.p_factored = factor_cost_to_go<NX, NU, NC>(L, ne_padded);
     if (!w.p_factored) {
@@ -594,12 +601,12 @@ void forward_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N
         double* nu = sol.nu[k].data();
         for (int i = 0; i < ne; ++i) nu[i] = w.gm(i);
         kernels::gemv_t<Update::kSub>(NX, ne, L + kXo + kUp * kLd, kLd, sol.x[k].data(), nu);
-        kernels::trsv_lower_trans(ne, L + kUp * (kLd + 1), kLd, nu);
+        kernels::trsv_lower_trans(ne, L + kUp * (kLd + 1), kLd, w.dinvT.data() + 4 * kUp, nu);
         kernels::gemv_t<Update::kAdd>(ne, NU, L + kUp, kLd, nu, ws.t.data());
       }
     }
     sol.u[k] = -ws.t;
-    kernels::trsv_lower_trans(NU, L, kLd, sol.u[k].data());
+    kernels::trsv_lower_trans(NU, L, kLd, w.dinvT.data(), sol.u[k].data());
     sol.x[k + 1] = vec.b[k];
     kernels::gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data());
     kernels::gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data());

@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/LU>
 #include <memory>
 #include <cmath>
 #include <vector>
@@ -190,11 +191,24 @@ TEST(RiccatiKernels, TriangularSolvesAndProductsMatchEigen) {
     for (int j = 0; j < n; ++j) L(j, j) = 2.0 + std::abs(L(j, j));  // well conditioned
     const auto Lt = L.topRows(n).triangularView<Eigen::Lower>();
     const Eigen::VectorXd b = random_matrix(n, 1, rng);
+    // The solves take the inverses of the 4×4 diagonal blocks (the last one jb×jb, padded
+    // with the identity): check those against Eigen's inverse first.
+    std::vector<double> binv(16 * ((n + 3) / 4)), binvt(binv.size());
+    for (int j = 0; j < n; j += 4) {
+      const int jb = std::min(4, n - j);
+      kernels::invert_diag4(L.data(), ld, j, jb, binv.data() + 4 * j, binvt.data() + 4 * j);
+      const Eigen::Map<const Eigen::Matrix4d> X(binv.data() + 4 * j), Xt(binvt.data() + 4 * j);
+      Eigen::Matrix4d expected = Eigen::Matrix4d::Identity();
+      expected.topLeftCorner(jb, jb) =
+          MatrixXd(L.block(j, j, jb, jb).triangularView<Eigen::Lower>()).inverse();
+      EXPECT_LE((X - expected).cwiseAbs().maxCoeff(), 1e-14) << n << " block " << j;
+      EXPECT_EQ(Xt, X.transpose());
+    }
     Eigen::VectorXd x = b;
-    kernels::trsv_lower(n, L.data(), ld, x.data());
+    kernels::trsv_lower(n, L.data(), ld, binv.data(), x.data());
     EXPECT_LE((Lt * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
     x = b;
-    kernels::trsv_lower_trans(n, L.data(), ld, x.data());
+    kernels::trsv_lower_trans(n, L.data(), ld, binvt.data(), x.data());
     EXPECT_LE((Lt.transpose() * x - b).cwiseAbs().maxCoeff(), 1e-12) << n;
     // The triangular products read the 4×4 diagonal chunks whole: zeros above the diagonal there.
     for (int j = 0; j < n; ++j) {
@@ -233,7 +247,15 @@ void check_stage(int ne, std::mt19937_64& rng) {
   riccati_detail::FactorMap<NX, NU, NC> K(w->L.data());
   const int ne_padded = kernels::round_up4(ne);
   riccati_detail::load_stage(s, ne_padded, K);
-  ASSERT_EQ((riccati_detail::factor_stage<NX, NU, NC>(w->L.data(), ne, ne_padded)), QpStatus::kSolved);
+  ASSERT_EQ((riccati_detail::factor_stage<NX, NU, NC>(w->L.data(), ne, ne_padded, w->dinv.data(), w->dinvT.data())),
+            QpStatus::kSolved);
+  // The inverses of the u and used ν columns' 4×4 diagonal blocks (padding pivots included).
+  for (int j = 0; j < kUp + ne_padded; j += 4) {
+    const Eigen::Map<const Eigen::Matrix4d> X(w->dinv.data() + 4 * j), Xt(w->dinvT.data() + 4 * j);
+    const Eigen::Matrix4d block = K.template block<4, 4>(j, j).template triangularView<Eigen::Lower>();
+    EXPECT_LE((X * block - Eigen::Matrix4d::Identity()).cwiseAbs().maxCoeff(), 1e-13) << "block " << j;
+    EXPECT_EQ(Xt, X.transpose());
+  }
   ASSERT_TRUE((riccati_detail::factor_cost_to_go<NX, NU, NC>(w->L.data(), ne_padded)));
 
   const Eigen::LLT<MatrixXd> llt(MatrixXd(s.R));
