@@ -282,25 +282,36 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
 // holds L: L(c,c) = √(d·a_c), L(r,c) = a_rc / (d·L(c,c)). Returns false at a pivot with
 // d·a ≤ 0 or NaN (not definite with the expected sign).
 inline bool factor_panel4(double* L, int ld, int j, int row_end, int row2_begin, int row2_end, double d) {
-  // The 4×4 diagonal block first (it yields the pivots' reciprocals and the factors f), then
-  // every 4 rows below it in registers: per entry the same operations in the same order as
-  // column by column (scale by 1/(d·l), then − f·l for each earlier column of the panel, fused
-  // as the compiler fuses it), so the result is bit for bit the column sweep's, with one load
-  // and store per entry instead of one per column.
+  // The 4×4 diagonal block S first, by elimination without square roots (S_rc2 −= S_rc·S_c2c/S_cc,
+  // the LDLᵀ recurrence: the same Schur complements as the Cholesky sweep, whose L(r,c)·d·L(c2,c)
+  // is S_rc·S_c2c/S_cc), so the chain from one pivot to the next is a divide, a multiply and an
+  // FMA instead of a square root, a divide, the column's scaling and the update. The square roots
+  // and reciprocals of the four pivots are independent and follow at once: l_c = √(d·S_cc),
+  // inv_c = 1/(d·l_c), L(r,c) = S_rc·inv_c; and the factors f = d·L(c2,c) for the rows below.
+  double sb[4][4];  // sb[r][c], r ≥ c
+  for (int c = 0; c < 4; ++c) {
+    for (int r = c; r < 4; ++r) sb[r][c] = L[(j + r) + (j + c) * ld];
+  }
+  for (int c = 0; c < 4; ++c) {
+    if (!(d * sb[c][c] > 0.0)) return false;
+    const double q = 1.0 / sb[c][c];
+    for (int c2 = c + 1; c2 < 4; ++c2) {
+      const double t = sb[c2][c] * q;
+      for (int r = c2; r < 4; ++r) sb[r][c2] -= sb[r][c] * t;
+    }
+  }
   double inv[4];
   double f[4][4] = {};
-  for (int c = j; c < j + 4; ++c) {
-    double* Lc = L + c * ld;
-    const double a = d * Lc[c];
-    if (!(a > 0.0)) return false;
-    const double l = std::sqrt(a);
-    Lc[c] = l;
-    inv[c - j] = 1.0 / (d * l);
-    for (int r = c + 1; r < j + 4; ++r) Lc[r] *= inv[c - j];
-    for (int c2 = c + 1; c2 < j + 4; ++c2) {
-      double* L2 = L + c2 * ld;
-      f[c - j][c2 - j] = d * Lc[c2];
-      for (int r = c2; r < j + 4; ++r) L2[r] -= f[c - j][c2 - j] * Lc[r];
+  for (int c = 0; c < 4; ++c) {
+    const double l = std::sqrt(d * sb[c][c]);
+    inv[c] = 1.0 / (d * l);
+    L[(j + c) * (ld + 1)] = l;
+  }
+  for (int c = 0; c < 4; ++c) {
+    for (int r = c + 1; r < 4; ++r) {
+      const double v = sb[r][c] * inv[c];
+      L[(j + r) + (j + c) * ld] = v;
+      f[c][r] = d * v;
     }
   }
   const auto rows_below = [&](int begin, int end) {
