@@ -371,6 +371,32 @@ inline __m256i row_mask(int r) {
 }
 #endif
 
+#ifdef KUAVO_QP_KERNELS_SIMD
+// y[m] += A[m×4]·[b0 b1 b2 b3] (each b broadcast in all lanes), A column-major (lda); rows past
+// the last whole 4 through masked loads and stores.
+inline void add_4_columns(int m, const double* A, int lda, __m256d b0, __m256d b1, __m256d b2, __m256d b3,
+                          double* y) {
+  int i = 0;
+  for (; i + 4 <= m; i += 4) {
+    __m256d acc = _mm256_loadu_pd(y + i);
+    acc = _mm256_fmadd_pd(_mm256_loadu_pd(A + i), b0, acc);
+    acc = _mm256_fmadd_pd(_mm256_loadu_pd(A + i + lda), b1, acc);
+    acc = _mm256_fmadd_pd(_mm256_loadu_pd(A + i + 2 * lda), b2, acc);
+    acc = _mm256_fmadd_pd(_mm256_loadu_pd(A + i + 3 * lda), b3, acc);
+    _mm256_storeu_pd(y + i, acc);
+  }
+  if (i < m) {
+    const __m256i tail = row_mask(m - i);
+    __m256d acc = _mm256_maskload_pd(y + i, tail);
+    acc = _mm256_fmadd_pd(_mm256_maskload_pd(A + i, tail), b0, acc);
+    acc = _mm256_fmadd_pd(_mm256_maskload_pd(A + i + lda, tail), b1, acc);
+    acc = _mm256_fmadd_pd(_mm256_maskload_pd(A + i + 2 * lda, tail), b2, acc);
+    acc = _mm256_fmadd_pd(_mm256_maskload_pd(A + i + 3 * lda, tail), b3, acc);
+    _mm256_maskstore_pd(y + i, tail, acc);
+  }
+}
+#endif
+
 // y[m] (+=, −=) A[m×n]·x, A column-major (lda), kSet not supported (callers add into y).
 template <Update kUpdate>
 inline void gemv_n(int m, int n, const double* A, int lda, const double* x, double* y) {
@@ -381,26 +407,8 @@ inline void gemv_n(int m, int n, const double* A, int lda, const double* x, doub
   const __m256i tail = row_mask(m - m4);
   int j = 0;
   for (; j + 4 <= n; j += 4) {
-    const __m256d b0 = _mm256_set1_pd(sign * x[j]), b1 = _mm256_set1_pd(sign * x[j + 1]);
-    const __m256d b2 = _mm256_set1_pd(sign * x[j + 2]), b3 = _mm256_set1_pd(sign * x[j + 3]);
-    const double* a = A + j * lda;
-    int i = 0;
-    for (; i < m4; i += 4) {
-      __m256d acc = _mm256_loadu_pd(y + i);
-      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), b0, acc);
-      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), b1, acc);
-      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), b2, acc);
-      acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), b3, acc);
-      _mm256_storeu_pd(y + i, acc);
-    }
-    if (i < m) {
-      __m256d acc = _mm256_maskload_pd(y + i, tail);
-      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i, tail), b0, acc);
-      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + lda, tail), b1, acc);
-      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 2 * lda, tail), b2, acc);
-      acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 3 * lda, tail), b3, acc);
-      _mm256_maskstore_pd(y + i, tail, acc);
-    }
+    add_4_columns(m, A + j * lda, lda, _mm256_set1_pd(sign * x[j]), _mm256_set1_pd(sign * x[j + 1]),
+                  _mm256_set1_pd(sign * x[j + 2]), _mm256_set1_pd(sign * x[j + 3]), y);
   }
   for (; j < n; ++j) {
     const __m256d b = _mm256_set1_pd(sign * x[j]);
@@ -529,27 +537,10 @@ inline void trsv_lower(int n, const double* L, int ld, const double* Binv, doubl
       return;  // the last block: nothing below
     }
     _mm256_storeu_pd(x + j, xb);
-    const __m256d b0 = _mm256_permute4x64_pd(xb, 0x00), b1 = _mm256_permute4x64_pd(xb, 0x55);
-    const __m256d b2 = _mm256_permute4x64_pd(xb, 0xAA), b3 = _mm256_permute4x64_pd(xb, 0xFF);
-    const double* a = L + j * ld;
-    int i = j + 4;
-    for (; i + 4 <= n; i += 4) {
-      __m256d y = _mm256_loadu_pd(x + i);
-      y = _mm256_fnmadd_pd(_mm256_loadu_pd(a + i), b0, y);
-      y = _mm256_fnmadd_pd(_mm256_loadu_pd(a + i + ld), b1, y);
-      y = _mm256_fnmadd_pd(_mm256_loadu_pd(a + i + 2 * ld), b2, y);
-      y = _mm256_fnmadd_pd(_mm256_loadu_pd(a + i + 3 * ld), b3, y);
-      _mm256_storeu_pd(x + i, y);
-    }
-    if (i < n) {
-      const __m256i tail = row_mask(n - i);
-      __m256d y = _mm256_maskload_pd(x + i, tail);
-      y = _mm256_fnmadd_pd(_mm256_maskload_pd(a + i, tail), b0, y);
-      y = _mm256_fnmadd_pd(_mm256_maskload_pd(a + i + ld, tail), b1, y);
-      y = _mm256_fnmadd_pd(_mm256_maskload_pd(a + i + 2 * ld, tail), b2, y);
-      y = _mm256_fnmadd_pd(_mm256_maskload_pd(a + i + 3 * ld, tail), b3, y);
-      _mm256_maskstore_pd(x + i, tail, y);
-    }
+    // x[j+4 …] −= L(j+4 …, j…j+3)·xb (an FMA with −xb, sign flipped exactly, is the FNMA with xb).
+    const __m256d nb = _mm256_xor_pd(xb, _mm256_set1_pd(-0.0));
+    add_4_columns(n - j - 4, L + j + 4 + j * ld, ld, _mm256_permute4x64_pd(nb, 0x00), _mm256_permute4x64_pd(nb, 0x55),
+                  _mm256_permute4x64_pd(nb, 0xAA), _mm256_permute4x64_pd(nb, 0xFF), x + j + 4);
   }
 #else
   for (int j = 0; j < n; j += 4) {
