@@ -311,12 +311,19 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
   return cost;
 }
 
-TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
-  MpcFixture& f = mpc_fixture();
+// The stepping window from t = 0, the MPC warmed by two iterations from the nominal pose moving
+// sideways at vy: returns the initial velocity the QP is then built at.
+dynamics::VelocityVector warm_stepping(MpcFixture& f, double vy) {
   stepping_window(f, 0, SteppingPlan{});
   dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
-  v0[1] = 0.15;
+  v0[1] = vy;
   for (int it = 0; it < 2; ++it) mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan);
+  return v0;
+}
+
+TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
+  MpcFixture& f = mpc_fixture();
+  const dynamics::VelocityVector v0 = warm_stepping(f, 0.15);
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
   static dynamics::Data data;
   constexpr double kStep = 1e-6;
@@ -360,10 +367,7 @@ TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
 // exactly zero (f̄ + δf, δf = −f̄ bit for bit) while stance corners carry the weight.
 TEST(MpcStepping, SwingForcesAreFixedInputsWithExactZeroResult) {
   MpcFixture& f = mpc_fixture();
-  stepping_window(f, 0, SteppingPlan{});
-  dynamics::VelocityVector v0 = dynamics::VelocityVector::Zero();
-  v0[1] = 0.1;
-  for (int it = 0; it < 2; ++it) mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v0, f.window, f.plan);
+  const dynamics::VelocityVector v0 = warm_stepping(f, 0.1);
   // A warm start whose swing forces are not zero: the fixed step must cancel them.
   for (int k = 0; k <= f.ws.horizon; ++k) f.ws.u[k].segment<3 * mpc::kNumPoints>(0).array() += 0.5;
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
