@@ -23,8 +23,12 @@ double counts_to_rad(const DriveConfig& cfg, double counts) {
   return counts * (2.0 * std::numbers::pi / cfg.counts_per_rev);
 }
 
+namespace {
+double counts_of_rad(const DriveConfig& cfg, double rad) { return rad * cfg.counts_per_rev / (2.0 * std::numbers::pi); }
+}  // namespace
+
 std::int32_t rad_to_counts(const DriveConfig& cfg, double rad) {
-  const double c = std::isfinite(rad) ? rad * cfg.counts_per_rev / (2.0 * std::numbers::pi) : 0.0;
+  const double c = std::isfinite(rad) ? counts_of_rad(cfg, rad) : 0.0;
   const double lim = 2147483647.0;
   return static_cast<std::int32_t>(std::lround(c > lim ? lim : (c < -lim ? -lim : c)));
 }
@@ -49,7 +53,7 @@ std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& 
 }
 
 DriverError position_to_counts_rt(const DriveConfig& cfg, double rad, std::int32_t& counts) {
-  const double c = rad * cfg.counts_per_rev / (2.0 * std::numbers::pi);
+  const double c = counts_of_rad(cfg, rad);
   if (!(std::abs(c) <= 2147483647.0)) return DriverError::kCommandRefused;  // NaN fails too
   counts = static_cast<std::int32_t>(std::lround(c));
   return DriverError::kOk;
