@@ -225,52 +225,69 @@ inline void trmm_right_lower(int m, int n, const double* A, int lda, const doubl
 
 // dst(j, i) = src(i, j) for an m×n column-major src. With last (n entries): also last[j] = 1 +
 // the last row in which src's column j is nonzero (0: all zero; NaN counts as nonzero), found
-// on the vectors the transpose loads anyway instead of a second, branchy scan of src.
+// on the vectors the transpose loads anyway (for m ≤ 64, a bit mask of nonzero rows per column,
+// branch-free) instead of a second, branchy scan of src.
 inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd, int* last = nullptr) {
-  if (last != nullptr) {
-    for (int j = 0; j < n; ++j) last[j] = 0;
-  }
-  // Rows r of column j whose entries are nonzero, as a bit mask from bit 0 = row r0.
-  const auto note = [last](int j, int r0, int mask) {
-    if (mask != 0) last[j] = r0 + 32 - __builtin_clz(static_cast<unsigned>(mask));  // rows grow: the later the larger
-  };
-  int i = 0;
+  const bool masks = last != nullptr && m <= 64;
+  int j = 0;
 #ifdef KUAVO_QP_KERNELS_SIMD
+  // Column groups outside, rows inside: src is read in address order (at MPC size each stage's
+  // A and B are first touched here, from beyond L2, and a sequential read streams). Each 4×4
+  // block: the row pairs of columns (j, j+2) and (j+1, j+3) by 128-bit loads into the two halves
+  // (the insert takes any vector port, the cross-lane permute only the shuffle port), then one
+  // unpack per output row.
   const __m256d zero = _mm256_setzero_pd();
-  for (; i + 4 <= m; i += 4) {
-    int j = 0;
-    for (; j + 4 <= n; j += 4) {
-      const __m256d a0 = _mm256_loadu_pd(src + i + j * lds);
-      const __m256d a1 = _mm256_loadu_pd(src + i + (j + 1) * lds);
-      const __m256d a2 = _mm256_loadu_pd(src + i + (j + 2) * lds);
-      const __m256d a3 = _mm256_loadu_pd(src + i + (j + 3) * lds);
-      if (last != nullptr) {
-        note(j, i, _mm256_movemask_pd(_mm256_cmp_pd(a0, zero, _CMP_NEQ_UQ)));
-        note(j + 1, i, _mm256_movemask_pd(_mm256_cmp_pd(a1, zero, _CMP_NEQ_UQ)));
-        note(j + 2, i, _mm256_movemask_pd(_mm256_cmp_pd(a2, zero, _CMP_NEQ_UQ)));
-        note(j + 3, i, _mm256_movemask_pd(_mm256_cmp_pd(a3, zero, _CMP_NEQ_UQ)));
+  for (; j + 4 <= n; j += 4) {
+    const double* s0 = src + j * lds;
+    unsigned long long nz[4] = {0, 0, 0, 0};  // bit r: row r of column j + c is nonzero
+    int i = 0;
+    for (; i + 4 <= m; i += 4) {
+      const double* c0 = s0 + i;
+      if (masks) {
+        KUAVO_UNROLL
+        for (int c = 0; c < 4; ++c) {
+          const int bits = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(c0 + c * lds), zero, _CMP_NEQ_UQ));
+          nz[c] |= static_cast<unsigned long long>(bits) << i;
+        }
       }
-      const __m256d t0 = _mm256_unpacklo_pd(a0, a1), t1 = _mm256_unpackhi_pd(a0, a1);
-      const __m256d t2 = _mm256_unpacklo_pd(a2, a3), t3 = _mm256_unpackhi_pd(a2, a3);
-      _mm256_storeu_pd(dst + j + i * ldd, _mm256_permute2f128_pd(t0, t2, 0x20));
-      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_permute2f128_pd(t1, t3, 0x20));
-      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_permute2f128_pd(t0, t2, 0x31));
-      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_permute2f128_pd(t1, t3, 0x31));
+      const __m256d h0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0)), _mm_loadu_pd(c0 + 2 * lds), 1);
+      const __m256d h1 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds)), _mm_loadu_pd(c0 + 3 * lds), 1);
+      const __m256d h2 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + 2)), _mm_loadu_pd(c0 + 2 * lds + 2), 1);
+      const __m256d h3 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds + 2)), _mm_loadu_pd(c0 + 3 * lds + 2), 1);
+      _mm256_storeu_pd(dst + j + i * ldd, _mm256_unpacklo_pd(h0, h1));
+      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_unpackhi_pd(h0, h1));
+      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_unpacklo_pd(h2, h3));
+      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_unpackhi_pd(h2, h3));
     }
-    for (; j < n; ++j) {
-      int mask = 0;
-      for (int r = i; r < i + 4; ++r) {
-        dst[j + r * ldd] = src[r + j * lds];
-        mask |= (src[r + j * lds] != 0.0) << (r - i);
+    for (; i < m; ++i) {
+      for (int c = 0; c < 4; ++c) {
+        const double x = s0[i + c * lds];
+        dst[j + c + i * ldd] = x;
+        if (masks) nz[c] |= static_cast<unsigned long long>(x != 0.0) << i;
       }
-      if (last != nullptr) note(j, i, mask);
+    }
+    if (masks) {
+      for (int c = 0; c < 4; ++c) last[j + c] = nz[c] == 0 ? 0 : 64 - __builtin_clzll(nz[c]);
     }
   }
 #endif
-  for (; i < m; ++i) {
-    for (int j = 0; j < n; ++j) {
+  const int j_vector_end = j;
+  for (; j < n; ++j) {
+    int l = 0;
+    for (int i = 0; i < m; ++i) {
       dst[j + i * ldd] = src[i + j * lds];
-      if (last != nullptr && src[i + j * lds] != 0.0) last[j] = i + 1;
+      if (src[i + j * lds] != 0.0) l = i + 1;
+    }
+    if (last != nullptr) last[j] = l;
+  }
+  if (last != nullptr && !masks) {  // m > 64: the vector loop's columns by a scan from the bottom
+    for (int c = 0; c < j_vector_end; ++c) {
+      int l = m;
+      while (l > 0 && src[l - 1 + c * lds] == 0.0) --l;
+      last[c] = l;
     }
   }
 }

@@ -85,8 +85,9 @@ TEST(RiccatiKernels, TransposeAndTriangularProductMatchEigen) {
   }
   // The columns' last nonzero rows, against a plain scan from the end: zero tails of every
   // length (whole, none, remainders past the 4-row vectors), −0, NaN and infinities count as
-  // nonzero except −0, and rows past m (the leading-dimension padding) are not looked at.
-  for (const int m : {1, 3, 4, 7, 38}) {
+  // nonzero except −0, and rows past m (the leading-dimension padding) are not looked at;
+  // 63, 64: the last rows of the per-column bit masks, 65, 70: the scan beyond them.
+  for (const int m : {1, 3, 4, 7, 38, 63, 64, 65, 70}) {
     for (const int n : {1, 5, 38, 50}) {
       MatrixXd src = random_matrix(m + 2, n, rng);
       for (int j = 0; j < n; ++j) {
