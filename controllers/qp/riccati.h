@@ -216,25 +216,43 @@ inline ExtentRun extent_run(const int* extent, int row0, int i, int m) {
   return run;
 }
 
+// C[rows i0…i1, columns j0…j1) = S there (rows past add.rows: zero): where a kSum product has
+// no terms.
+inline void copy_addend(int i0, int i1, int j0, int j1, const kernels::Addend& add, double* C, int ldc) {
+  for (int j = j0; j < j1; ++j) {
+    for (int i = i0; i < i1; ++i) C[i + j * ldc] = i < add.rows ? add.s[i + j * add.ld] : 0.0;
+  }
+}
+
 // C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
 // of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
 // the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
-// diagonal on.
+// diagonal on. With add.s: C = S + the product instead (kernels::Update::kSum; S copied where
+// the extents leave no terms).
 template <bool kLower>
 void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
-                            double* C) {
+                            double* C, const kernels::Addend& add = {}) {
   using kernels::gemm;
   using kernels::Update;
+  const bool sum = add.s != nullptr;
   for (int j = 0; j < n; j += 4) {
     const int ej = extent[(col0 + j) / 4];
-    if (ej == 0) continue;
+    const int nj = std::min(4, n - j);
     int i = kLower ? j : 0;
+    if (ej == 0) {
+      if (sum) copy_addend(i, m, j, j + nj, add, C, ld);
+      continue;
+    }
     while (i < m) {
       const ExtentRun run = extent_run(extent, row0, i, m);
       const int k = std::min(run.max_extent, ej);
-      if (k > 0) {
-        gemm<true, Update::kAdd>(run.end - i, std::min(4, n - j), k, Zt + row0 + i, ld, Zt + col0 + j, ld,
-                                 C + i + j * ld, ld);
+      if (k > 0 && sum) {
+        gemm<true, Update::kSum>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld,
+                                 add.offset(i, j));
+      } else if (k > 0) {
+        gemm<true, Update::kAdd>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld);
+      } else if (sum) {
+        copy_addend(i, run.end, j, j + nj, add, C, ld);
       }
       i = run.end;
     }
@@ -280,11 +298,12 @@ inline void copy_lower(int n, const double* S, int lds, double* D, int ldd) {
 }
 
 // Q into the x block with its padding (zero rows, identity pivots), lower triangle (copy_lower).
+// Without copy_q only the padding (Q then comes in as the addend of the x block's product).
 template <int NX, int NU, int NC>
-void load_x_block(const Eigen::Matrix<double, NX, NX>& Q, FactorMap<NX, NU, NC>& K) {
+void load_x_block(const Eigen::Matrix<double, NX, NX>& Q, FactorMap<NX, NU, NC>& K, bool copy_q = true) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   constexpr int kXo = Layout::kXo, kXp = Layout::kXp;
-  copy_lower(NX, Q.data(), NX, K.data() + kXo * (Layout::kLd + 1), Layout::kLd);
+  if (copy_q) copy_lower(NX, Q.data(), NX, K.data() + kXo * (Layout::kLd + 1), Layout::kLd);
   if constexpr (kXp > NX) {
     K.template block<kXp - NX, Layout::kLd>(kXo + NX, 0).setZero();
     for (int i = NX; i < kXp; ++i) K(kXo + i, kXo + i) = 1.0;
@@ -292,19 +311,21 @@ void load_x_block(const Eigen::Matrix<double, NX, NX>& Q, FactorMap<NX, NU, NC>&
 }
 
 // The stage's own blocks [R ·; D 0 ·; Sᵀ Cᵀ Q] into the lower triangle, with the padding
-// (R and Q: copy_lower).
+// (R and Q: copy_lower). Without diagonal_blocks R and Q are left out (the matrix pass adds them
+// to [B A]ᵀPₖ₊₁[B A]'s u and x blocks as the products' addends, kernels::Update::kSum).
 template <int NX, int NU, int NC, int NG>
-void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, NU, NC>& K) {
+void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, NU, NC>& K,
+                bool diagonal_blocks = true) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
-  copy_lower(NU, s.R.data(), NU, K.data(), Layout::kLd);
+  if (diagonal_blocks) copy_lower(NU, s.R.data(), NU, K.data(), Layout::kLd);
   if constexpr (kUp > NU) {
     K.template block<kUp - NU, NU>(NU, 0).setZero();
     K.template block<kUp - NU, kUp - NU>(NU, NU).setIdentity();
     K.template block<Layout::kLd - kUp, kUp - NU>(kUp, NU).setZero();
   }
   kernels::transpose(NU, NX, s.S.data(), NU, K.data() + kXo, Layout::kLd);
-  load_x_block<NX, NU, NC>(s.Q, K);
+  load_x_block<NX, NU, NC>(s.Q, K, diagonal_blocks);
   if constexpr (NC > 0) {
     const int ne = s.num_eq;
     if (ne_padded == 0) return;
@@ -416,20 +437,23 @@ void schur_cost_to_go(double* L, int ne_padded) {
   symmetrize_x_block<NX, NU, NC>(L);
 }
 
-// Lower triangle of [B A]ᵀPₖ₊₁[B A]'s x block, added into the x block of L: ZᵀZ from Zᵀ in Yt
-// when Pₖ₊₁ is factored, else Yt·A with Yt = [B A]ᵀPₖ₊₁.
+// Lower triangle of Q + [B A]ᵀPₖ₊₁[B A]'s x block into the x block of L (whose padding is set):
+// ZᵀZ from Zᵀ in Yt when Pₖ₊₁ is factored, else Yt·A with Yt = [B A]ᵀPₖ₊₁.
 template <int NX, int NU, int NC>
-void add_x_product(const double* Yt, const double* A, const int* extent, bool factored, double* L) {
+void add_x_product(const double* Yt, const double* A, const int* extent, bool factored,
+                   const Eigen::Matrix<double, NX, NX>& Q, double* L) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kXo = Layout::kXo, kXp = Layout::kXp;
+  const kernels::Addend q{Q.data(), NX, NX};
+  double* P = L + kXo * (kLd + 1);
   if (factored && extent != nullptr) {
-    add_product_by_extents<true>(extent, kXo, kXp, kXo, NX, Yt, kLd, L + kXo * (kLd + 1));
+    add_product_by_extents<true>(extent, kXo, kXp, kXo, NX, Yt, kLd, P, q);
   } else if (factored) {
-    gemm<true, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, L + kXo * (kLd + 1), kLd);
+    gemm<true, Update::kSum, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, P, kLd, q);
   } else {
-    gemm<false, Update::kAdd, true>(kXp, NX, NX, Yt + kXo, kLd, A, NX, L + kXo * (kLd + 1), kLd);
+    gemm<false, Update::kSum, true>(kXp, NX, NX, Yt + kXo, kLd, A, NX, P, kLd, q);
   }
 }
 
@@ -530,7 +554,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const int ne = NC > 0 ? s.num_eq : 0;
     const int ne_padded = kernels::round_up4(ne);
     FactorMap<NX, NU, NC> K(L);
-    load_stage(s, ne_padded, K);
+    load_stage(s, ne_padded, K, false);  // R and Q: the addends of the products below
 
     kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data());
     kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data());
@@ -538,28 +562,29 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
     const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
+    const kernels::Addend r{s.R.data(), NU, NU};  // u block: R + [B A]ᵀPₖ₊₁[B A]
     if (next.p_factored) {
       // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ (over the extents).
       if (column_extents<NX, NU, NC>(ws.last_b.data(), ws.last_a.data(), ws.extent.data())) {
         extent = ws.extent.data();
         zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
         zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
-        add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L);
+        add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L, r);
         add_product_by_extents<false>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
       } else {
         kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
         kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
-        gemm<true, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd);
+        gemm<true, Update::kSum, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd, r);
         gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
       }
     } else {
       // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
       gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
       gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
-      gemm<false, Update::kAdd, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd);
+      gemm<false, Update::kSum, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd, r);
       gemm<false, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
     }
-    add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, L);
+    add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, s.Q, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);
 
@@ -567,8 +592,8 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     if (f != QpStatus::kSolved) return f;
     w.p_factored = factor_cost_to_go<NX, NU, NC>(L, ne_padded);
     if (!w.p_factored) {
-      load_x_block<NX, NU, NC>(s.Q, K);
-      add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, L);
+      load_x_block<NX, NU, NC>(s.Q, K, false);
+      add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, s.Q, L);
       add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
       schur_cost_to_go<NX, NU, NC>(L, ne_padded);
     }

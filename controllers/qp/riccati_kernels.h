@@ -42,8 +42,21 @@ namespace kuavo::qp::kernels {
 #define KUAVO_UNROLL _Pragma("GCC unroll 8")
 
 
-// What a product does with C.
-enum class Update { kSet, kAdd, kSub };
+// What a product does with C. kSum: C = S + product, S a separate matrix (Addend), so a stage's
+// own blocks (R, Q) need not be copied into the factor storage first: each tile reads its part
+// of S in its epilogue, where the out-of-order core overlaps S's first touch (at MPC size from
+// beyond L2) with the next tile's FMAs. The sum is the one kAdd forms on a copy, bit for bit.
+enum class Update { kSet, kAdd, kSub, kSum };
+
+// S of a kSum product: column-major, leading dimension ld, rows [0, rows) relative to C's row 0
+// (fewer than C's: the rows past them read as zero, through masked loads, so nothing beyond
+// S's column is read).
+struct Addend {
+  const double* s = nullptr;
+  int ld = 0;
+  int rows = 0;
+  Addend offset(int i, int j) const { return {s == nullptr ? nullptr : s + i + j * ld, ld, rows - i}; }
+};
 
 constexpr int round_up4(int n) { return (n + 3) / 4 * 4; }
 
@@ -54,10 +67,24 @@ inline const double* b_entry(const double* B, int ldb, int p, int j) {
 }
 
 #ifdef KUAVO_QP_KERNELS_SIMD
-// C (=, +=, −=) x for one 4-row vector of C's column.
+// Lanes [0, r) of a 4-lane mask, r = 1…4.
+inline __m256i row_mask(int r) {
+  return _mm256_cmpgt_epi64(_mm256_set1_epi64x(r), _mm256_setr_epi64x(0, 1, 2, 3));
+}
+
+// The 4 rows of S at s whose row index, counted from s, is below rows; zero beyond.
+inline __m256d addend_ymm(const double* s, int rows) {
+  if (rows >= 4) return _mm256_loadu_pd(s);
+  if (rows <= 0) return _mm256_setzero_pd();
+  return _mm256_maskload_pd(s, row_mask(rows));
+}
+
+// C (=, +=, −=) x, or C = S + x (kSum, S's rows below rows) for one 4-row vector of C's column.
 template <Update kUpdate>
-inline void update_ymm(double* c, __m256d x) {
-  if constexpr (kUpdate == Update::kSet) {
+inline void update_ymm(double* c, __m256d x, const double* s = nullptr, int rows = 0) {
+  if constexpr (kUpdate == Update::kSum) {
+    _mm256_storeu_pd(c, _mm256_add_pd(addend_ymm(s, rows), x));
+  } else if constexpr (kUpdate == Update::kSet) {
     _mm256_storeu_pd(c, x);
   } else if constexpr (kUpdate == Update::kAdd) {
     _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), x));
@@ -69,7 +96,7 @@ inline void update_ymm(double* c, __m256d x) {
 
 // One MR×NR tile of C (MR = 4 or 8, NR = 1…4) over the inner extent k.
 template <int MR, int NR, bool kTransB, Update kUpdate>
-inline void tile(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
+inline void tile(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc, Addend add = {}) {
   static_assert(MR == 4 || MR == 8, "tile rows");
   static_assert(NR >= 1 && NR <= 4, "tile columns");
 #ifdef KUAVO_QP_KERNELS_SIMD
@@ -94,7 +121,9 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
   KUAVO_UNROLL
   for (int j = 0; j < NR; ++j) {
     KUAVO_UNROLL
-    for (int v = 0; v < MV; ++v) update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j]);
+    for (int v = 0; v < MV; ++v) {
+      update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j], add.s + j * add.ld + 4 * v, add.rows - 4 * v);
+    }
   }
 #else
   double acc[MR][NR] = {};
@@ -107,7 +136,8 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
   for (int j = 0; j < NR; ++j) {
     for (int i = 0; i < MR; ++i) {
       double& c = C[j * ldc + i];
-      if constexpr (kUpdate == Update::kSet) c = acc[i][j];
+      if constexpr (kUpdate == Update::kSum) c = (i < add.rows ? add.s[j * add.ld + i] : 0.0) + acc[i][j];
+      else if constexpr (kUpdate == Update::kSet) c = acc[i][j];
       else if constexpr (kUpdate == Update::kAdd) c += acc[i][j];
       else c -= acc[i][j];
     }
@@ -116,10 +146,14 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
 }
 
 #ifdef KUAVO_QP_KERNELS_AVX512
-// C (=, +=, −=) x for one vector of C's column.
+// C (=, +=, −=) x, or C = S + x (kSum, S's rows below rows) for one 8-row vector of C's column.
 template <Update kUpdate>
-inline void update_zmm(double* c, __m512d x) {
-  if constexpr (kUpdate == Update::kSet) {
+inline void update_zmm(double* c, __m512d x, const double* s = nullptr, int rows = 0) {
+  if constexpr (kUpdate == Update::kSum) {
+    const __m512d a = rows >= 8 ? _mm512_loadu_pd(s)
+                                : _mm512_maskz_loadu_pd(static_cast<__mmask8>((1u << std::max(rows, 0)) - 1u), s);
+    _mm512_storeu_pd(c, _mm512_add_pd(a, x));
+  } else if constexpr (kUpdate == Update::kSet) {
     _mm512_storeu_pd(c, x);
   } else if constexpr (kUpdate == Update::kAdd) {
     _mm512_storeu_pd(c, _mm512_add_pd(_mm512_loadu_pd(c), x));
@@ -133,7 +167,7 @@ inline void update_zmm(double* c, __m512d x) {
 // broadcast). Per inner index MZ (+1) loads of A and NR broadcasts of B feed up to 16
 // independent accumulators, enough to keep two 512-bit FMA pipes busy through their latency.
 template <int MZ, bool kHalf, int NR, bool kTransB, Update kUpdate>
-inline void tile_zmm(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
+inline void tile_zmm(int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc, Addend add = {}) {
   static_assert(MZ >= 1 && MZ <= 3, "tile zmm vectors");
   static_assert(NR >= 1 && NR <= 4, "tile columns");
   __m512d acc[MZ][NR];
@@ -162,36 +196,40 @@ inline void tile_zmm(int k, const double* A, int lda, const double* B, int ldb, 
   KUAVO_UNROLL
   for (int j = 0; j < NR; ++j) {
     double* c = C + j * ldc;
+    const double* s = add.s + j * add.ld;
     KUAVO_UNROLL
-    for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j]);
-    if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j]);
+    for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j], s + 8 * v, add.rows - 8 * v);
+    if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j], s + 8 * MZ, add.rows - 8 * MZ);
   }
 }
 #endif
 
 template <int NR, bool kTransB, Update kUpdate>
 inline void tile_column(int i, int m, int k, const double* A, int lda, const double* B, int ldb, double* C,
-                        int ldc) {
+                        int ldc, Addend add = {}) {
 #ifdef KUAVO_QP_KERNELS_AVX512
   // 24-row tiles while more than 28 rows remain, then one tile for the last 4…28 (the stage
   // blocks: 52 u rows = 24 + 28, 40 x rows = 24 + 16), so no column ends in a short tile that
   // re-reads B for a few rows.
-  for (; m - i > 28; i += 24) tile_zmm<3, false, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc);
+  for (; m - i > 28; i += 24) {
+    tile_zmm<3, false, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
+  }
   const double* Ai = A + i;
   double* Ci = C + i;
+  const Addend ai = add.offset(i, 0);
   switch (m - i) {
-    case 28: tile_zmm<3, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 24: tile_zmm<3, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 20: tile_zmm<2, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 16: tile_zmm<2, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 12: tile_zmm<1, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 8: tile_zmm<1, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
-    case 4: tile<4, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc); break;
+    case 28: tile_zmm<3, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 24: tile_zmm<3, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 20: tile_zmm<2, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 16: tile_zmm<2, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 12: tile_zmm<1, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 8: tile_zmm<1, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
+    case 4: tile<4, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
     default: break;  // m − i == 0
   }
 #else
-  for (; i + 8 <= m; i += 8) tile<8, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc);
-  if (i < m) tile<4, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc);
+  for (; i + 8 <= m; i += 8) tile<8, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
+  if (i < m) tile<4, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
 #endif
 }
 
@@ -200,17 +238,20 @@ inline void tile_column(int i, int m, int k, const double* A, int lda, const dou
 // wanted: rows above each 4-column strip are skipped (tiles that straddle the diagonal are
 // computed whole, so a few entries above it are written too: only inside the 4×4 diagonal
 // chunks, since every strip's first tile starts on the diagonal, whatever its height).
+// kSum: C = S + A·op(B) with S from add (there too the diagonal chunks' upper entries are read).
 template <bool kTransB, Update kUpdate, bool kLower = false>
-inline void gemm(int m, int n, int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc) {
+inline void gemm(int m, int n, int k, const double* A, int lda, const double* B, int ldb, double* C, int ldc,
+                 Addend add = {}) {
   for (int j = 0; j < n; j += 4) {
     const int i = kLower ? j : 0;
     const double* Bj = b_entry<kTransB>(B, ldb, 0, j);
     double* Cj = C + j * ldc;
+    const Addend aj = add.offset(0, j);
     switch (std::min(4, n - j)) {
-      case 4: tile_column<4, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
-      case 3: tile_column<3, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
-      case 2: tile_column<2, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
-      default: tile_column<1, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc); break;
+      case 4: tile_column<4, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;
+      case 3: tile_column<3, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;
+      case 2: tile_column<2, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;
+      default: tile_column<1, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;
     }
   }
 }
@@ -381,12 +422,6 @@ inline bool cholesky(double* L, int ld, int n) {
 // Any m, n (row remainders through masked loads, so nothing past row m is read or written).
 // Eigen's gemv at these sizes (38–50) is its general blocked kernel with per-call setup.
 
-#ifdef KUAVO_QP_KERNELS_SIMD
-// Lanes [0, r) of a 4-lane mask, r = 1…4.
-inline __m256i row_mask(int r) {
-  return _mm256_cmpgt_epi64(_mm256_set1_epi64x(r), _mm256_setr_epi64x(0, 1, 2, 3));
-}
-#endif
 
 #ifdef KUAVO_QP_KERNELS_SIMD
 // y[m] += A[m×4]·[b0 b1 b2 b3] (each b broadcast in all lanes), A column-major (lda); rows past

@@ -57,6 +57,60 @@ void check_gemm(int m, int n, int k, std::mt19937_64& rng) {
   }
 }
 
+// C = S + A·op(B) (kSum) with S's first s_rows rows (the rest read as zero): against Eigen, and
+// bit for bit against kAdd on a copy of S (what the matrix pass did before it folded R and Q into
+// the products). Rows of S's storage past s_rows hold NaN, so a load past them would show; C's
+// old contents must not matter.
+template <bool kTransB, bool kLower>
+void check_gemm_sum(int m, int n, int k, int s_rows, std::mt19937_64& rng) {
+  const int ld = m + 4;
+  const MatrixXd A = random_matrix(ld, k, rng);
+  const MatrixXd B = kTransB ? random_matrix(n + 3, k, rng) : random_matrix(k + 3, n, rng);
+  MatrixXd S = MatrixXd::Constant(s_rows + 3, n, std::numeric_limits<double>::quiet_NaN());
+  S.topRows(s_rows) = random_matrix(s_rows, n, rng);
+  MatrixXd S_ext = MatrixXd::Zero(ld, n);  // S, zero below its rows
+  S_ext.topRows(std::min(s_rows, m)) = S.topRows(std::min(s_rows, m));
+  const MatrixXd C0 = random_matrix(ld, n, rng);
+  MatrixXd C = C0;
+  kernels::gemm<kTransB, Update::kSum, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
+                                               static_cast<int>(B.rows()), C.data(), ld,
+                                               kernels::Addend{S.data(), static_cast<int>(S.rows()), s_rows});
+  MatrixXd C_add = C0;
+  C_add.topRows(m) = S_ext.topRows(m);
+  kernels::gemm<kTransB, Update::kAdd, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
+                                               static_cast<int>(B.rows()), C_add.data(), ld);
+  const MatrixXd product = kTransB ? MatrixXd(A.topRows(m) * B.topRows(n).transpose())
+                                   : MatrixXd(A.topRows(m) * B.topRows(k));
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < ld; ++i) {
+      if (i >= m || (kLower && i < j / 4 * 4)) {
+        EXPECT_EQ(C(i, j), C0(i, j)) << "outside the product: " << i << "," << j;
+      } else {
+        EXPECT_EQ(C(i, j), C_add(i, j)) << m << "x" << n << "x" << k << " rows " << s_rows << " at " << i << "," << j;
+        if (!kLower || i >= j) {
+          EXPECT_NEAR(C(i, j), S_ext(i, j) + product(i, j), kTolerance * (1.0 + k) * 10.0) << i << "," << j;
+        }
+      }
+    }
+  }
+}
+
+TEST(RiccatiKernels, ProductsOntoASeparateAddendMatchEigenAndTheCopiedSum) {
+  std::mt19937_64 rng(106);
+  for (const int m : {4, 8, 12, 20, 28, 40, 52}) {
+    for (const int n : {1, 2, 4, 38, 50}) {
+      for (const int k : {0, 1, 38}) {
+        for (const int s_rows : {m, m - 2, m - 5, m - 11, 1}) {
+          if (s_rows < 1) continue;
+          check_gemm_sum<true, true>(m, n, k, s_rows, rng);
+          check_gemm_sum<false, true>(m, n, k, s_rows, rng);
+          check_gemm_sum<true, false>(m, n, k, s_rows, rng);
+        }
+      }
+    }
+  }
+}
+
 TEST(RiccatiKernels, ProductsMatchEigen) {
   std::mt19937_64 rng(101);
   for (const int m : {4, 8, 12, 40, 52, 92}) {
