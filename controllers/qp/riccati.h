@@ -20,7 +20,10 @@
 // product); a left-looking blocked Cholesky over 4-column panels whose updates are the same
 // 8×4 FMA tiles; the x block's Schur complement is one lower-triangular product. Storage is
 // padded to multiples of 4 rows (u padding carries an identity pivot, ν padding a −1 pivot,
-// x padding zero rows with an identity pivot), so every tile is whole.
+// x padding zero rows with an identity pivot), so every tile is whole. R and Q are not copied
+// into the factor storage: the u and x blocks' products write R + ZᵀZ and Q + ZᵀZ, reading R and
+// Q in their tiles' epilogues (kernels::Update::kSum), where at MPC size (the horizon's data
+// beyond L2) their first touch overlaps the FMAs instead of stalling a copy loop.
 // Square-root recursion with the classical statuses: the sweep goes on into the x block, whose
 // Schur complement Pₖ is factored in place (Pₖ = Lp·Lpᵀ, the next stage's Lp, no copy). Pₖ need
 // not be definite (singular Q; barrier weights spread over 15 decades in the interior point):
