@@ -20,10 +20,11 @@
 // product); a left-looking blocked Cholesky over 4-column panels whose updates are the same
 // 8×4 FMA tiles; the x block's Schur complement is one lower-triangular product. Storage is
 // padded to multiples of 4 rows (u padding carries an identity pivot, ν padding a −1 pivot,
-// x padding zero rows with an identity pivot), so every tile is whole. R and Q are not copied
-// into the factor storage: the u and x blocks' products write R + ZᵀZ and Q + ZᵀZ, reading R and
-// Q in their tiles' epilogues (kernels::Update::kSum), where at MPC size (the horizon's data
-// beyond L2) their first touch overlaps the FMAs instead of stalling a copy loop.
+// x padding zero rows with an identity pivot), so every tile is whole. R, S and Q are not copied
+// into the factor storage: the u, x-u and x blocks' products write R + ZᵀZ, Sᵀ + ZᵀZ and
+// Q + ZᵀZ, reading R, S and Q in their tiles' epilogues (kernels::Update::kSum, kSumT), where at
+// MPC size (the horizon's data beyond L2) their first touch overlaps the FMAs instead of
+// stalling a copy loop.
 // Square-root recursion with the classical statuses: the sweep goes on into the x block, whose
 // Schur complement Pₖ is factored in place (Pₖ = Lp·Lpᵀ, the next stage's Lp, no copy). Pₖ need
 // not be definite (singular Q; barrier weights spread over 15 decades in the interior point):
@@ -219,20 +220,24 @@ inline ExtentRun extent_run(const int* extent, int row0, int i, int m) {
   return run;
 }
 
-// C[rows i0…i1, columns j0…j1) = S there (rows past add.rows: zero): where a kSum product has
-// no terms.
-inline void copy_addend(int i0, int i1, int j0, int j1, const kernels::Addend& add, double* C, int ldc) {
+// C[rows i0…i1, columns j0…j1) = S there (Sᵀ for kSumT; rows past add.rows: zero): where a
+// kSum (kSumT) product has no terms.
+template <kernels::Update kSum>
+void copy_addend(int i0, int i1, int j0, int j1, const kernels::Addend& add, double* C, int ldc) {
   for (int j = j0; j < j1; ++j) {
-    for (int i = i0; i < i1; ++i) C[i + j * ldc] = i < add.rows ? add.s[i + j * add.ld] : 0.0;
+    for (int i = i0; i < i1; ++i) {
+      const double* s = kSum == kernels::Update::kSumT ? add.s + j + i * add.ld : add.s + i + j * add.ld;
+      C[i + j * ldc] = i < add.rows ? *s : 0.0;
+    }
   }
 }
 
 // C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
 // of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
 // the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
-// diagonal on. With add.s: C = S + the product instead (kernels::Update::kSum; S copied where
-// the extents leave no terms).
-template <bool kLower>
+// diagonal on. With add.s: C = S + the product instead (kSum, or Sᵀ + the product: kSumT; S
+// copied where the extents leave no terms).
+template <bool kLower, kernels::Update kSum = kernels::Update::kSum>
 void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
                             double* C, const kernels::Addend& add = {}) {
   using kernels::gemm;
@@ -243,19 +248,19 @@ void add_product_by_extents(const int* extent, int row0, int m, int col0, int n,
     const int nj = std::min(4, n - j);
     int i = kLower ? j : 0;
     if (ej == 0) {
-      if (sum) copy_addend(i, m, j, j + nj, add, C, ld);
+      if (sum) copy_addend<kSum>(i, m, j, j + nj, add, C, ld);
       continue;
     }
     while (i < m) {
       const ExtentRun run = extent_run(extent, row0, i, m);
       const int k = std::min(run.max_extent, ej);
       if (k > 0 && sum) {
-        gemm<true, Update::kSum>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld,
-                                 add.offset(i, j));
+        gemm<true, kSum>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld,
+                         add.offset<kSum>(i, j));
       } else if (k > 0) {
         gemm<true, Update::kAdd>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld);
       } else if (sum) {
-        copy_addend(i, run.end, j, j + nj, add, C, ld);
+        copy_addend<kSum>(i, run.end, j, j + nj, add, C, ld);
       }
       i = run.end;
     }
@@ -314,21 +319,22 @@ void load_x_block(const Eigen::Matrix<double, NX, NX>& Q, FactorMap<NX, NU, NC>&
 }
 
 // The stage's own blocks [R ·; D 0 ·; Sᵀ Cᵀ Q] into the lower triangle, with the padding
-// (R and Q: copy_lower). Without diagonal_blocks R and Q are left out (the matrix pass adds them
-// to [B A]ᵀPₖ₊₁[B A]'s u and x blocks as the products' addends, kernels::Update::kSum).
+// (R and Q: copy_lower). Without cost_blocks R, S and Q are left out (the matrix pass adds them
+// to [B A]ᵀPₖ₊₁[B A]'s u, x-u and x blocks as the products' addends, kernels::Update::kSum,
+// kSumT).
 template <int NX, int NU, int NC, int NG>
 void load_stage(const OcpStage<NX, NU, NC, NG>& s, int ne_padded, FactorMap<NX, NU, NC>& K,
-                bool diagonal_blocks = true) {
+                bool cost_blocks = true) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   constexpr int kUp = Layout::kUp, kXo = Layout::kXo;
-  if (diagonal_blocks) copy_lower(NU, s.R.data(), NU, K.data(), Layout::kLd);
+  if (cost_blocks) copy_lower(NU, s.R.data(), NU, K.data(), Layout::kLd);
   if constexpr (kUp > NU) {
     K.template block<kUp - NU, NU>(NU, 0).setZero();
     K.template block<kUp - NU, kUp - NU>(NU, NU).setIdentity();
     K.template block<Layout::kLd - kUp, kUp - NU>(kUp, NU).setZero();
   }
-  kernels::transpose(NU, NX, s.S.data(), NU, K.data() + kXo, Layout::kLd);
-  load_x_block<NX, NU, NC>(s.Q, K, diagonal_blocks);
+  if (cost_blocks) kernels::transpose(NU, NX, s.S.data(), NU, K.data() + kXo, Layout::kLd);
+  load_x_block<NX, NU, NC>(s.Q, K, cost_blocks);
   if constexpr (NC > 0) {
     const int ne = s.num_eq;
     if (ne_padded == 0) return;
@@ -557,7 +563,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const int ne = NC > 0 ? s.num_eq : 0;
     const int ne_padded = kernels::round_up4(ne);
     FactorMap<NX, NU, NC> K(L);
-    load_stage(s, ne_padded, K, false);  // R and Q: the addends of the products below
+    load_stage(s, ne_padded, K, false);  // R, S, Q: the addends of the products below
 
     kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data());
     kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data());
@@ -565,7 +571,8 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
     const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
-    const kernels::Addend r{s.R.data(), NU, NU};  // u block: R + [B A]ᵀPₖ₊₁[B A]
+    const kernels::Addend r{s.R.data(), NU, NU};   // u block: R + [B A]ᵀPₖ₊₁[B A]
+    const kernels::Addend st{s.S.data(), NU, NX};  // x-u block: Sᵀ + …
     if (next.p_factored) {
       // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ (over the extents).
       if (column_extents<NX, NU, NC>(ws.last_b.data(), ws.last_a.data(), ws.extent.data())) {
@@ -573,19 +580,19 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
         zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
         zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
         add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L, r);
-        add_product_by_extents<false>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo);
+        add_product_by_extents<false, Update::kSumT>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo, st);
       } else {
         kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
         kernels::trmm_right_lower(kXp, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
         gemm<true, Update::kSum, true>(kUp, NU, NX, Yt, kLd, Yt, kLd, L, kLd, r);
-        gemm<true, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd);
+        gemm<true, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, Yt, kLd, L + kXo, kLd, st);
       }
     } else {
       // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
       gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
       gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
       gemm<false, Update::kSum, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd, r);
-      gemm<false, Update::kAdd>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd);
+      gemm<false, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd, st);
     }
     add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, s.Q, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);

@@ -46,16 +46,23 @@ namespace kuavo::qp::kernels {
 // own blocks (R, Q) need not be copied into the factor storage first: each tile reads its part
 // of S in its epilogue, where the out-of-order core overlaps S's first touch (at MPC size from
 // beyond L2) with the next tile's FMAs. The sum is the one kAdd forms on a copy, bit for bit.
-enum class Update { kSet, kAdd, kSub, kSum };
+// kSumT: C = Sᵀ + product (the x-u block's Sᵀ from the stage's S), each 4×4 block of Sᵀ
+// transposed in registers.
+enum class Update { kSet, kAdd, kSub, kSum, kSumT };
 
-// S of a kSum product: column-major, leading dimension ld, rows [0, rows) relative to C's row 0
-// (fewer than C's: the rows past them read as zero, through masked loads, so nothing beyond
-// S's column is read).
+// S of a kSum (kSumT) product: column-major, leading dimension ld; C's rows [0, rows) are S's
+// rows (columns) there. C's rows past them read as zero, through masked loads, so nothing
+// beyond S's column (row) is read.
 struct Addend {
   const double* s = nullptr;
   int ld = 0;
   int rows = 0;
-  Addend offset(int i, int j) const { return {s == nullptr ? nullptr : s + i + j * ld, ld, rows - i}; }
+  // The addend of C's block from (i, j): S(i, j) on, or Sᵀ(i, j) = S(j, i) for kSumT.
+  template <Update kUpdate>
+  Addend offset(int i, int j) const {
+    if (s == nullptr) return {};
+    return {kUpdate == Update::kSumT ? s + j + i * ld : s + i + j * ld, ld, rows - i};
+  }
 };
 
 constexpr int round_up4(int n) { return (n + 3) / 4 * 4; }
@@ -77,6 +84,23 @@ inline __m256d addend_ymm(const double* s, int rows) {
   if (rows >= 4) return _mm256_loadu_pd(s);
   if (rows <= 0) return _mm256_setzero_pd();
   return _mm256_maskload_pd(s, row_mask(rows));
+}
+
+// Rows [0, 4) of Sᵀ's columns [0, nr) (nr = 1…4) from S at s (S's rows [0, nr), columns [0, 4)
+// with leading dimension ld; columns from rows on, and S's rows past nr, read as zero): t[c] is
+// Sᵀ's column c, i.e. S's row c.
+inline void addend_t4(const double* s, int ld, int rows, int nr, __m256d t[4]) {
+  __m256d q[4];
+  const __m256i cols = row_mask(nr);
+  for (int r = 0; r < 4; ++r) {
+    q[r] = r >= rows ? _mm256_setzero_pd() : nr == 4 ? _mm256_loadu_pd(s + r * ld) : _mm256_maskload_pd(s + r * ld, cols);
+  }
+  const __m256d t0 = _mm256_unpacklo_pd(q[0], q[1]), t1 = _mm256_unpackhi_pd(q[0], q[1]);
+  const __m256d t2 = _mm256_unpacklo_pd(q[2], q[3]), t3 = _mm256_unpackhi_pd(q[2], q[3]);
+  t[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  t[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  t[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  t[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
 }
 
 // C (=, +=, −=) x, or C = S + x (kSum, S's rows below rows) for one 4-row vector of C's column.
@@ -118,11 +142,27 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
       for (int v = 0; v < MV; ++v) acc[v][j] = _mm256_fmadd_pd(a[v], b, acc[v][j]);
     }
   }
-  KUAVO_UNROLL
-  for (int j = 0; j < NR; ++j) {
+  if constexpr (kUpdate == Update::kSumT) {
     KUAVO_UNROLL
     for (int v = 0; v < MV; ++v) {
-      update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j], add.s + j * add.ld + 4 * v, add.rows - 4 * v);
+      __m256d t[4];
+      addend_t4(add.s + 4 * v * add.ld, add.ld, add.rows - 4 * v, NR, t);
+      KUAVO_UNROLL
+      for (int j = 0; j < NR; ++j) _mm256_storeu_pd(C + j * ldc + 4 * v, _mm256_add_pd(t[j], acc[v][j]));
+    }
+  } else if constexpr (kUpdate == Update::kSum) {
+    KUAVO_UNROLL
+    for (int j = 0; j < NR; ++j) {
+      KUAVO_UNROLL
+      for (int v = 0; v < MV; ++v) {
+        update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j], add.s + j * add.ld + 4 * v, add.rows - 4 * v);
+      }
+    }
+  } else {
+    KUAVO_UNROLL
+    for (int j = 0; j < NR; ++j) {
+      KUAVO_UNROLL
+      for (int v = 0; v < MV; ++v) update_ymm<kUpdate>(C + j * ldc + 4 * v, acc[v][j]);
     }
   }
 #else
@@ -137,6 +177,7 @@ inline void tile(int k, const double* A, int lda, const double* B, int ldb, doub
     for (int i = 0; i < MR; ++i) {
       double& c = C[j * ldc + i];
       if constexpr (kUpdate == Update::kSum) c = (i < add.rows ? add.s[j * add.ld + i] : 0.0) + acc[i][j];
+      else if constexpr (kUpdate == Update::kSumT) c = (i < add.rows ? add.s[j + i * add.ld] : 0.0) + acc[i][j];
       else if constexpr (kUpdate == Update::kSet) c = acc[i][j];
       else if constexpr (kUpdate == Update::kAdd) c += acc[i][j];
       else c -= acc[i][j];
@@ -193,13 +234,41 @@ inline void tile_zmm(int k, const double* A, int lda, const double* B, int ldb, 
       if constexpr (kHalf) acc_h[j] = _mm256_fmadd_pd(a_h, _mm512_castpd512_pd256(b), acc_h[j]);
     }
   }
-  KUAVO_UNROLL
-  for (int j = 0; j < NR; ++j) {
-    double* c = C + j * ldc;
-    const double* s = add.s + j * add.ld;
+  if constexpr (kUpdate == Update::kSumT) {
     KUAVO_UNROLL
-    for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j], s + 8 * v, add.rows - 8 * v);
-    if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j], s + 8 * MZ, add.rows - 8 * MZ);
+    for (int v = 0; v < MZ; ++v) {
+      __m256d lo[4], hi[4];
+      addend_t4(add.s + 8 * v * add.ld, add.ld, add.rows - 8 * v, NR, lo);
+      addend_t4(add.s + (8 * v + 4) * add.ld, add.ld, add.rows - 8 * v - 4, NR, hi);
+      KUAVO_UNROLL
+      for (int j = 0; j < NR; ++j) {
+        const __m512d t = _mm512_insertf64x4(_mm512_castpd256_pd512(lo[j]), hi[j], 1);
+        _mm512_storeu_pd(C + j * ldc + 8 * v, _mm512_add_pd(t, acc[v][j]));
+      }
+    }
+    if constexpr (kHalf) {
+      __m256d t[4];
+      addend_t4(add.s + 8 * MZ * add.ld, add.ld, add.rows - 8 * MZ, NR, t);
+      KUAVO_UNROLL
+      for (int j = 0; j < NR; ++j) _mm256_storeu_pd(C + j * ldc + 8 * MZ, _mm256_add_pd(t[j], acc_h[j]));
+    }
+  } else if constexpr (kUpdate == Update::kSum) {
+    KUAVO_UNROLL
+    for (int j = 0; j < NR; ++j) {
+      double* c = C + j * ldc;
+      const double* s = add.s + j * add.ld;
+      KUAVO_UNROLL
+      for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j], s + 8 * v, add.rows - 8 * v);
+      if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j], s + 8 * MZ, add.rows - 8 * MZ);
+    }
+  } else {
+    KUAVO_UNROLL
+    for (int j = 0; j < NR; ++j) {
+      double* c = C + j * ldc;
+      KUAVO_UNROLL
+      for (int v = 0; v < MZ; ++v) update_zmm<kUpdate>(c + 8 * v, acc[v][j]);
+      if constexpr (kHalf) update_ymm<kUpdate>(c + 8 * MZ, acc_h[j]);
+    }
   }
 }
 #endif
@@ -212,11 +281,11 @@ inline void tile_column(int i, int m, int k, const double* A, int lda, const dou
   // blocks: 52 u rows = 24 + 28, 40 x rows = 24 + 16), so no column ends in a short tile that
   // re-reads B for a few rows.
   for (; m - i > 28; i += 24) {
-    tile_zmm<3, false, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
+    tile_zmm<3, false, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.template offset<kUpdate>(i, 0));
   }
   const double* Ai = A + i;
   double* Ci = C + i;
-  const Addend ai = add.offset(i, 0);
+  const Addend ai = add.template offset<kUpdate>(i, 0);
   switch (m - i) {
     case 28: tile_zmm<3, true, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
     case 24: tile_zmm<3, false, NR, kTransB, kUpdate>(k, Ai, lda, B, ldb, Ci, ldc, ai); break;
@@ -228,8 +297,8 @@ inline void tile_column(int i, int m, int k, const double* A, int lda, const dou
     default: break;  // m − i == 0
   }
 #else
-  for (; i + 8 <= m; i += 8) tile<8, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
-  if (i < m) tile<4, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.offset(i, 0));
+  for (; i + 8 <= m; i += 8) tile<8, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.template offset<kUpdate>(i, 0));
+  if (i < m) tile<4, NR, kTransB, kUpdate>(k, A + i, lda, B, ldb, C + i, ldc, add.template offset<kUpdate>(i, 0));
 #endif
 }
 
@@ -246,7 +315,7 @@ inline void gemm(int m, int n, int k, const double* A, int lda, const double* B,
     const int i = kLower ? j : 0;
     const double* Bj = b_entry<kTransB>(B, ldb, 0, j);
     double* Cj = C + j * ldc;
-    const Addend aj = add.offset(0, j);
+    const Addend aj = add.template offset<kUpdate>(0, j);
     switch (std::min(4, n - j)) {
       case 4: tile_column<4, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;
       case 3: tile_column<3, kTransB, kUpdate>(i, m, k, A, lda, Bj, ldb, Cj, ldc, aj); break;

@@ -57,24 +57,30 @@ void check_gemm(int m, int n, int k, std::mt19937_64& rng) {
   }
 }
 
-// C = S + A·op(B) (kSum) with S's first s_rows rows (the rest read as zero): against Eigen, and
-// bit for bit against kAdd on a copy of S (what the matrix pass did before it folded R and Q into
-// the products). Rows of S's storage past s_rows hold NaN, so a load past them would show; C's
-// old contents must not matter.
-template <bool kTransB, bool kLower>
+// C = S + A·op(B) (kSum) or Sᵀ + A·op(B) (kSumT) with the addend's first s_rows rows (the rest
+// read as zero): against Eigen, and bit for bit against kAdd on a copy of the addend (what the
+// matrix pass did before it folded R, S and Q into the products). S's storage past the addend's
+// rows and columns holds NaN, so a load past them would show; C's old contents must not matter.
+template <bool kTransB, bool kLower, Update kSum>
 void check_gemm_sum(int m, int n, int k, int s_rows, std::mt19937_64& rng) {
   const int ld = m + 4;
   const MatrixXd A = random_matrix(ld, k, rng);
   const MatrixXd B = kTransB ? random_matrix(n + 3, k, rng) : random_matrix(k + 3, n, rng);
-  MatrixXd S = MatrixXd::Constant(s_rows + 3, n, std::numeric_limits<double>::quiet_NaN());
-  S.topRows(s_rows) = random_matrix(s_rows, n, rng);
-  MatrixXd S_ext = MatrixXd::Zero(ld, n);  // S, zero below its rows
-  S_ext.topRows(std::min(s_rows, m)) = S.topRows(std::min(s_rows, m));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const MatrixXd addend = random_matrix(s_rows, n, rng);  // C's rows [0, s_rows)
+  MatrixXd S = kSum == Update::kSumT ? MatrixXd::Constant(n + 3, s_rows + 3, nan) : MatrixXd::Constant(s_rows + 3, n, nan);
+  if (kSum == Update::kSumT) {
+    S.topLeftCorner(n, s_rows) = addend.transpose();
+  } else {
+    S.topRows(s_rows) = addend;
+  }
+  MatrixXd S_ext = MatrixXd::Zero(ld, n);  // the addend, zero below its rows
+  S_ext.topRows(std::min(s_rows, m)) = addend.topRows(std::min(s_rows, m));
   const MatrixXd C0 = random_matrix(ld, n, rng);
   MatrixXd C = C0;
-  kernels::gemm<kTransB, Update::kSum, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
-                                               static_cast<int>(B.rows()), C.data(), ld,
-                                               kernels::Addend{S.data(), static_cast<int>(S.rows()), s_rows});
+  kernels::gemm<kTransB, kSum, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
+                                       static_cast<int>(B.rows()), C.data(), ld,
+                                       kernels::Addend{S.data(), static_cast<int>(S.rows()), s_rows});
   MatrixXd C_add = C0;
   C_add.topRows(m) = S_ext.topRows(m);
   kernels::gemm<kTransB, Update::kAdd, kLower>(m, n, k, A.data(), static_cast<int>(A.rows()), B.data(),
@@ -102,9 +108,11 @@ TEST(RiccatiKernels, ProductsOntoASeparateAddendMatchEigenAndTheCopiedSum) {
       for (const int k : {0, 1, 38}) {
         for (const int s_rows : {m, m - 2, m - 5, m - 11, 1}) {
           if (s_rows < 1) continue;
-          check_gemm_sum<true, true>(m, n, k, s_rows, rng);
-          check_gemm_sum<false, true>(m, n, k, s_rows, rng);
-          check_gemm_sum<true, false>(m, n, k, s_rows, rng);
+          check_gemm_sum<true, true, Update::kSum>(m, n, k, s_rows, rng);
+          check_gemm_sum<false, true, Update::kSum>(m, n, k, s_rows, rng);
+          check_gemm_sum<true, false, Update::kSum>(m, n, k, s_rows, rng);
+          check_gemm_sum<true, false, Update::kSumT>(m, n, k, s_rows, rng);
+          check_gemm_sum<false, false, Update::kSumT>(m, n, k, s_rows, rng);
         }
       }
     }
