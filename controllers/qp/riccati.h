@@ -232,34 +232,28 @@ void copy_addend(int i0, int i1, int j0, int j1, const kernels::Addend& add, dou
   }
 }
 
-// C[m×n] += Zᵀ_rows·(Zᵀ_cols)ᵀ, the rows of Zᵀ from row0, its columns' rows from col0 (multiples
-// of 4), each 4-row strip against each run of row groups of equal extent over the shorter of
-// the two extents. kLower: C is a diagonal block (row0 == col0), only rows from each strip's
-// diagonal on. With add.s: C = S + the product instead (kSum, or Sᵀ + the product: kSumT; S
-// copied where the extents leave no terms).
+// C[m×n] = S + Zᵀ_rows·(Zᵀ_cols)ᵀ (kSum; kSumT: Sᵀ + …, S from add), the rows of Zᵀ from row0,
+// its columns' rows from col0 (multiples of 4), each 4-row strip against each run of row groups
+// of equal extent over the shorter of the two extents; S copied where the extents leave no
+// terms. kLower: C is a diagonal block (row0 == col0), only rows from each strip's diagonal on.
 template <bool kLower, kernels::Update kSum = kernels::Update::kSum>
 void add_product_by_extents(const int* extent, int row0, int m, int col0, int n, const double* Zt, int ld,
-                            double* C, const kernels::Addend& add = {}) {
-  using kernels::gemm;
-  using kernels::Update;
-  const bool sum = add.s != nullptr;
+                            double* C, const kernels::Addend& add) {
   for (int j = 0; j < n; j += 4) {
     const int ej = extent[(col0 + j) / 4];
     const int nj = std::min(4, n - j);
     int i = kLower ? j : 0;
     if (ej == 0) {
-      if (sum) copy_addend<kSum>(i, m, j, j + nj, add, C, ld);
+      copy_addend<kSum>(i, m, j, j + nj, add, C, ld);
       continue;
     }
     while (i < m) {
       const ExtentRun run = extent_run(extent, row0, i, m);
       const int k = std::min(run.max_extent, ej);
-      if (k > 0 && sum) {
-        gemm<true, kSum>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld,
-                         add.offset<kSum>(i, j));
-      } else if (k > 0) {
-        gemm<true, Update::kAdd>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld);
-      } else if (sum) {
+      if (k > 0) {
+        kernels::gemm<true, kSum>(run.end - i, nj, k, Zt + row0 + i, ld, Zt + col0 + j, ld, C + i + j * ld, ld,
+                                  add.offset<kSum>(i, j));
+      } else {
         copy_addend<kSum>(i, run.end, j, j + nj, add, C, ld);
       }
       i = run.end;
