@@ -15,6 +15,7 @@
 
 #include "controllers/mpc/mpc.h"
 #include "controllers/standing/standing_controller.h"
+#include "tools/bench/bench_stats.h"
 
 namespace {
 
@@ -69,10 +70,7 @@ Fixture& fixture() {
   return *f;
 }
 
-double percentile(std::vector<double>& v, int p) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, v.size() * static_cast<std::size_t>(p) / 100)];
-}
+using kuavo::bench::percentile;
 
 void BM_MpcStep(benchmark::State& state, bool stepping) {
   Fixture& f = fixture();

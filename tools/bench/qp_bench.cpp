@@ -24,6 +24,7 @@
 
 #include "controllers/qp/dense_qp_solver.h"
 #include "controllers/qp/ocp_solver.h"
+#include "tools/bench/bench_stats.h"
 
 namespace {
 
@@ -206,12 +207,10 @@ void riccati_once(benchmark::State& state, bool equalities, RiccatiPart part = R
     // At N = 60 the solve streams ~10 MB through the L3 this VM shares with other tenants: its
     // time spreads by tens of percent with their traffic (at N = 6, L2-resident, by ~3 %), so
     // the spread is reported beside the mean. min: the quiet-machine cost.
-    std::sort(fused_us.begin(), fused_us.end());
-    const auto at = [&](double q) { return fused_us[static_cast<size_t>(q * double(fused_us.size() - 1))]; };
-    state.counters["min_us"] = fused_us.front();
-    state.counters["p10_us"] = at(0.10);
-    state.counters["p50_us"] = at(0.50);
-    state.counters["p90_us"] = at(0.90);
+    state.counters["min_us"] = kuavo::bench::percentile(fused_us, 0);
+    state.counters["p10_us"] = kuavo::bench::percentile(fused_us, 10);
+    state.counters["p50_us"] = kuavo::bench::percentile(fused_us, 50);
+    state.counters["p90_us"] = kuavo::bench::percentile(fused_us, 90);
   }
   int factored = 0;  // stages whose cost-to-go took the square-root path
   for (const auto& w : b->ws.riccati.stage) factored += w.p_factored ? 1 : 0;
