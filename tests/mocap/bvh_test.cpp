@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -162,6 +163,120 @@ TEST(mocap_bvh, MalformedFilesNameTheLineAndProblem) {
     EXPECT_FALSE(parse_bvh(c.text, b, error)) << c.text;
     EXPECT_NE(error.find(c.expect), std::string::npos) << "got: " << error << "\nexpected: " << c.expect;
   }
+}
+
+std::string with_line_endings(const std::string& lf_text, const std::string& eol) {
+  std::string out;
+  for (char c : lf_text) {
+    if (c == '\n')
+      out += eol;
+    else
+      out += c;
+  }
+  return out;
+}
+
+// Issue 22: a UTF-8 byte-order mark read as "expected HIERARCHY, found '???HIERARCHY'", and
+// CR-only line endings put the whole file on one line ("motion row 0 has more than 96 values").
+TEST(mocap_bvh, ByteOrderMarkAndEveryLineEndingReadTheSame) {
+  std::string lf = read_file(kMocap + "cmu_05_20_mb.bvh");
+  lf.erase(std::remove(lf.begin(), lf.end(), '\r'), lf.end());  // the clip mixes CRLF and LF
+  Bvh reference;
+  std::string error;
+  ASSERT_TRUE(parse_bvh(lf, reference, error)) << error;
+  std::string mixed;  // every third line ends CRLF, every third CR alone
+  int line = 0;
+  for (char c : lf) {
+    if (c != '\n') {
+      mixed += c;
+      continue;
+    }
+    mixed += line % 3 == 0 ? "\r\n" : line % 3 == 1 ? "\r" : "\n";
+    ++line;
+  }
+  const std::string variants[] = {"\xEF\xBB\xBF" + lf, with_line_endings(lf, "\r\n"), with_line_endings(lf, "\r"),
+                                  "\xEF\xBB\xBF" + with_line_endings(lf, "\r"), mixed};
+  for (const std::string& text : variants) {
+    Bvh b;
+    ASSERT_TRUE(parse_bvh(text, b, error)) << error;
+    EXPECT_EQ(b.motion, reference.motion);
+    ASSERT_EQ(b.joints.size(), reference.joints.size());
+    for (std::size_t i = 0; i < b.joints.size(); ++i) {
+      EXPECT_EQ(b.joints[i].name, reference.joints[i].name);
+      EXPECT_EQ(b.joints[i].line, reference.joints[i].line);  // lines counted the same way
+    }
+  }
+}
+
+// Errors name the same line whatever the line endings.
+TEST(mocap_bvh, ErrorLinesAreTheSameInEveryLineEnding) {
+  const std::string text =
+      "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n}\n"
+      "MOTION\nFrames: 3\nFrame Time: 0.1\n1 2 3\n4 5\n7 8 9\n";
+  for (const char* eol : {"\n", "\r\n", "\r"}) {
+    Bvh b;
+    std::string error;
+    EXPECT_FALSE(parse_bvh(with_line_endings(text, eol), b, error));
+    EXPECT_NE(error.find("line 11: motion row 1 has 2 values, expected 3"), std::string::npos) << error;
+    EXPECT_FALSE(parse_bvh("\xEF\xBB\xBF" + with_line_endings(text, eol), b, error));
+    EXPECT_NE(error.find("line 11: motion row 1 has 2 values, expected 3"), std::string::npos) << error;
+  }
+  Bvh b;
+  std::string error;
+  EXPECT_FALSE(parse_bvh(std::string("\xFF\xFEH\0I\0", 6), b, error));
+  EXPECT_NE(error.find("line 1: the file is UTF-16"), std::string::npos) << error;
+}
+
+// Issue 22: Frame Time 1e-9 and 10 s were accepted, and a root channel scaled by 1e300 made
+// an all-NaN motion. Every bound names the line and the rule; values at a bound still pass.
+TEST(mocap_bvh, ValuesBeyondHumanMotionNameTheLineAndTheRule) {
+  const auto file = [](const std::string& offset, const std::string& frames, const std::string& dt,
+                       const std::string& row) {
+    return "HIERARCHY\nROOT Hips\n{\nOFFSET " + offset +
+           "\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+           "End Site\n{\nOFFSET 0 -10 0\n}\n}\nMOTION\nFrames: " +
+           frames + "\nFrame Time: " + dt + "\n" + row + "\n";
+  };
+  const std::string ok_row = "0 90 0 0 0 0";
+  struct Case {
+    std::string text;
+    std::string expect;  // empty: accepted
+  };
+  const Case cases[] = {
+      {file("0 0 0", "1", "1e-9", ok_row), "line 13: Frame Time: '1e-9' s is below 0.0001 s"},
+      {file("0 0 0", "1", "10", ok_row), "line 13: Frame Time: '10' s is above 0.25 s"},
+      {file("0 0 0", "1", "0.0001", ok_row), ""},
+      {file("0 0 0", "1", "0.25", ok_row), ""},
+      {file("0 0 0", "7202", "0.25", ok_row), "line 12: Frames: 7202 at Frame Time 0.25 s last 1800.25 s"},
+      {file("0 0 0", "0", "0.01", ""), "line 12: Frames: needs a positive integer"},
+      {file("0 1e300 0", "1", "0.01", ok_row), "line 4: OFFSET of 'Hips' '1e300' exceeds 100000 file units"},
+      {file("0 -100000 0", "1", "0.01", ok_row), ""},
+      {file("0 0 0", "1", "0.01", "0 9e301 0 0 0 0"),
+       "line 14: motion row 0, 'Hips' Yposition '9e301' exceeds 100000 file units"},
+      {file("0 0 0", "1", "0.01", "0 90 0 0 -1000001 0"),
+       "line 14: motion row 0, 'Hips' Xrotation '-1000001' exceeds 1e+06 degrees"},
+      {file("0 0 0", "1", "0.01", "0 90 0 0 -1000000 0"), ""},
+  };
+  for (const Case& c : cases) {
+    Bvh b;
+    std::string error;
+    const bool ok = parse_bvh(c.text, b, error);
+    if (c.expect.empty()) {
+      EXPECT_TRUE(ok) << error << "\n" << c.text;
+      continue;
+    }
+    EXPECT_FALSE(ok) << c.text;
+    EXPECT_NE(error.find(c.expect), std::string::npos) << "got: " << error << "\nexpected: " << c.expect;
+  }
+  // The shared clip with its root position channels scaled by 1e300, as the fuzzer did it.
+  Bvh clip;
+  std::string error;
+  ASSERT_TRUE(load_bvh_file(kMocap + "cmu_05_20_mb.bvh", clip, error)) << error;
+  for (int f = 0; f < clip.frame_count; ++f) clip.motion[static_cast<std::size_t>(f) * clip.channel_count] *= 1e300;
+  Bvh b;
+  EXPECT_FALSE(parse_bvh(write_bvh(clip), b, error));
+  EXPECT_NE(error.find("'Hips' Xposition"), std::string::npos) << error;
+  EXPECT_NE(error.find("exceeds 100000 file units"), std::string::npos) << error;
 }
 
 // Seeded mutation + truncation fuzz: every input either parses or fails with "line N: ...".

@@ -19,9 +19,10 @@ struct Token {
   int line;
 };
 
-// Splits into whitespace-separated tokens with their 1-based line numbers. '\r' is
-// whitespace, so CRLF, LF and a mix of both read the same. Braces are tokens even when
-// glued to a word ("{" after a name without a space happens in hand-edited files).
+// Splits into whitespace-separated tokens with their 1-based line numbers. LF, CRLF and a
+// lone CR (classic Mac OS) each end a line, so every convention and any mix of them reads the
+// same and motion rows break where the file's lines do. Braces are tokens even when glued to
+// a word ("{" after a name without a space happens in hand-edited files).
 class Lexer {
  public:
   explicit Lexer(std::string_view text) : text_(text) {}
@@ -55,7 +56,8 @@ class Lexer {
   static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
   void skip_space() {
     while (pos_ < text_.size() && is_space(text_[pos_])) {
-      if (text_[pos_] == '\n') ++line_;
+      const bool lone_cr = text_[pos_] == '\r' && (pos_ + 1 >= text_.size() || text_[pos_ + 1] != '\n');
+      if (text_[pos_] == '\n' || lone_cr) ++line_;
       ++pos_;
     }
   }
@@ -98,6 +100,14 @@ bool parse_channel(std::string_view s, BvhChannel& c) {
   return false;
 }
 
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+constexpr const char* kLengthReason = "100 m in millimetres: no capture volume or bone is that large";
+
 std::string quote(std::string_view s) {
   std::string out = "'";
   for (char c : s.substr(0, 40)) out += (c >= 32 && c < 127) ? c : '?';
@@ -139,6 +149,9 @@ class Parser {
       if (!lex_.next(t)) return fail(lex_.line(), "unexpected end of file in OFFSET of " + quote(j.name));
       if (!to_double(t.text, j.offset[k]))
         return fail(t.line, "OFFSET of " + quote(j.name) + " needs 3 finite numbers, found " + quote(t.text));
+      if (std::abs(j.offset[k]) > kBvhMaxLength)
+        return fail(t.line, "OFFSET of " + quote(j.name) + " " + quote(t.text) + " exceeds " + number(kBvhMaxLength) +
+                                " file units (" + kLengthReason + ")");
     }
     return true;
   }
@@ -225,17 +238,28 @@ class Parser {
     if (t.text != "MOTION") return fail(t.line, "expected MOTION after the hierarchy, found " + quote(t.text));
     if (!expect("Frames:", t)) return false;
     long frames = 0;
-    if (!lex_.next(t) || !to_int(t.text, frames) || frames < 0)
-      return fail(t.line, "Frames: needs a non-negative integer, found " + quote(t.text));
+    if (!lex_.next(t) || !to_int(t.text, frames) || frames < 1)
+      return fail(t.line, "Frames: needs a positive integer (a motion has at least one frame), found " + quote(t.text));
+    const int frames_line = t.line;
     Token w1, w2;
     if (!lex_.next(w1) || w1.text != "Frame" || !lex_.next(w2) || w2.text != "Time:")
       return fail(w1.line, "expected 'Frame Time:'");
     double dt = 0.0;
-    if (!lex_.next(t) || !to_double(t.text, dt) || !(dt > 0.0) || dt > 10.0)
+    if (!lex_.next(t) || !to_double(t.text, dt) || !(dt > 0.0))
       return fail(t.line, "Frame Time: needs a positive number of seconds, found " + quote(t.text));
+    if (dt < kBvhMinFrameTime_s)
+      return fail(t.line, "Frame Time: " + quote(t.text) + " s is below " + number(kBvhMinFrameTime_s) +
+                              " s (10 kHz: faster than any motion capture records)");
+    if (dt > kBvhMaxFrameTime_s)
+      return fail(t.line, "Frame Time: " + quote(t.text) + " s is above " + number(kBvhMaxFrameTime_s) +
+                              " s (4 Hz: slower, a dance's beat is no longer sampled)");
+    if (static_cast<double>(frames - 1) * dt > kBvhMaxDuration_s)
+      return fail(frames_line, "Frames: " + std::to_string(frames) + " at Frame Time " + number(dt) + " s last " +
+                                   number(static_cast<double>(frames - 1) * dt) + " s, more than " +
+                                   number(kBvhMaxDuration_s) + " s (one dance piece per motion file)");
     const long columns = out_.channel_count;
     if (columns > 0 && frames > kBvhMaxValues / columns)
-      return fail(t.line, "Frames: " + std::to_string(frames) + " is too large for this parser");
+      return fail(frames_line, "Frames: " + std::to_string(frames) + " is too large for this parser");
     out_.frame_count = static_cast<int>(frames);
     out_.frame_time_s = dt;
     // Reserve only what the text can hold (each value is at least 2 characters), so a
@@ -259,6 +283,7 @@ class Parser {
       }
       double v = 0.0;
       if (!to_double(t.text, v)) return fail(t.line, "motion value " + quote(t.text) + " is not a finite number");
+      if (!value_in_bounds(in_row, v, t, row)) return false;
       out_.motion.push_back(v);
       if (++in_row == columns) {
         in_row = 0;
@@ -273,6 +298,25 @@ class Parser {
       return fail(lex_.line(), "file ends after " + std::to_string(row) + " of " + std::to_string(frames) +
                                    " motion rows (truncated?)");
     return true;
+  }
+
+  // Position channels within kBvhMaxLength, rotations within kBvhMaxAngle_deg.
+  bool value_in_bounds(long column, double v, const Token& t, long row) {
+    if (column_joint_.empty()) {  // column → joint, built once
+      column_joint_.resize(static_cast<std::size_t>(out_.channel_count));
+      for (std::size_t i = 0; i < out_.joints.size(); ++i)
+        for (std::size_t k = 0; k < out_.joints[i].channels.size(); ++k)
+          column_joint_[static_cast<std::size_t>(out_.joints[i].first_column) + k] = static_cast<int>(i);
+    }
+    const BvhJoint& j = out_.joints[static_cast<std::size_t>(column_joint_[static_cast<std::size_t>(column)])];
+    const BvhChannel c = j.channels[static_cast<std::size_t>(column - j.first_column)];
+    const bool position = static_cast<int>(c) < 3;
+    const double bound = position ? kBvhMaxLength : kBvhMaxAngle_deg;
+    if (std::abs(v) <= bound) return true;
+    return fail(t.line, "motion row " + std::to_string(row) + ", " + quote(j.name) + " " + channel_name(c) + " " +
+                            quote(t.text) + " exceeds " + number(bound) +
+                            (position ? std::string(" file units (") + kLengthReason + ")"
+                                      : std::string(" degrees (2 778 turns: no dance turns that far)")));
   }
 
   // A position channel is absolute when its values sit around OFFSET rather than around 0
@@ -298,6 +342,7 @@ class Parser {
   Lexer lex_;
   Bvh& out_;
   std::string& error_;
+  std::vector<int> column_joint_;
 };
 
 Mat3 axis_rotation(int axis, double deg) {
@@ -331,6 +376,16 @@ int Bvh::find(std::string_view name) const {
 }
 
 bool parse_bvh(std::string_view text, Bvh& out, std::string& error) {
+  // A UTF-8 byte-order mark (Windows editors write one) is not part of the text. UTF-16 and
+  // UTF-32 are not BVH: say so instead of failing on the NUL bytes.
+  constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+  if (text.substr(0, 3) == kUtf8Bom) text.remove_prefix(3);
+  if (text.substr(0, 2) == "\xFF\xFE" || text.substr(0, 2) == "\xFE\xFF" ||
+      text.substr(0, 4) == std::string_view("\x00\x00\xFE\xFF", 4)) {
+    out = Bvh{};
+    error = "line 1: the file is UTF-16 or UTF-32 (byte-order mark); save it as UTF-8 or ASCII";
+    return false;
+  }
   Parser p(text, out, error);
   try {
     if (p.run()) return true;

@@ -3,7 +3,7 @@
 // The reader accepts the dialects met in practice (see ../shared/mocap/README.md):
 //   - any rotation channel order per joint (ZYX, YXZ, ...), 0, 3 or 6 channels, position
 //     channels on any joint;
-//   - CRLF, LF and mixed line endings, tabs or spaces;
+//   - a UTF-8 byte-order mark; LF, CRLF, CR-only and mixed line endings; tabs or spaces;
 //   - zero-length helper joints (they simply pose to the parent's position);
 //   - position channels that are *added* to OFFSET (CMU, iClone CC_Base root) or that are
 //     *absolute* and replace it (MotionBuilder-style non-root 6-channel joints): decided per
@@ -50,9 +50,29 @@ struct Bvh {
 
 // Parser limits: far above any real capture, they bound memory on hostile input.
 inline constexpr int kBvhMaxJoints = 4096;
-inline constexpr long kBvhMaxValues = 200'000'000;  // frames × channels
+inline constexpr long kBvhMaxValues = 200'000'000;  // frames × channels (1.6 GB of doubles)
+
+// Bounds no human motion capture exceeds. Each refuses, with the line and the rule, input that
+// would otherwise become an absurd or non-finite motion further down (a root channel of 1e300
+// made an all-NaN motion; Frame Time 1e-9 a one-frame one; Frame Time 10 s 1.3 million frames).
+// 10 kHz: faster than any full-body capture records (optical systems reach 2 kHz at full
+// resolution, IMU suits 1 kHz).
+inline constexpr double kBvhMinFrameTime_s = 1e-4;
+// 4 Hz: sampled any slower, the beat of a 120 bpm dance (2 Hz) is past the Nyquist rate and
+// the dance itself is lost between frames.
+inline constexpr double kBvhMaxFrameTime_s = 0.25;
+// 30 min: longer than one dance piece, which is what one motion file plays (a show is a
+// sequence of pieces). Bounds the work and memory of every later stage up front.
+inline constexpr double kBvhMaxDuration_s = 1800.0;
+// OFFSET components and position channels [file units]: 100 m in millimetres, the smallest
+// unit in use. No capture volume is that large, and no bone comes near it in any unit.
+inline constexpr double kBvhMaxLength = 1e5;
+// Rotation channels [deg]: 2 778 turns. Unwrapped exports accumulate whole turns (the
+// shared iClone clip reaches 750°); 30 min of pirouettes at 1.5 turns/s is 2 700 turns.
+inline constexpr double kBvhMaxAngle_deg = 1e6;
 
 // Parses a whole BVH text. On failure returns false and sets error to "line N: problem".
+// Lines are counted as editors count them: LF, CRLF and a lone CR each end one line.
 bool parse_bvh(std::string_view text, Bvh& out, std::string& error);
 // Reads and parses a file; the error names the file too.
 bool load_bvh_file(const std::string& path, Bvh& out, std::string& error);
