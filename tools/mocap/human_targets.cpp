@@ -93,6 +93,61 @@ void keypoints_from_pose(const SkeletonMap& map, const std::vector<Vec3>& pose, 
   kp[kKpNeck] = 0.5 * (kp[kKpLeftShoulder] + kp[kKpRightShoulder]);
 }
 
+// Leading reference frames (T-pose, calibration or origin pose that converters and capture
+// software put before the motion). A reference is a held pose followed by a jump no human
+// motion makes; the rule reads the motion itself, so it holds whatever the dialect. Lengths are
+// in units of the dancer's leg (hip to ankle, about 0.8 m), so they hold whatever the unit.
+// How far into the clip a reference may reach: a calibration pose is held a few seconds.
+constexpr double kReferenceSearch_s = 5.0;
+// A held pose stays within this of its first frame: a person holding still sways and jitters
+// by 1-2 cm (0.05 leg is about 4 cm); more is motion, and motion is never dropped.
+constexpr double kHeldPose_leg = 0.05;
+// A jump smaller than this (about 16 cm, half a forearm) leaves a pose close enough to the
+// motion's first one that keeping it is harmless.
+constexpr double kMinJump_leg = 0.2;
+// No keypoint of a human moves faster: about 25 m/s, above a kicking foot (about 20 m/s) and a
+// punching fist (about 13 m/s). A larger step in one frame time is a discontinuity.
+constexpr double kMaxKeypointSpeed_leg_per_s = 30.0;
+// At low frame rates a fast move can take a large step in one frame, but then the frames after
+// it move as much: a jump is a discontinuity only if it is this many times the median step over
+// the next kJumpContext_s (motion changes speed smoothly; a reference jump lands on a still or
+// slow start).
+constexpr double kJumpRatio = 5.0;
+constexpr double kJumpContext_s = 0.25;
+
+double percentile(std::vector<double> v, double p);
+
+double largest_step(const KpArray& a, const KpArray& b, const std::array<bool, kNumKeypoints>& present) {
+  double d = 0.0;
+  for (int k = 0; k < kNumKeypoints; ++k)
+    if (present[k]) d = std::max(d, (b[k] - a[k]).norm());
+  return d;
+}
+
+// Number of leading reference frames: repeatedly, a held run of frames that ends in a
+// discontinuity is dropped; the first run that moves before any jump is the motion.
+int count_reference_frames(const std::vector<KpArray>& src, const std::array<bool, kNumKeypoints>& present, double leg,
+                           double dt_s) {
+  const int frames = static_cast<int>(src.size());
+  const int last = std::min(frames - 3, static_cast<int>(std::floor(kReferenceSearch_s / dt_s)));  // keep 2
+  const int context = std::max(3, static_cast<int>(std::ceil(kJumpContext_s / dt_s)));
+  const auto discontinuity = [&](int t) {
+    const double step = largest_step(src[t], src[t + 1], present);
+    if (!(step > kMinJump_leg * leg)) return false;
+    if (step > kMaxKeypointSpeed_leg_per_s * leg * dt_s) return true;
+    std::vector<double> next;
+    for (int u = t + 1; u < std::min(frames - 1, t + 1 + context); ++u)
+      next.push_back(largest_step(src[u], src[u + 1], present));
+    return step > kJumpRatio * percentile(next, 0.5);
+  };
+  int start = 0;
+  for (int t = 0; t <= last; ++t) {
+    if (largest_step(src[start], src[t], present) > kHeldPose_leg * leg) break;  // moving: the motion
+    if (discontinuity(t)) start = t + 1;
+  }
+  return start;
+}
+
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   const std::size_t i = static_cast<std::size_t>(std::clamp(p, 0.0, 1.0) * static_cast<double>(v.size() - 1));
@@ -241,21 +296,9 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   }
   out.human_height_m = stature_units * out.unit_to_m;
 
-  // 1. Reference frame 0: a jump to frame 1 larger than 10 % of the stature that is also
-  //    5 times the next frame's motion is no human motion.
+  // 1. Leading reference frames: held poses that end in a jump no human makes.
   int drop = options.drop_first_frames;
-  if (drop < 0) {
-    drop = 0;
-    if (bvh.frame_count >= 3) {
-      double d01 = 0.0, d12 = 0.0;
-      for (int k = 0; k < kNumKeypoints; ++k) {
-        if (!out.present[k]) continue;
-        d01 = std::max(d01, (src[1][k] - src[0][k]).norm());
-        d12 = std::max(d12, (src[2][k] - src[1][k]).norm());
-      }
-      if (d01 > 0.1 * stature_units && d01 > 5.0 * d12) drop = 1;
-    }
-  }
+  if (drop < 0) drop = count_reference_frames(src, out.present, human_leg, bvh.frame_time_s);
   if (bvh.frame_count - drop < 2) {
     error = "fewer than 2 motion frames remain after dropping " + std::to_string(drop);
     return false;

@@ -1,8 +1,12 @@
 // From a parsed BVH to robot-proportioned keypoint targets at 100 Hz.
 //
 // Steps (each one is a documented choice, reported in HumanTargets):
-//  1. Reference frame: a T-pose or reference pose prepended as frame 0 (cgspeed, iClone,
-//     Perfume) is detected as an impossible jump between frames 0 and 1 and dropped.
+//  1. Reference frames: T-poses, calibration or origin poses put before the motion (cgspeed's
+//     T-pose, Perfume's pose at the origin) are dropped whatever the dialect: repeatedly, a
+//     held run of leading frames (still within 0.05 leg lengths) that ends in a jump no human
+//     makes (over 0.2 leg lengths, and faster than 30 leg lengths/s or 5 times the median step of
+//     the next 0.25 s) goes; the first run that moves before any jump is the motion, and nothing
+//     after it is ever dropped. Searched over the first 5 s; the count is reported.
 //  2. Units: BVH has none. The stature implied by the leg length picks metres, centimetres,
 //     millimetres, inches or CMU units (×0.056444 m), whichever gives the most human height.
 //     Only the report uses it: all geometry below is scaled by ratios.
@@ -56,7 +60,7 @@ struct TargetFrame {
 
 struct ImportOptions {
   double rate_hz = 100.0;
-  int drop_first_frames = -1;     // -1: detect a reference frame 0; >= 0: drop exactly this many
+  int drop_first_frames = -1;     // -1: detect leading reference frames; >= 0: drop exactly this many
   double heading_window_s = 0.5;  // the start heading is the mean hip line over this time
   bool feet_above_floor = true;   // clamp ankle/toe/heel targets to flat-foot height (step 6)
 };
