@@ -5,11 +5,18 @@
 // midpoints of the two hips and of the two shoulders on both sides, which makes the
 // pelvis→hip and neck→shoulder vectors purely lateral on human and robot alike.
 //
-// Built-in naming families (matched after lower-casing, dropping non-alphanumerics and a
-// "namespace:" prefix such as "mixamorig:"): CMU/cgspeed (LeftUpLeg, LeftArm ...), Mixamo
-// (same names under a prefix), Perfume (LeftHip, LeftShoulder = upper arm ...), iClone
-// CC_Base (CC_Base_L_Thigh ...), generic lower-case (l_hip, left_knee ...) and the robot's own
-// link names (leg_l3_link ... as written by robot_bvh.h). Anything else: a mapping file.
+// Built-in naming, no mapping file needed: a joint name is read, case-insensitively, as a
+// side plus a body-part word, after dropping a rig prefix (a "namespace:" such as "mixamorig:",
+// "mixamorig", "CC_Base_", "Bip01 ", Rigify's "DEF-"). The side is written as a word before or
+// after the part ("LeftUpLeg", "Left Knee", "ThighLeft") or a letter after a separator
+// ("thigh.L", "UpperLeg_L", "L_Thigh", "Bip01 L Calf") or before the part ("lThigh", "rShin").
+// The part must then be one of a keypoint's words as a whole: "LeftHandThumb1" is never the
+// wrist ("hand"), "Leg" never l + "eg". That covers CMU/cgspeed, Mixamo, Perfume, iClone
+// CC_Base, Blender/Rigify, Unity-style suffixes, DAZ/Poser prefixes, 3ds Max Biped and generic
+// names (words per keypoint in skeleton_map.cpp); the robot's own link names (robot_bvh.h) are
+// matched exactly. A match that cannot be right stops the import with a message: two joints
+// reading the same, or a keypoint not below its chain parent (knee below hip, ...), or the two
+// legs or arms not on separate branches. Anything else: a mapping file.
 #pragma once
 
 #include <array>
@@ -57,15 +64,19 @@ bool keypoint_optional(int kp);
 
 struct SkeletonMap {
   std::array<int, kNumMappedKeypoints> joint{};  // BVH joint index per keypoint, -1 if absent
-  std::string family;                            // "cmu", "perfume", "cc_base", "robot", "generic", "file"
+  // "cmu", "mixamo", "perfume", "cc_base", "biped", "blender", "side_suffix", "side_prefix",
+  // "robot", "generic" or "file" (how the names were written; for the report).
+  std::string family;
 };
 
-// Maps by the built-in tables. On failure (a required keypoint unmapped) returns false
-// with an error listing every unmapped keypoint, the candidates tried and the BVH's joints.
+// Maps by name. On failure (a required keypoint unmapped, two joints reading the same, a
+// keypoint not below its chain parent) returns false with an error naming the keypoints, the
+// words looked for and the BVH's joints.
 bool map_skeleton(const Bvh& bvh, SkeletonMap& out, std::string& error);
 
 // A mapping file: one "keypoint = BVH joint name" per line, '#' starts a comment, blank
-// lines ignored. Entries override the built-in tables; the rest is still matched by name.
+// lines ignored. Entries override the name matching (and its checks); the rest is still
+// matched by name.
 bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, SkeletonMap& out, std::string& error);
 
 }  // namespace kuavo::mocap
