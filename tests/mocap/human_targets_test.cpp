@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
+
 #include "tools/mocap/default_dance.h"
 
 namespace kuavo::mocap {
@@ -131,6 +133,36 @@ TEST(mocap_human_targets, SharedClipsDropTheirReferenceFrames) {
     std::string error;
     ASSERT_TRUE(load_bvh_file(kMocap + file, b, error)) << error;
     EXPECT_EQ(import(b).dropped_frames, dropped) << file;
+  }
+}
+
+// A skeleton that names its sides from the viewer's side maps without complaint (every chain is
+// consistent), but the dancer would face backward with knees bending the wrong way: refused.
+TEST(mocap_human_targets, SwappedSidesAreRefused) {
+  const auto swap_sides = [](Bvh b) {
+    for (BvhJoint& j : b.joints) {
+      std::string& n = j.name;
+      if (n.rfind("Left", 0) == 0)
+        n = "Right" + n.substr(4);
+      else if (n.rfind("Right", 0) == 0)
+        n = "Left" + n.substr(5);
+      else if (n.size() > 1 && (n[0] == 'L' || n[0] == 'R') && std::isupper(static_cast<unsigned char>(n[1])))
+        // cgspeed's LHipJoint, LThumb
+        n[0] = n[0] == 'L' ? 'R' : 'L';
+    }
+    return b;
+  };
+  Bvh clip;
+  std::string error;
+  ASSERT_TRUE(load_bvh_file(kMocap + "cmu_05_20_mb.bvh", clip, error)) << error;
+  for (const Bvh& b : {default_dance_bvh(), clip}) {
+    HumanTargets t;
+    ASSERT_TRUE(import(b, t, error)) << error;  // as named: accepted
+    const Bvh swapped = swap_sides(b);
+    SkeletonMap map;
+    ASSERT_TRUE(map_skeleton(swapped, map, error)) << error;  // the names alone cannot tell
+    EXPECT_FALSE(import(swapped, t, error));
+    EXPECT_NE(error.find("left and right look swapped"), std::string::npos) << error;
   }
 }
 

@@ -148,6 +148,39 @@ int count_reference_frames(const std::vector<KpArray>& src, const std::array<boo
   return start;
 }
 
+// Sides as named: in any human stance the toes point ahead of the pelvis or sideways (a ballet
+// turnout, 90 degrees, at the extreme), never backward. The median over the clip of the cosine
+// between the foot (ankle to toe) and the facing direction (left hip minus right hip, crossed
+// with up) is well above zero for a correctly named skeleton and near -1 when left and right are
+// swapped (a skeleton named from the viewer's side). A median below this cosine (120 degrees,
+// further back than any turnout) means swapped.
+constexpr double kSwappedSidesCos = -0.5;
+// Feet whose ankle-to-toe vector is less than this share horizontal (steeper than 70 degrees)
+// are left out of that median.
+constexpr double kFootHorizontalShare = 0.33;
+
+double feet_forward_cos(const std::vector<KpArray>& src, const std::array<bool, kNumKeypoints>& present,
+                        const Vec3& up) {
+  if (!present[kKpLeftToe] || !present[kKpRightToe]) return 1.0;  // nothing to tell by
+  std::vector<double> cos;
+  cos.reserve(src.size());
+  const auto horizontal = [&](Vec3 v) { return Vec3(v - v.dot(up) * up); };
+  for (const KpArray& kp : src) {
+    const Vec3 forward = horizontal(kp[kKpLeftHip] - kp[kKpRightHip]).cross(up);
+    double sum = 0.0;
+    int feet = 0;
+    for (const auto& [toe, ankle] : {std::pair{kKpLeftToe, kKpLeftAnkle}, std::pair{kKpRightToe, kKpRightAnkle}}) {
+      const Vec3 foot = horizontal(kp[toe] - kp[ankle]);
+      // A foot pointing down (tiptoe, or a toe End Site below the ankle) tells no direction.
+      if (!(foot.norm() > kFootHorizontalShare * (kp[toe] - kp[ankle]).norm()) || !(forward.norm() > 1e-9)) continue;
+      sum += foot.normalized().dot(forward.normalized());
+      ++feet;
+    }
+    if (feet > 0) cos.push_back(sum / feet);
+  }
+  return cos.empty() ? 1.0 : percentile(cos, 0.5);
+}
+
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   const std::size_t i = static_cast<std::size_t>(std::clamp(p, 0.0, 1.0) * static_cast<double>(v.size() - 1));
@@ -330,6 +363,13 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   to_robot.row(0) = lateral.cross(up).transpose();
   to_robot.row(1) = lateral.transpose();
   to_robot.row(2) = up.transpose();
+  if (const double cos = feet_forward_cos(src, out.present, up); cos < kSwappedSidesCos) {
+    error = "left and right look swapped: with the joints as named, the toes point backward (median cosine " +
+            std::to_string(cos) + " between foot and facing direction, below " + std::to_string(kSwappedSidesCos) +
+            "); the skeleton names its sides as seen from the front. Map it with --map (left_hip = <the joint on "
+            "the dancer's left> ...)";
+    return false;
+  }
 
   // 4. Robot-proportioned keypoints per source frame.
   std::vector<KpArray> scaled(src.size());

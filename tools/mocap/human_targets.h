@@ -13,7 +13,8 @@
 //  3. Axes: the up axis is the file axis closest to the mean pelvis→neck direction (Y for
 //     most files, Z for SFU-style files); heading: the left-hip minus right-hip direction,
 //     averaged over the first half second, becomes the robot's +y, so the dancer starts
-//     facing +x.
+//     facing +x. Sides as named must hold: if the toes point backward of that facing over most
+//     of the clip (median cosine below -0.5), left and right are swapped and the import stops.
 //  4. Proportional scaling: the pelvis path is scaled by robot/human leg length; every other
 //     keypoint is rebuilt down the chain pelvis→hip→knee→ankle→toe/heel and
 //     pelvis→neck→shoulder→elbow→wrist→hand/thumb, neck→head, each human segment vector scaled
