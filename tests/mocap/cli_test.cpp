@@ -74,5 +74,33 @@ TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
   EXPECT_EQ(run("--variant s44 -o x.motion", "_broken"), 2);
 }
 
+// Issue 22: values no human motion reaches exit 2 with the line and the rule, before any output
+// is written (Frame Time 10 s made a 374 MB file; a root channel of 1e300 an all-NaN motion).
+TEST(mocap_cli, AbsurdValuesExitTwoWithLineAndRule) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string head =
+      "\xEF\xBB\xBFHIERARCHY\rROOT Hips\r{\r  OFFSET 0 0 0\r  CHANNELS 6 Xposition Yposition Zposition "
+      "Zrotation Xrotation Yrotation\r  End Site\r  {\r    OFFSET 0 -10 0\r  }\r}\rMOTION\rFrames: 2\r";
+  struct Case {
+    const char* tag;
+    std::string tail;
+    const char* expect;
+  };
+  const Case cases[] = {
+      {"_dt", "Frame Time: 10\r0 90 0 0 0 0\r0 90 0 0 0 0\r", "line 13: Frame Time: '10' s is above 0.25 s"},
+      {"_huge", "Frame Time: 0.01\r0 90 0 0 0 0\r1e300 90 0 0 0 0\r",
+       "line 15: motion row 1, 'Hips' Xposition '1e300' exceeds"},
+  };
+  for (const Case& c : cases) {
+    const std::string bvh = kOut + c.tag + ".bvh", motion = kOut + c.tag + ".motion";
+    std::ofstream(bvh, std::ios::binary) << head + c.tail;
+    std::filesystem::remove(motion);
+    EXPECT_EQ(run(bvh + " -o " + motion, c.tag), 2);
+    const std::string message = slurp(kOut + c.tag + ".stderr");
+    EXPECT_NE(message.find(c.expect), std::string::npos) << message;
+    EXPECT_FALSE(std::filesystem::exists(motion));
+  }
+}
+
 }  // namespace
 }  // namespace kuavo::mocap
