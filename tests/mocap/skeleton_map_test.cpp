@@ -175,6 +175,7 @@ const Names kCmu = {"Hips", "LeftUpLeg", "LeftUpLegRoll", "LeftLeg", "LeftFoot",
 struct Family {
   const char* family;  // what map_skeleton reports
   Names names;
+  int thumb_role = kLThumb2;  // left thumb keypoint's joint; the right one mirrors it
 };
 const Family kFamilies[] = {
     {"cmu", kCmu},
@@ -199,7 +200,7 @@ const Family kFamilies[] = {
      "UpperArm_L", "LowerArm_L", "Hand_L", "ThumbProximal_L", "ThumbIntermediate_L", "MiddleProximal_L",
      "Shoulder_R", "UpperArm_R", "LowerArm_R", "Hand_R", "ThumbProximal_R", "ThumbIntermediate_R",
      "MiddleProximal_R"}},
-    {"perfume", {"Pelvis", "Left Thigh", "Left ThighTwist", "Left Knee", "Left Ankle", "Left Toe", "Right Thigh",
+    {"generic", {"Pelvis", "Left Thigh", "Left ThighTwist", "Left Knee", "Left Ankle", "Left Toe", "Right Thigh",
      "Right ThighTwist", "Right Knee", "Right Ankle", "Right Toe", "Spine", "Chest", "Neck", "Head", "Left Collar",
      "Left Shoulder", "Left Elbow", "Left Wrist", "Left Thumb1", "Left Thumb2", "Left Middle1", "Right Collar",
      "Right Shoulder", "Right Elbow", "Right Wrist", "Right Thumb1", "Right Thumb2", "Right Middle1"}},
@@ -221,6 +222,25 @@ const Family kFamilies[] = {
      "Bip01 L Hand", "Bip01 L Finger0", "Bip01 L Finger01", "Bip01 L Finger2", "Bip01 R Clavicle",
      "Bip01 R UpperArm", "Bip01 R Forearm", "Bip01 R Hand", "Bip01 R Finger0", "Bip01 R Finger01",
      "Bip01 R Finger2"}},
+    {"side_suffix", {"pelvis", "thigh_l", "thigh_twist_01_l", "calf_l", "foot_l", "ball_l", "thigh_r",
+     "thigh_twist_01_r", "calf_r", "foot_r", "ball_r", "spine_01", "spine_02", "neck_01", "head", "clavicle_l",
+     "upperarm_l", "lowerarm_l", "hand_l", "thumb_01_l", "thumb_02_l", "middle_01_l", "clavicle_r", "upperarm_r",
+     "lowerarm_r", "hand_r", "thumb_01_r", "thumb_02_r", "middle_01_r"}},  // Unreal mannequin
+    // SMPL-H: "L_Foot" is the toe joint below "L_Ankle", and the collar is the clavicle.
+    {"side_prefix", {"Pelvis", "L_Hip", "L_HipTwist", "L_Knee", "L_Ankle", "L_Foot", "R_Hip", "R_HipTwist",
+     "R_Knee", "R_Ankle", "R_Foot", "Spine1", "Spine3", "Neck", "Head", "L_Collar", "L_Shoulder", "L_Elbow",
+     "L_Wrist", "L_Thumb1", "L_Thumb2", "L_Middle1", "R_Collar", "R_Shoulder", "R_Elbow", "R_Wrist", "R_Thumb1",
+     "R_Thumb2", "R_Middle1"}},
+    {"generic", {"pelvis", "left_hip", "left_hip_twist", "left_knee", "left_ankle", "left_foot", "right_hip",
+     "right_hip_twist", "right_knee", "right_ankle", "right_foot", "spine1", "spine3", "neck", "head",
+     "left_collar", "left_shoulder", "left_elbow", "left_wrist", "left_thumb1", "left_thumb2", "left_middle1",
+     "right_collar", "right_shoulder", "right_elbow", "right_wrist", "right_thumb1", "right_thumb2",
+     "right_middle1"}},  // SMPL-X
+    // ASF bone names (amc2bvh): the wrist is "lwrist", the hand beyond it, the thumb one bone.
+    {"side_prefix", {"root", "lfemur", "lfemurtwist", "ltibia", "lfoot", "ltoes", "rfemur", "rfemurtwist", "rtibia",
+     "rfoot", "rtoes", "lowerback", "thorax", "lowerneck", "head", "lclavicle", "lhumerus", "lradius", "lwrist",
+     "lthumb", "lthumbtip", "lfingers", "rclavicle", "rhumerus", "rradius", "rwrist", "rthumb", "rthumbtip",
+     "rfingers"}, kLThumb1},
 };
 // clang-format on
 
@@ -245,7 +265,9 @@ TEST(mocap_skeleton_map, EveryFamilyMapsEachKeypointToItsJointAndGivesTheCmuTarg
     ASSERT_TRUE(map_skeleton(b, map, error)) << error;
     EXPECT_EQ(map.family, fam.family);
     for (int k = 0; k < kNumMappedKeypoints; ++k) {
-      const int role = kExpectedRole[k];
+      int role = kExpectedRole[k];
+      if (k == kKpLeftThumb) role = fam.thumb_role;
+      if (k == kKpRightThumb) role = fam.thumb_role + (kRThumb1 - kLThumb1);
       const int expected = role == -2 ? b.find(std::string(fam.names[kHead]) + "_End")
                            : role < 0 ? -1
                                       : joint_of(b, fam.names, role);
@@ -259,7 +281,8 @@ TEST(mocap_skeleton_map, EveryFamilyMapsEachKeypointToItsJointAndGivesTheCmuTarg
     double worst = 0.0;
     for (std::size_t f = 0; f < t.frames.size(); ++f)
       for (int k = 0; k < kNumKeypoints; ++k)
-        worst = std::max(worst, (t.frames[f].position_m[k] - reference.frames[f].position_m[k]).norm());
+        if (fam.thumb_role == kLThumb2 || (k != kKpLeftThumb && k != kKpRightThumb))  // the same thumb joint
+          worst = std::max(worst, (t.frames[f].position_m[k] - reference.frames[f].position_m[k]).norm());
     EXPECT_LT(worst, 1e-9);
   }
 }
@@ -282,7 +305,7 @@ TEST(mocap_skeleton_map, LookAlikeNamesNeverMapSilently) {
   const Names* daz = &kFamilies[6].names;
   // No joint is the hand (wrist) any more: the thumb and finger beside it are not taken.
   std::string e = map_error(renamed(kCmu, kLHand, "LeftHandThumb"));
-  EXPECT_NE(e.find("unmapped keypoints: left_wrist (a joint named by one of hand, wrist)"), std::string::npos) << e;
+  EXPECT_NE(e.find("unmapped keypoints: left_wrist (a joint named by one of wrist, hand)"), std::string::npos) << e;
   // "Leg" without a side is not l + "eg", nor any knee.
   e = map_error(renamed(*daz, kLKnee, "leg"));
   EXPECT_NE(e.find("unmapped keypoints: left_knee"), std::string::npos) << e;
@@ -316,6 +339,19 @@ TEST(mocap_skeleton_map, LookAlikeNamesNeverMapSilently) {
   EXPECT_NE(e.find("left_shoulder 'LeftArm' and right_shoulder 'RightArm' are not separate branches"),
             std::string::npos)
       << e;
+}
+
+// "Foot" is a toe word only below another ankle (SMPL): where it is the ankle and the toe joint
+// has no toe name, the toe is the joint below it, not the foot a second time.
+TEST(mocap_skeleton_map, AJointIsNeverTwoKeypoints) {
+  const Names& blender = kFamilies[2].names;
+  const Bvh b = skeleton(renamed(renamed(blender, kLToe, "toe_helper.L"), kRToe, "toe_helper.R"));
+  SkeletonMap map;
+  std::string error;
+  ASSERT_TRUE(map_skeleton(b, map, error)) << error;
+  EXPECT_EQ(map.joint[kKpLeftAnkle], b.find("foot.L"));
+  EXPECT_EQ(map.joint[kKpLeftToe], b.find("toe_helper.L"));
+  EXPECT_EQ(map.joint[kKpRightToe], b.find("toe_helper.R"));
 }
 
 TEST(mocap_skeleton_map, UnmappableSkeletonNamesEveryMissingKeypoint) {

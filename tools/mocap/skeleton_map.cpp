@@ -42,21 +42,25 @@ Side side_of(int kp) {
 // real clashes: "Shoulder" is the clavicle in CMU, Mixamo and Blender (which also have "Arm" or
 // "upper_arm") but the upper arm in Perfume (which has no other); "Hip" is the thigh joint in
 // Perfume but "UpLeg"/"Thigh" win where both exist; CMU's "LHipJoint" (a pelvis helper) matches
-// nothing. End Sites read as their parent's word plus "end".
+// nothing. Where both exist, "Ankle" and "Wrist" are the joints and "Foot" and "Hand" lie beyond
+// them (SMPL, ASF); elsewhere "Foot" and "Hand" are the ankle and the wrist. A joint already taken
+// by one keypoint is not another ("Foot", the ankle, is not also the toe). ASF bone names (femur,
+// tibia, humerus, radius) read too. End Sites read as their parent's word plus "end".
 struct Words {
-  const char* words[12];
+  const char* words[16];
 };
-constexpr Words kHipWords = {{"upleg", "upperleg", "thigh", "thighbend", "hip"}};
-constexpr Words kKneeWords = {{"leg", "lowerleg", "shin", "calf", "knee", "loleg"}};
-constexpr Words kAnkleWords = {{"foot", "ankle"}};
+constexpr Words kHipWords = {{"upleg", "upperleg", "thigh", "thighbend", "hip", "femur"}};
+constexpr Words kKneeWords = {{"leg", "lowerleg", "shin", "calf", "knee", "loleg", "tibia"}};
+constexpr Words kAnkleWords = {{"ankle", "foot"}};
 constexpr Words kToeWords = {
-    {"toebase", "toe", "toes", "toe0", "ball", "toeend", "toebaseend", "toesend", "footend", "ankleend"}};
-constexpr Words kShoulderWords = {{"arm", "upperarm", "uparm", "shldr", "shldrbend", "shoulder"}};
-constexpr Words kElbowWords = {{"forearm", "lowerarm", "forearmbend", "elbow", "loarm"}};
-constexpr Words kWristWords = {{"hand", "wrist"}};
+    {"toebase", "toe", "toes", "toe0", "ball", "foot", "toeend", "toebaseend", "toesend", "footend", "ankleend"}};
+constexpr Words kShoulderWords = {{"arm", "upperarm", "uparm", "shldr", "shldrbend", "shoulder", "humerus"}};
+constexpr Words kElbowWords = {{"forearm", "lowerarm", "forearmbend", "elbow", "loarm", "radius"}};
+constexpr Words kWristWords = {{"wrist", "hand"}};
 // The hand point: the base of the middle (else index) finger, else the hand's End Site.
-constexpr Words kHandWords = {{"handmiddle1", "middle1", "mid1", "middleproximal", "fmiddle01", "handindex1", "index1",
-                               "indexproximal", "finger2", "handindex1end", "handend", "wristend"}};
+constexpr Words kHandWords = {{"handmiddle1", "middle1", "mid1", "middle01", "middleproximal", "fmiddle01",
+                               "handindex1", "index1", "index01", "finger2", "fingers", "handindex1end", "handend",
+                               "wristend"}};
 // CMU's "LThumb" sits on the wrist: its End Site is the thumb. Biped's thumb is "Finger0",
 // "Finger01".
 constexpr Words kThumbWords = {{"handthumb2", "thumb2", "thumbintermediate", "thumb02", "finger01", "handthumb1",
@@ -220,7 +224,7 @@ std::vector<Reading> readings(std::string_view raw) {
 
 bool is_word_of(int kp, const std::string& word, int& rank) {
   const Words& w = words_of(kp);
-  for (int i = 0; i < 12 && w.words[i]; ++i)
+  for (int i = 0; i < 16 && w.words[i]; ++i)
     if (word == w.words[i]) {
       rank = i;
       return true;
@@ -243,9 +247,17 @@ struct Match {
   std::string ambiguity;  // first ambiguous keypoint, for the error
 };
 
+// Taken by a name-matched keypoint (a mapping file may give one joint two keypoints).
+bool taken(const SkeletonMap& map, const std::array<bool, kNumMappedKeypoints>& by_name, int joint) {
+  for (int k = 0; k < kNumMappedKeypoints; ++k)
+    if (by_name[k] && map.joint[k] == joint) return true;
+  return false;
+}
+
 // Name matching for keypoints not set yet. An End Site reads as its parent's readings with
 // "end" appended to the word.
-void map_by_names(const Bvh& bvh, SkeletonMap& out, Match& match) {
+void map_by_names(const Bvh& bvh, const std::array<bool, kNumMappedKeypoints>& by_name, SkeletonMap& out,
+                  Match& match) {
   std::vector<std::vector<Reading>> read(bvh.joints.size());
   for (std::size_t i = 0; i < bvh.joints.size(); ++i) {
     const BvhJoint& j = bvh.joints[i];
@@ -261,6 +273,7 @@ void map_by_names(const Bvh& bvh, SkeletonMap& out, Match& match) {
     int best_rank = 1 << 20, best = -1, second = -1;
     const char* style = "";
     for (std::size_t i = 0; i < read.size(); ++i) {
+      if (taken(out, by_name, static_cast<int>(i))) continue;
       for (const Reading& r : read[i]) {
         int rank = 0;
         if (r.side != side_of(k) || !is_word_of(k, r.word, rank)) continue;
@@ -292,14 +305,15 @@ void map_by_names(const Bvh& bvh, SkeletonMap& out, Match& match) {
     }
     out.joint[hand] = pick;
   }
-  // Toe fallback: the ankle's End Site (a foot without a toe joint).
+  // Toe fallback: the ankle's End Site, else its first child (a foot without a named toe).
   for (const auto& [toe, ankle] : {std::pair{kKpLeftToe, kKpLeftAnkle}, std::pair{kKpRightToe, kKpRightAnkle}}) {
     if (out.joint[toe] >= 0 || out.joint[ankle] < 0) continue;
-    for (std::size_t i = 0; i < bvh.joints.size(); ++i)
-      if (bvh.joints[i].parent == out.joint[ankle] && bvh.joints[i].end_site && bvh.joints[i].offset.norm() > 0.0) {
-        out.joint[toe] = static_cast<int>(i);
-        break;
-      }
+    int pick = -1;
+    for (std::size_t i = 0; i < bvh.joints.size(); ++i) {
+      const BvhJoint& j = bvh.joints[i];
+      if (j.parent == out.joint[ankle] && j.offset.norm() > 0.0 && (pick < 0 || j.end_site)) pick = static_cast<int>(i);
+    }
+    out.joint[toe] = pick;
   }
 }
 
@@ -309,7 +323,7 @@ const char* detect_family(const Bvh& bvh, const Match& match) {
     const std::string n = lower_alnum(j.name);
     cc |= n.rfind("ccbase", 0) == 0;
     leftarm |= n == "leftarm" || n == "leftupleg";
-    leftelbow |= n == "leftelbow";
+    leftelbow |= std::string_view(strip_rig_prefix(j.name)) == "LeftElbow";
     robot |= n == "legl1link";
     mixamo |= n.rfind("mixamorig", 0) == 0;
     biped |= n.rfind("bip0", 0) == 0;
@@ -372,7 +386,7 @@ bool finish(const Bvh& bvh, SkeletonMap& out, const Match& match, const std::arr
     if (out.joint[k] >= 0 || keypoint_optional(k)) continue;
     missing += std::string(missing.empty() ? "" : "; ") + kNames[k] + " (a joint named by one of";
     const Words& w = words_of(k);
-    for (int i = 0; i < 12 && w.words[i]; ++i) missing += std::string(i ? ", " : " ") + w.words[i];
+    for (int i = 0; i < 16 && w.words[i]; ++i) missing += std::string(i ? ", " : " ") + w.words[i];
     missing += ")";
   }
   if (!missing.empty()) {
@@ -411,7 +425,7 @@ bool map_all(const Bvh& bvh, SkeletonMap& out, std::string& error) {
   std::array<bool, kNumMappedKeypoints> by_name{};
   for (int k = 0; k < kNumMappedKeypoints; ++k) by_name[k] = out.joint[k] < 0;
   Match match;
-  if (!map_robot(bvh, out)) map_by_names(bvh, out, match);
+  if (!map_robot(bvh, out)) map_by_names(bvh, by_name, out, match);
   if (out.family.empty()) out.family = detect_family(bvh, match);
   return finish(bvh, out, match, by_name, error);
 }

@@ -11,9 +11,10 @@
 // after the part ("LeftUpLeg", "Left Knee", "ThighLeft") or a letter after a separator
 // ("thigh.L", "UpperLeg_L", "L_Thigh", "Bip01 L Calf") or before the part ("lThigh", "rShin").
 // The part must then be one of a keypoint's words as a whole: "LeftHandThumb1" is never the
-// wrist ("hand"), "Leg" never l + "eg". That covers CMU/cgspeed, Mixamo, Perfume, iClone
-// CC_Base, Blender/Rigify, Unity-style suffixes, DAZ/Poser prefixes, 3ds Max Biped and generic
-// names (words per keypoint in skeleton_map.cpp); the robot's own link names (robot_bvh.h) are
+// wrist ("hand"), "Leg" never l + "eg", and a joint is never two keypoints. That covers
+// CMU/cgspeed, Mixamo, Perfume, iClone CC_Base, Blender/Rigify, Unity-style suffixes, the Unreal
+// mannequin, DAZ/Poser prefixes, 3ds Max Biped, SMPL, ASF bone names and generic names (words per
+// keypoint in skeleton_map.cpp); the robot's own link names (robot_bvh.h) are
 // matched exactly. A match that cannot be right stops the import with a message: two joints
 // reading the same, or a keypoint not below its chain parent (knee below hip, ...), or the two
 // legs or arms not on separate branches. Anything else: a mapping file.
