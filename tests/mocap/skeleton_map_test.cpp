@@ -241,6 +241,29 @@ const Family kFamilies[] = {
      "rfoot", "rtoes", "lowerback", "thorax", "lowerneck", "head", "lclavicle", "lhumerus", "lradius", "lwrist",
      "lthumb", "lthumbtip", "lfingers", "rclavicle", "rhumerus", "rradius", "rwrist", "rthumb", "rthumbtip",
      "rfingers"}, kLThumb1},
+    // MotionBuilder HumanIK: every name carries the character's name.
+    {"generic", {"Character1_Hips", "Character1_LeftUpLeg", "Character1_LeftUpLegRoll", "Character1_LeftLeg",
+     "Character1_LeftFoot", "Character1_LeftToeBase", "Character1_RightUpLeg", "Character1_RightUpLegRoll",
+     "Character1_RightLeg", "Character1_RightFoot", "Character1_RightToeBase", "Character1_Spine",
+     "Character1_Spine1", "Character1_Neck", "Character1_Head", "Character1_LeftShoulder", "Character1_LeftArm",
+     "Character1_LeftForeArm", "Character1_LeftHand", "Character1_LeftHandThumb1", "Character1_LeftHandThumb2",
+     "Character1_LeftHandMiddle1", "Character1_RightShoulder", "Character1_RightArm", "Character1_RightForeArm",
+     "Character1_RightHand", "Character1_RightHandThumb1", "Character1_RightHandThumb2",
+     "Character1_RightHandMiddle1"}},
+    // OptiTrack Motive: the asset name in front, UArm/FArm for the arm bones.
+    {"side_prefix", {"Skeleton_Hip", "Skeleton_LThigh", "Skeleton_LThighTwist", "Skeleton_LShin", "Skeleton_LFoot",
+     "Skeleton_LToe", "Skeleton_RThigh", "Skeleton_RThighTwist", "Skeleton_RShin", "Skeleton_RFoot",
+     "Skeleton_RToe", "Skeleton_Ab", "Skeleton_Chest", "Skeleton_Neck", "Skeleton_Head", "Skeleton_LShoulder",
+     "Skeleton_LUArm", "Skeleton_LFArm", "Skeleton_LHand", "Skeleton_LThumb1", "Skeleton_LThumb2",
+     "Skeleton_LMiddle1", "Skeleton_RShoulder", "Skeleton_RUArm", "Skeleton_RFArm", "Skeleton_RHand",
+     "Skeleton_RThumb1", "Skeleton_RThumb2", "Skeleton_RMiddle1"}},
+    // Kinect v2: side word after the part; FootLeft is the toe joint below AnkleLeft; the hand
+    // point is the wrist's child that is not the thumb.
+    {"generic", {"SpineBase", "HipLeft", "ThighTwistLeft", "KneeLeft", "AnkleLeft", "FootLeft", "HipRight",
+     "ThighTwistRight", "KneeRight", "AnkleRight", "FootRight", "SpineMid", "SpineShoulder", "Neck", "Head",
+     "ClavicleLeft", "ShoulderLeft", "ElbowLeft", "WristLeft", "ThumbLeft", "ThumbTipLeft", "HandTipLeft",
+     "ClavicleRight", "ShoulderRight", "ElbowRight", "WristRight", "ThumbRight", "ThumbTipRight", "HandTipRight"},
+     kLThumb1},
 };
 // clang-format on
 

@@ -54,8 +54,8 @@ constexpr Words kKneeWords = {{"leg", "lowerleg", "shin", "calf", "knee", "loleg
 constexpr Words kAnkleWords = {{"ankle", "foot"}};
 constexpr Words kToeWords = {
     {"toebase", "toe", "toes", "toe0", "ball", "foot", "toeend", "toebaseend", "toesend", "footend", "ankleend"}};
-constexpr Words kShoulderWords = {{"arm", "upperarm", "uparm", "shldr", "shldrbend", "shoulder", "humerus"}};
-constexpr Words kElbowWords = {{"forearm", "lowerarm", "forearmbend", "elbow", "loarm", "radius"}};
+constexpr Words kShoulderWords = {{"arm", "upperarm", "uparm", "uarm", "shldr", "shldrbend", "shoulder", "humerus"}};
+constexpr Words kElbowWords = {{"forearm", "lowerarm", "forearmbend", "farm", "elbow", "loarm", "radius"}};
 constexpr Words kWristWords = {{"wrist", "hand"}};
 // The hand point: the base of the middle (else index) finger, else the hand's End Site.
 constexpr Words kHandWords = {{"handmiddle1", "middle1", "mid1", "middle01", "middleproximal", "fmiddle01",
@@ -247,6 +247,30 @@ struct Match {
   std::string ambiguity;  // first ambiguous keypoint, for the error
 };
 
+// Length of the prefix every joint name shares up to and including a separator: a character or
+// take name the exporter put in front ("Character1_LeftUpLeg", "Skeleton_LThigh", "Take 1 ...").
+// It carries no meaning, so it is dropped before reading.
+std::size_t shared_prefix(const Bvh& bvh) {
+  const BvhJoint* first = nullptr;
+  std::size_t n = std::string::npos;
+  int joints = 0;
+  for (const BvhJoint& j : bvh.joints) {
+    if (j.end_site) continue;
+    ++joints;
+    if (!first) {
+      first = &j;
+      n = j.name.size();
+      continue;
+    }
+    std::size_t k = 0;
+    while (k < n && k < j.name.size() && j.name[k] == first->name[k]) ++k;
+    n = k;
+  }
+  if (!first || joints < 3) return 0;
+  while (n > 0 && !is_separator(first->name[n - 1]) && first->name[n - 1] != ':' && first->name[n - 1] != '|') --n;
+  return n < first->name.size() ? n : 0;  // keep at least something of the shortest name
+}
+
 // Taken by a name-matched keypoint (a mapping file may give one joint two keypoints).
 bool taken(const SkeletonMap& map, const std::array<bool, kNumMappedKeypoints>& by_name, int joint) {
   for (int k = 0; k < kNumMappedKeypoints; ++k)
@@ -258,11 +282,12 @@ bool taken(const SkeletonMap& map, const std::array<bool, kNumMappedKeypoints>& 
 // "end" appended to the word.
 void map_by_names(const Bvh& bvh, const std::array<bool, kNumMappedKeypoints>& by_name, SkeletonMap& out,
                   Match& match) {
+  const std::size_t shared = shared_prefix(bvh);
   std::vector<std::vector<Reading>> read(bvh.joints.size());
   for (std::size_t i = 0; i < bvh.joints.size(); ++i) {
     const BvhJoint& j = bvh.joints[i];
     if (!j.end_site) {
-      read[i] = readings(j.name);
+      read[i] = readings(std::string_view(j.name).substr(shared));
     } else {
       read[i] = read[static_cast<std::size_t>(j.parent)];
       for (Reading& r : read[i]) r.word += "end";

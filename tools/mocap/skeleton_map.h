@@ -7,7 +7,7 @@
 //
 // Built-in naming, no mapping file needed: a joint name is read, case-insensitively, as a
 // side plus a body-part word, after dropping a rig prefix (a "namespace:" such as "mixamorig:",
-// "mixamorig", "CC_Base_", "Bip01 ", Rigify's "DEF-"). The side is written as a word before or
+// "mixamorig", "CC_Base_", "Bip01 ", Rigify's "DEF-", a prefix all names share). The side is written as a word before or
 // after the part ("LeftUpLeg", "Left Knee", "ThighLeft") or a letter after a separator
 // ("thigh.L", "UpperLeg_L", "L_Thigh", "Bip01 L Calf") or before the part ("lThigh", "rShin").
 // The part must then be one of a keypoint's words as a whole: "LeftHandThumb1" is never the
