@@ -129,8 +129,9 @@ double largest_step(const KpArray& a, const KpArray& b, const std::array<bool, k
 int count_reference_frames(const std::vector<KpArray>& src, const std::array<bool, kNumKeypoints>& present, double leg,
                            double dt_s) {
   const int frames = static_cast<int>(src.size());
-  const int last = std::min(frames - 3, static_cast<int>(std::floor(kReferenceSearch_s / dt_s)));  // keep 2
-  const int context = std::max(3, static_cast<int>(std::ceil(kJumpContext_s / dt_s)));
+  // In doubles first: a Bvh built in code need not respect the parser's frame-time bounds.
+  const int last = static_cast<int>(std::min<double>(frames - 3, std::floor(kReferenceSearch_s / dt_s)));  // keep 2
+  const int context = static_cast<int>(std::max(3.0, std::min<double>(std::ceil(kJumpContext_s / dt_s), frames)));
   const auto discontinuity = [&](int t) {
     const double step = largest_step(src[t], src[t + 1], present);
     if (!(step > kMinJump_leg * leg)) return false;
