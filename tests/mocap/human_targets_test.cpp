@@ -136,6 +136,31 @@ TEST(mocap_human_targets, SharedClipsDropTheirReferenceFrames) {
   }
 }
 
+// A skeleton no unit makes human-sized is refused, not scaled to nothing.
+TEST(mocap_human_targets, SkeletonOfNoHumanSizeIsRefused) {
+  const Bvh dance = default_dance_bvh();
+  for (double scale : {1e4, 1e-3}) {
+    Bvh b = dance;
+    for (BvhJoint& j : b.joints) j.offset *= scale;
+    for (int f = 0; f < b.frame_count; ++f)
+      for (int c = 0; c < 3; ++c) b.motion[static_cast<std::size_t>(f) * b.channel_count + c] *= scale;
+    HumanTargets t;
+    std::string error;
+    EXPECT_FALSE(import(b, t, error)) << scale;
+    EXPECT_NE(error.find("the skeleton fits no human size in any unit"), std::string::npos) << error;
+  }
+  // Every unit in use still imports: metres, millimetres (the dance is in centimetres).
+  for (double scale : {0.01, 10.0}) {
+    Bvh b = dance;
+    for (BvhJoint& j : b.joints) j.offset *= scale;
+    for (int f = 0; f < b.frame_count; ++f)
+      for (int c = 0; c < 3; ++c) b.motion[static_cast<std::size_t>(f) * b.channel_count + c] *= scale;
+    HumanTargets t;
+    std::string error;
+    EXPECT_TRUE(import(b, t, error)) << error;
+  }
+}
+
 // A skeleton that names its sides from the viewer's side maps without complaint (every chain is
 // consistent), but the dancer would face backward with knees bending the wrong way: refused.
 TEST(mocap_human_targets, SwappedSidesAreRefused) {

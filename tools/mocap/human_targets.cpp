@@ -83,6 +83,10 @@ constexpr Unit kUnits[] = {{"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"inch", 0.0
 // Hip-to-ankle length over stature for adults (anthropometric tables put it at 0.45–0.49).
 constexpr double kLegToStature = 0.47;
 constexpr double kTypicalStature_m = 1.7;
+// In the closest unit, the dancer's stature is within this factor of typical (0.57 .. 5.1 m):
+// a child dancer is about 1.2 m; outside the band the skeleton is no human in any unit (a clip
+// scaled by 1e4 gave a root scale of 0 and a motion of NaN).
+constexpr double kStatureFactor = 3.0;
 
 using KpArray = std::array<Vec3, kNumKeypoints>;
 
@@ -329,6 +333,13 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     }
   }
   out.human_height_m = stature_units * out.unit_to_m;
+  if (!(best <= std::log(kStatureFactor))) {
+    error = "the skeleton fits no human size in any unit: its leg (hip to ankle) is " + std::to_string(human_leg) +
+            " file units, a dancer of " + std::to_string(out.human_height_m) + " m in the closest unit (" + out.unit +
+            "), outside " + std::to_string(kTypicalStature_m / kStatureFactor) + " .. " +
+            std::to_string(kTypicalStature_m * kStatureFactor) + " m";
+    return false;
+  }
 
   // 1. Leading reference frames: held poses that end in a jump no human makes.
   int drop = options.drop_first_frames;

@@ -9,7 +9,8 @@
 //     after it is ever dropped. Searched over the first 5 s; the count is reported.
 //  2. Units: BVH has none. The stature implied by the leg length picks metres, centimetres,
 //     millimetres, inches or CMU units (×0.056444 m), whichever gives the most human height.
-//     Only the report uses it: all geometry below is scaled by ratios.
+//     Only the report uses it: all geometry below is scaled by ratios. A skeleton that no unit
+//     makes 0.57 .. 5.1 m tall (a factor 3 around 1.7 m) is no human and is refused.
 //  3. Axes: the up axis is the file axis closest to the mean pelvis→neck direction (Y for
 //     most files, Z for SFU-style files); heading: the left-hip minus right-hip direction,
 //     averaged over the first half second, becomes the robot's +y, so the dancer starts
