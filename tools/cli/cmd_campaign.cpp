@@ -10,7 +10,6 @@
 // that produced no summary or whose simulation failed counts as a fall (conservative) and
 // is also counted in "sim_failures".
 #include <sys/resource.h>
-#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
