@@ -5,10 +5,27 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace kuavo::sim {
 
 using Vec3 = Eigen::Vector3d;
+
+// Uneven ground (sim/perturbation.h draws it): a plane tilted by the two slopes,
+// carrying square tiles whose heights differ (steps). Tile heights come from a hash of
+// (seed, tile index), so the terrain needs no storage and is the same at every query.
+// Contact forces act along the plane's normal and friction in its tangent plane; the
+// step edges themselves are not modelled (a corner sees only the height under it).
+struct Terrain {
+  double slope_x = 0.0;  // dz/dx
+  double slope_y = 0.0;  // dz/dy
+  double tile_m = 0.5;
+  double grid_origin_x_m = 0.0, grid_origin_y_m = 0.0;
+  double step_lo_m = 0.0, step_hi_m = 0.0;  // tile heights, uniform in [lo, hi]
+  std::uint64_t seed = 0;
+};
+double terrain_height_m(const Terrain& t, double x_m, double y_m);
+Vec3 terrain_normal(const Terrain& t);
 
 struct GroundParams {
   const char* name;
@@ -21,6 +38,7 @@ struct GroundParams {
   double tangential_stiffness_N_m;  // stiction spring
   double tangential_damping_Ns_m;
   double friction_coefficient;
+  const Terrain* terrain = nullptr;  // nullptr: the flat z = 0 plane
 };
 
 // floor: hard floor, about 0.1 mm of compression under the standing robot.
@@ -42,7 +60,7 @@ struct ContactPointState {
   bool touching = false;
 };
 
-// Force of the ground (z = 0 plane) on a point at position p and velocity v.
+// Force of the ground (z = 0 plane, or g.terrain) on a point at position p and velocity v.
 Vec3 contact_force(const GroundParams& g, const Vec3& p, const Vec3& v, const ContactPointState& s);
 
 // Between integration intervals: attach the anchor on touchdown, drop it on

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <random>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
@@ -99,20 +100,51 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   auto pending = std::make_unique<planner::ReferencePlan>();
   auto metrics_data = std::make_unique<dynamics::Data>();
 
+  // The plant's robot: the controller's model unless a perturbation is drawn.
+  const PlantPerturbation& perturb = config.perturbation;
+  auto plant_model = std::make_unique<model::Model>(model);
+  if (perturb.active) {
+    if (const char* why = validate_perturbation_set(perturb.set)) {
+      run.ok = false;
+      run.error = std::string("perturbation set: ") + why;
+      return out;
+    }
+    perturbed_model(model, perturb, *plant_model);
+    out.perturbation_json = perturbation_json(perturb, *plant_model);
+  }
   PlantConfig plant_cfg;
-  plant_cfg.ground = config.run.ground;
+  plant_cfg.ground = perturbed_ground(config.run.ground, perturb);
   plant_cfg.integrator = config.run.integrator;
   plant_cfg.relative_tolerance = config.run.relative_tolerance;
   plant_cfg.absolute_tolerance = 0.1 * config.run.relative_tolerance;
-  Plant plant(model, plant_cfg);
+  if (perturb.active) plant_cfg.actuation = &perturb.actuation;
+  Plant plant(*plant_model, plant_cfg);
   dynamics::ConfigVector q0 = motion.q[0];
   control::place_on_ground(model, *metrics_data, q0);
   plant.reset(q0, dynamics::VelocityVector::Zero());
+  if (plant_cfg.ground.terrain != nullptr) {
+    // Raise the robot until its lowest corner touches the uneven ground (the others hang
+    // above it and the robot settles: the stage is not the controller's flat floor).
+    double lift_m = -1e9;
+    for (const Vec3& c : plant.truth().contact_point_m) {
+      lift_m = std::max(lift_m, terrain_height_m(*plant_cfg.ground.terrain, c.x(), c.y()) - c.z());
+    }
+    q0[2] += lift_m;
+    plant.reset(q0, dynamics::VelocityVector::Zero());
+  }
   plant.set_push(config.run.push);
 
   SensorNoise noise;
   if (config.ideal_sensors) noise = SensorNoise{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   SensorModel sensors(config.run.seed, noise);
+  if (perturb.active) sensors.set_errors(&perturb.sensors);
+  // Command latency jitter: each tick's command reaches the drives a drawn delay into the
+  // plant interval (the previous one acts until then); its own generator, so the other
+  // draws of the run do not depend on it.
+  const bool jitter = perturb.active && perturb.command_jitter_s.hi > 0.0;
+  std::mt19937_64 jitter_rng(perturb.seed ^ 0x6a09e667f3bcc909ULL);
+  hal::CommandFrame arriving_command;
+  bool command_arriving = false;
   RunLog log(config.run.log_path);
   if (log.failed_to_open(config.run.log_path)) {
     run.ok = false;
@@ -185,7 +217,12 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
       if (last_status != wbc::WbcStatus::kOk) ++out.wbc_not_ok_ticks;
       in_flight[slot] = command;
       slot = (slot + 1) % in_flight.size();
-      plant.set_command(in_flight[slot]);
+      if (jitter) {
+        arriving_command = in_flight[slot];
+        command_arriving = true;
+      } else {
+        plant.set_command(in_flight[slot]);
+      }
       ++run.control_ticks;
     } else if (ev.kind == rtos::SimEventKind::kPlanRequest) {
       const bool truth_state = config.use_truth_state;
@@ -198,7 +235,20 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
       if (spent_ns > plan_period_ns) ++out.deadline_misses;
       if (config.measured_plan_latency) sched.set_plan_delay_ns(rtos::round_up_to_multiple_ns(spent_ns, period_ns));
     } else if (ev.kind == rtos::SimEventKind::kPlantStep) {
-      if (plant.advance(static_cast<double>(ev.dt_ns) * 1e-9) != PlantError::kOk) {
+      double step_s = static_cast<double>(ev.dt_ns) * 1e-9;
+      if (command_arriving) {
+        // Whole microseconds: no sliver intervals for the integrator.
+        const double delay_s = std::min(step_s, std::floor(uniform_from_bits(jitter_rng(), perturb.command_jitter_s) * 1e6) * 1e-6);
+        if (delay_s > 0.0 && plant.advance(delay_s) != PlantError::kOk) {
+          run.ok = false;
+          run.error = plant.last_error();
+          break;
+        }
+        plant.set_command(arriving_command);
+        command_arriving = false;
+        step_s -= delay_s;
+      }
+      if (step_s > 0.0 && plant.advance(step_s) != PlantError::kOk) {
         run.ok = false;
         run.error = plant.last_error();
         break;
@@ -219,6 +269,9 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
         ++tracked;
         out.com_err_m_max = std::max(out.com_err_m_max, (t.com_m - motion_now.com_position_m).norm());
         if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
+        for (int j = 0; j < model::kNumJoints; ++j) {
+          out.torque_ratio_max = std::max(out.torque_ratio_max, std::abs(t.joint_torque_Nm[j]) / model.limits.peak_torque_Nm[j]);
+        }
         if (bal.defined && bal.margin_m < kAtEdge_m) out.zmp_at_edge_s += static_cast<double>(ev.dt_ns) * 1e-9;
         const double pos_err = (est.q.head<2>() - t.q.head<2>()).norm();
         out.estimator_position_err_m_max = std::max(out.estimator_position_err_m_max, pos_err);
@@ -296,6 +349,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 ",\n  \"planner\": \"%s\",\n  \"motion_duration_s\": %.3f,\n"
                 "  \"tracking_rms_rad\": {\"legs\": %.5f, \"arms\": %.5f},\n"
                 "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n  \"zmp_at_edge_s\": %.3f,\n"
+                "  \"torque_ratio_max\": %.4f,\n"
                 "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
                 "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
                 "  \"wbc_qp_iterations\": {\"p50\": %.0f, \"p99\": %.0f, \"max\": %.0f},\n"
@@ -303,12 +357,18 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
-                s.zmp_margin_m_min, s.zmp_at_edge_s, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
+                s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
                 s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
-  return base + buf;
+  std::string json = base + buf;
+  if (!s.perturbation_json.empty()) {
+    json.resize(json.rfind('}'));
+    while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();
+    json += ",\n  \"perturbation\": " + s.perturbation_json + "\n}\n";
+  }
+  return json;
 }
 
 }  // namespace kuavo::sim

@@ -11,6 +11,7 @@
 #include "controllers/planner/motion_plan.h"
 #include "controllers/stack/online_stack.h"
 #include "sim/closed_loop.h"
+#include "sim/perturbation.h"
 #include "sim/sensor_model.h"
 
 namespace kuavo::sim {
@@ -28,6 +29,9 @@ struct MotionRunConfig {
   bool measured_plan_latency = false;
   bool use_truth_state = false;    // comparison runs: the WBC on the simulator's truth
   bool ideal_sensors = false;      // diagnostics: no noise, bias or quantization (SensorNoise zeroed)
+  // Model mismatch (sim/perturbation.h): the plant and the sensors get the drawn errors,
+  // the controller keeps `model`. Inactive (the default): the unperturbed run, bit for bit.
+  PlantPerturbation perturbation;
 };
 
 struct Percentiles {
@@ -44,6 +48,9 @@ struct MotionSummary {
   double com_err_m_max = 0.0;          // ‖CoM − planned CoM‖
   double zmp_margin_m_min = 0.0;       // centre of pressure to the support polygon's edge
   double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
+  double torque_ratio_max = 0.0;       // max over joints and ticks before a fall of |τ_joint| / peak torque
+                                       // (PlantTruth::joint_torque_Nm; 1: the drive saturates)
+  std::string perturbation_json;       // the set, seed and drawn figures; empty when inactive
   Percentiles mpc_ms;                  // planner iteration compute time
   Percentiles wbc_us;                  // control tick (estimator + reference + WBC) compute time
   Percentiles wbc_qp_iterations;       // the WBC QP's iterations per tick (warm-start guess size

@@ -54,8 +54,9 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
     for (int j = 0; j < model::kNumJoints; ++j) {
       const SimTK::MobilizedBody& b = r.body(j + 1);
       bool saturated = false;
-      const double tau = drive_torque(in_->forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
-                                      m.limits.peak_torque_Nm[j], &saturated);
+      double tau = drive_torque(in_->forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
+                                m.limits.peak_torque_Nm[j], &saturated);
+      if (in_->forces.actuation != nullptr) tau = actuated_torque(*in_->forces.actuation, j, tau, b.getOneU(s, 0));
       if (saturated && in_->count_saturations) ++in_->saturations;
       b.applyOneMobilityForce(s, 0, tau, mobility_forces);
     }
@@ -150,6 +151,7 @@ struct Plant::Impl {
     inputs.forces.contact = c.contact;
     inputs.forces.gravity = c.gravity;
     inputs.forces.push = &inputs.push;
+    inputs.forces.actuation = c.actuation;
     SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
     robot.system().realizeTopology();
     state = robot.system().getDefaultState();
@@ -281,6 +283,9 @@ struct Plant::Impl {
       const SimTK::MobilizedBody& b = robot.body(j + 1);
       truth.joint_torque_Nm[j] =
           drive_torque(inputs.forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
+      if (inputs.forces.actuation != nullptr) {
+        truth.joint_torque_Nm[j] = actuated_torque(*inputs.forces.actuation, j, truth.joint_torque_Nm[j], b.getOneU(s, 0));
+      }
     }
     if (inputs.forces.torque_source != nullptr) {
       std::array<double, model::kNumJoints> q{}, v{}, extra{};
@@ -343,7 +348,15 @@ struct Plant::Impl {
     std::array<double, NewtonSystem::kN> ours{}, theirs{};
     for (int i = 0; i < ny; ++i) y_end[i] = state.getY()[i];
     Eigen::Matrix<double, 6, 1> wrench;
-    dynamics->derivative(state.getTime(), y_end.data(), inputs.forces, ours.data(), wrench);
+    // Simbody's Pin has no rotor inertia: compare the two without it.
+    PlantForceInputs forces = inputs.forces;
+    JointActuation no_armature;
+    if (forces.actuation != nullptr) {
+      no_armature = *forces.actuation;
+      no_armature.armature_kgm2.fill(0.0);
+      forces.actuation = &no_armature;
+    }
+    dynamics->derivative(state.getTime(), y_end.data(), forces, ours.data(), wrench);
     for (int i = 0; i < 6; ++i) ours[ny + i] = wrench[i];
     state.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);  // re-run the forces for their wrench
     robot.system().realize(state, SimTK::Stage::Acceleration);
@@ -407,6 +420,14 @@ PlantError Plant::advance_interval(double dt_s) {
   Impl& p = *impl_;
   const double t_end = p.state.getTime() + dt_s;
   p.inputs.count_saturations = false;
+  if (p.config.actuation != nullptr && !p.truth_from_plant_dynamics()) {
+    for (const double a : p.config.actuation->armature_kgm2) {
+      if (a != 0.0) {
+        p.fail("rotor inertia (armature) needs the cvode integrator with the rigid-body derivative");
+        return PlantError::kIntegratorFailed;
+      }
+    }
+  }
   if (p.config.integrator == Integrator::kCvodeBdf) {
     // The command and the contact anchors change between intervals; CVODE's error
     // control takes those steps in stride, so the multistep history (and its

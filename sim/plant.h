@@ -16,6 +16,7 @@
 #include "controllers/hal/types.h"
 #include "controllers/model/model.h"
 #include "sim/ground_contact.h"
+#include "sim/perturbation.h"
 #include "sim/plant_dynamics.h"
 
 namespace kuavo::sim {
@@ -46,6 +47,10 @@ struct PlantConfig {
   double absolute_tolerance = 1e-4;
   bool gravity = true;
   bool contact = true;
+  // Model mismatch of the joints (sim/perturbation.h); nullptr: ideal joints. Rotor
+  // inertia needs kCvodeBdf with kRigidBody (Simbody's Pin has no armature): advance()
+  // refuses it otherwise. Must outlive the plant.
+  const JointActuation* actuation = nullptr;
 };
 
 // A force on the torso's centre of mass over [start_s, start_s + duration_s):
@@ -68,6 +73,7 @@ struct PlantTruth {
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   std::array<Vec3, model::kNumContactPoints> contact_point_m{};  // sole corners in the world
   std::array<Vec3, model::kNumContactPoints> contact_force_N{};
+  // The drive's torque; with a JointActuation, what reaches the joint (Kt error, friction).
   Eigen::Matrix<double, model::kNumJoints, 1> joint_torque_Nm = Eigen::Matrix<double, model::kNumJoints, 1>::Zero();
   Vec3 base_specific_force_m_s2 = Vec3::Zero();  // what an IMU at the base origin measures, base axes
   Vec3 com_m = Vec3::Zero();

@@ -4,6 +4,7 @@
 
 #include "controllers/dynamics/rigid_body.h"
 #include "sim/motor_model.h"
+#include "sim/perturbation.h"
 #include "sim/plant.h"
 
 namespace kuavo::sim {
@@ -108,8 +109,19 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   dynamics::crba(model_, d);
   dynamics::rnea(model_, d, dynamics::VelocityVector::Zero(), in.gravity);
   w.rhs = -d.tau;
-  for (int j = 0; j < model::kNumJoints; ++j) {
-    w.rhs[6 + j] += drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
+  if (in.actuation == nullptr) {
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      w.rhs[6 + j] += drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
+    }
+  } else {
+    // A rotor spinning N times faster adds N²·I_rotor to its joint's diagonal only (its
+    // gyroscopic coupling to the carrier is neglected, as in MuJoCo's armature).
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      d.mass_matrix(6 + j, 6 + j) += in.actuation->armature_kgm2[j];
+      const double drive =
+          drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
+      w.rhs[6 + j] += actuated_torque(*in.actuation, j, drive, w.v[6 + j]);
+    }
   }
   if (in.torque_source != nullptr) {
     const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
@@ -213,6 +225,7 @@ bool PlantDynamics::truth(double t_s, const double* y, const PlantForceInputs& i
     bool clipped = false;
     out.joint_torque_Nm[j] =
         drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], &clipped);
+    if (in.actuation != nullptr) out.joint_torque_Nm[j] = actuated_torque(*in.actuation, j, out.joint_torque_Nm[j], w.v[6 + j]);
     saturations += clipped;
   }
   if (in.torque_source != nullptr) {

@@ -36,6 +36,7 @@ namespace kuavo::sim {
 
 struct Push;
 struct PlantTruth;
+struct JointActuation;
 
 // Where our quantities sit in Simbody's y = [q; u] (filled from the built system).
 struct SimbodyLayout {
@@ -66,6 +67,9 @@ struct PlantForceInputs {
   bool gravity = true;
   hal::CommandFrame command{};
   const JointTorqueSource* torque_source = nullptr;  // added to the command's torques
+  // Model mismatch (sim/perturbation.h): torque-constant error and friction on the drive
+  // torque, rotor inertia on M's diagonal. nullptr: ideal joints.
+  const JointActuation* actuation = nullptr;
   std::array<ContactPointState, model::kNumContactPoints> points{};
   const Push* push = nullptr;
 };

@@ -35,6 +35,13 @@ void SensorModel::sample(const PlantTruth& truth, hal::TimeNs stamp_ns, hal::Sen
     imu.angular_rate_rad_s[k] = truth.v[3 + k] + gyro_bias_[k] + gauss(noise_.gyro_noise_rad_s);
     imu.acceleration_m_s2[k] = truth.base_specific_force_m_s2[k] + accel_bias_[k] + gauss(noise_.accel_noise_m_s2);
   }
+  if (errors_ != nullptr) {
+    for (int j = 0; j < model::kNumJoints; ++j) out.joints[j].position_rad += errors_->encoder_offset_rad[j];
+    for (int k = 0; k < 3; ++k) {
+      imu.angular_rate_rad_s[k] = errors_->gyro_scale[k] * imu.angular_rate_rad_s[k] + errors_->gyro_bias_rad_s[k];
+      imu.acceleration_m_s2[k] = errors_->accel_scale[k] * imu.acceleration_m_s2[k] + errors_->accel_bias_m_s2[k];
+    }
+  }
   imu.stamp_ns = stamp_ns;
   imu.valid = true;
 }

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "controllers/hal/types.h"
+#include "sim/perturbation.h"
 #include "sim/plant.h"
 
 namespace kuavo::sim {
@@ -33,6 +34,10 @@ class SensorModel {
   SensorModel(std::uint64_t seed, const SensorNoise& noise = SensorNoise{});
   // Fills the frame from the plant's true state at stamp_ns.
   void sample(const PlantTruth& truth, hal::TimeNs stamp_ns, hal::SensorFrame& out);
+  // Fixed errors on top of the noise (sim/perturbation.h): encoder offsets, IMU bias and
+  // scale (reading = scale·(what the noise model reads) + bias). nullptr: none.
+  // Must outlive the model's use.
+  void set_errors(const SensorErrors* errors) { errors_ = errors; }
 
  private:
   double gauss(double sigma);
@@ -40,6 +45,7 @@ class SensorModel {
   std::normal_distribution<double> normal_{0.0, 1.0};
   SensorNoise noise_;
   Eigen::Vector3d gyro_bias_, accel_bias_, tilt_bias_;
+  const SensorErrors* errors_ = nullptr;
 };
 
 }  // namespace kuavo::sim

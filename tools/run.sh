@@ -12,7 +12,8 @@ build="${KUAVO_BUILD_DIR:-$here/build}"
 jobs="${KUAVO_JOBS:-$(nproc)}"
 
 packages=(build-essential cmake libeigen3-dev libsimbody-dev libsundials-dev
-          libtinyxml2-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev)
+          libtinyxml2-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
+          parallel)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

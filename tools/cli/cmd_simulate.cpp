@@ -3,7 +3,8 @@
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured]
-//                [--duration SECONDS] [--balance-filter on|off] --log run.csv --summary run.json
+//                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
+//                --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
 #include <cmath>
@@ -17,6 +18,7 @@
 #include "sim/motion_loop.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
+#include "tools/cli/perturb_option.h"
 #include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
@@ -48,7 +50,7 @@ int usage() {
                "                      [--variant s45|s42] [--mass KG]\n"
                "                      [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
                "                      [--horizon SECONDS] [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
-               "                      [--balance-filter on|off]\n"
+               "                      [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
                "                      --log run.csv --summary run.json\n");
   return 2;
 }
@@ -66,6 +68,9 @@ int run_simulate(int argc, char** argv) {
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path;
   bool stand = false;
+  sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
+  std::uint64_t perturb_seed = 0;
+  bool perturb_seed_given = false;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -123,6 +128,14 @@ int run_simulate(int argc, char** argv) {
       if (!model::parse_variant(v, variant)) return bad("--variant must be s45 or s42, got");
     } else if (!std::strcmp(a, "--mass") && v) {
       if (!parse_double(v, mass_kg)) return bad("--mass needs kg, got");
+    } else if (!std::strcmp(a, "--perturb") && v) {
+      std::string error;
+      if (!load_perturbation_set(v, perturb_set, error)) return bad(error.c_str());
+    } else if (!std::strcmp(a, "--perturb-seed") && v) {
+      char* end = nullptr;
+      perturb_seed = std::strtoull(v, &end, 10);
+      perturb_seed_given = true;
+      if (end == v || *end != '\0') return bad("--perturb-seed needs an unsigned integer, got");
     } else if (!std::strcmp(a, "--log") && v) {
       cfg.log_path = v;
     } else if (!std::strcmp(a, "--summary") && v) {
@@ -144,6 +157,12 @@ int run_simulate(int argc, char** argv) {
   auto robot = std::make_unique<model::Model>();
   if (const auto err = model::build_model(variant, mass_kg, *robot); err != model::ModelError::kOk) {
     std::fprintf(stderr, "kuavo simulate: %s\n", model::to_string(err));
+    return 2;
+  }
+  // The perturbation's own seed defaults to the run's --seed.
+  motion_cfg.perturbation = sim::draw_perturbation(*robot, perturb_set, perturb_seed_given ? perturb_seed : cfg.seed);
+  if (stand && motion_cfg.perturbation.active) {
+    std::fprintf(stderr, "kuavo simulate: --perturb applies to MOTION and --step-in-place runs, not --stand\n");
     return 2;
   }
   sim::RunSummary s;

@@ -1,0 +1,92 @@
+// The campaign's spec parser, its per-seed push draw and the fall-rate interval. The
+// interval is checked against Wilson score values computed outside this code (the
+// textbook formula evaluated in Python, 4 decimals) and the zero-falls closed form
+// z²/(n + z²).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tools/cli/campaign_spec.h"
+
+namespace kuavo::test {
+namespace {
+
+TEST(CampaignSpec, WilsonIntervalMatchesIndependentValues) {
+  struct Case {
+    int falls, runs;
+    double lo, hi;
+  };
+  for (const Case& c : {Case{0, 100, 0.0, 0.0370}, Case{5, 100, 0.0215, 0.1118}, Case{50, 100, 0.4038, 0.5962},
+                        Case{1, 10, 0.0179, 0.4042}}) {
+    double lo = -1.0, hi = -1.0;
+    cli::wilson_interval_95(c.falls, c.runs, lo, hi);
+    EXPECT_NEAR(lo, c.lo, 1e-4) << c.falls << "/" << c.runs;
+    EXPECT_NEAR(hi, c.hi, 1e-4) << c.falls << "/" << c.runs;
+  }
+  double lo = -1.0, hi = -1.0;
+  cli::wilson_interval_95(0, 100, lo, hi);
+  const double z2 = 1.959963984540054 * 1.959963984540054;
+  EXPECT_NEAR(hi, z2 / (100.0 + z2), 1e-12);
+  EXPECT_EQ(lo, 0.0);
+}
+
+TEST(CampaignSpec, ExampleIsTheShowConditions) {
+  cli::CampaignSpec s;
+  std::string error;
+  ASSERT_TRUE(cli::parse_campaign_spec(cli::kShowConditionsSpec, s, error)) << error;
+  EXPECT_EQ(s.motions, std::vector<std::string>{"dance"});
+  EXPECT_EQ(s.grounds, std::vector<std::string>{"carpet"});
+  EXPECT_EQ(s.perturbations, std::vector<std::string>{"show"});
+  EXPECT_EQ(s.seeds, 100);
+  ASSERT_TRUE(s.push.enabled);
+  EXPECT_DOUBLE_EQ(s.push.impulse_Ns, 10.0);
+}
+
+TEST(CampaignSpec, RejectsBadSpecs) {
+  cli::CampaignSpec s;
+  std::string error;
+  EXPECT_FALSE(cli::parse_campaign_spec("[1]", s, error));
+  EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":["dance"],"grounds":["ice"],"perturbations":["none"],"seeds":1})", s, error));
+  EXPECT_NE(error.find("ice"), std::string::npos);
+  EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":0})", s, error));
+  EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":[],"grounds":["floor"],"perturbations":["none"],"seeds":1})", s, error));
+  EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1,"sedes":2})", s, error));
+  EXPECT_NE(error.find("sedes"), std::string::npos);
+}
+
+// A push is the impulse over its duration, starts inside the window, and depends only on
+// the seed; its directions cover the circle.
+TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
+  cli::PushSpec spec;
+  spec.enabled = true;
+  spec.impulse_Ns = 10.0;
+  spec.duration_s = 0.1;
+  spec.start_after_s = 1.0;
+  spec.end_before_s = 1.0;
+  double min_dir = 10.0, max_dir = -10.0;
+  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+    cli::PushDraw a, b;
+    ASSERT_TRUE(cli::draw_push(spec, seed, 31.0, a));
+    ASSERT_TRUE(cli::draw_push(spec, seed, 31.0, b));
+    EXPECT_EQ(a.start_s, b.start_s);
+    EXPECT_EQ(a.direction_rad, b.direction_rad);
+    EXPECT_GE(a.start_s, 1.0);
+    EXPECT_LE(a.start_s + spec.duration_s, 30.0);
+    EXPECT_DOUBLE_EQ(a.force_N * spec.duration_s, 10.0);
+    min_dir = std::min(min_dir, a.direction_rad);
+    max_dir = std::max(max_dir, a.direction_rad);
+  }
+  EXPECT_LT(min_dir, 0.2);
+  EXPECT_GT(max_dir, 6.0);
+  cli::PushDraw d;
+  EXPECT_FALSE(cli::draw_push(spec, 1, 2.0, d));  // window [1, 0.9]: empty
+}
+
+TEST(CampaignSpec, MotionNamesAreFileStems) {
+  EXPECT_EQ(cli::motion_name("dance"), "dance");
+  EXPECT_EQ(cli::motion_name("/a/b/salsa.motion"), "salsa");
+  EXPECT_EQ(cli::motion_name("show.json"), "show");
+}
+
+}  // namespace
+}  // namespace kuavo::test

@@ -1,0 +1,153 @@
+#include "tools/cli/campaign_spec.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace kuavo::cli {
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+double unit_from_bits(std::uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
+
+bool string_list(const nlohmann::json& j, const char* key, std::vector<std::string>& out, std::string& error) {
+  if (!j.contains(key) || !j[key].is_array() || j[key].empty()) {
+    error = std::string("\"") + key + "\" must be a non-empty list of strings";
+    return false;
+  }
+  for (const auto& v : j[key]) {
+    if (!v.is_string() || v.get<std::string>().empty()) {
+      error = std::string("\"") + key + "\" must be a non-empty list of strings";
+      return false;
+    }
+    out.push_back(v.get<std::string>());
+  }
+  return true;
+}
+
+bool number(const nlohmann::json& j, const char* key, double& out, std::string& error) {
+  if (!j.contains(key)) return true;
+  if (!j[key].is_number() || !std::isfinite(j[key].get<double>())) {
+    error = std::string("\"") + key + "\" must be a finite number";
+    return false;
+  }
+  out = j[key].get<double>();
+  return true;
+}
+
+}  // namespace
+
+bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string& error) {
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) {
+    error = "the spec is not a JSON object";
+    return false;
+  }
+  static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
+                                      "first_seed", "planner", "duration_s", "push"};
+  for (const auto& [key, value] : j.items()) {
+    bool known = false;
+    for (const char* k : kKeys) known = known || key == k;
+    if (!known) {
+      error = "unknown key \"" + key + "\"";
+      return false;
+    }
+  }
+  CampaignSpec s;
+  s.name = j.value("name", std::string("campaign"));
+  if (!string_list(j, "motions", s.motions, error) || !string_list(j, "grounds", s.grounds, error) ||
+      !string_list(j, "perturbations", s.perturbations, error)) {
+    return false;
+  }
+  for (const std::string& g : s.grounds) {
+    if (g != "floor" && g != "carpet") {
+      error = "ground '" + g + "' must be floor or carpet";
+      return false;
+    }
+  }
+  if (!j.contains("seeds") || !j["seeds"].is_number_integer() || j["seeds"].get<long long>() < 1 ||
+      j["seeds"].get<long long>() > 100000) {
+    error = "\"seeds\" must be an integer in 1..100000";
+    return false;
+  }
+  s.seeds = static_cast<int>(j["seeds"].get<long long>());
+  if (j.contains("first_seed")) {
+    if (!j["first_seed"].is_number_unsigned()) {
+      error = "\"first_seed\" must be an unsigned integer";
+      return false;
+    }
+    s.first_seed = j["first_seed"].get<std::uint64_t>();
+  }
+  s.planner = j.value("planner", std::string("mpc"));
+  if (s.planner != "mpc" && s.planner != "kinematic") {
+    error = "\"planner\" must be mpc or kinematic";
+    return false;
+  }
+  if (!number(j, "duration_s", s.duration_s, error)) return false;
+  if (s.duration_s < 0.0) {
+    error = "\"duration_s\" must be >= 0";
+    return false;
+  }
+  if (j.contains("push")) {
+    const nlohmann::json& p = j["push"];
+    if (!p.is_object()) {
+      error = "\"push\" must be an object";
+      return false;
+    }
+    s.push.enabled = true;
+    if (!number(p, "impulse_Ns", s.push.impulse_Ns, error) || !number(p, "duration_s", s.push.duration_s, error) ||
+        !number(p, "start_after_s", s.push.start_after_s, error) || !number(p, "end_before_s", s.push.end_before_s, error)) {
+      return false;
+    }
+    if (!(s.push.impulse_Ns > 0.0) || !(s.push.duration_s > 0.0) || s.push.start_after_s < 0.0 || s.push.end_before_s < 0.0) {
+      error = "\"push\" needs impulse_Ns > 0, duration_s > 0 and non-negative start_after_s, end_before_s";
+      return false;
+    }
+  }
+  out = s;
+  return true;
+}
+
+std::string motion_name(const std::string& entry) {
+  std::string name = entry;
+  const auto slash = name.find_last_of('/');
+  if (slash != std::string::npos) name = name.substr(slash + 1);
+  const auto dot = name.rfind('.');
+  if (dot != std::string::npos && dot > 0) name = name.substr(0, dot);
+  return name;
+}
+
+bool draw_push(const PushSpec& spec, std::uint64_t seed, double run_length_s, PushDraw& out) {
+  const double lo = spec.start_after_s;
+  const double hi = run_length_s - spec.end_before_s - spec.duration_s;
+  if (!(hi >= lo)) return false;
+  const std::uint64_t a = splitmix64(seed ^ 0x7075736800000000ULL);  // "push"
+  const std::uint64_t b = splitmix64(a);
+  // Whole milliseconds: the command line carries the time exactly.
+  out.start_s = std::floor((lo + (hi - lo) * unit_from_bits(a)) * 1000.0) / 1000.0;
+  out.direction_rad = 2.0 * 3.14159265358979323846 * unit_from_bits(b);
+  out.force_N = spec.impulse_Ns / spec.duration_s;
+  return true;
+}
+
+void wilson_interval_95(int falls, int runs, double& lo, double& hi) {
+  lo = 0.0;
+  hi = 1.0;
+  if (runs <= 0) return;
+  constexpr double z = 1.959963984540054;
+  const double n = runs;
+  const double p = falls / n;
+  const double denom = 1.0 + z * z / n;
+  const double centre = (p + z * z / (2.0 * n)) / denom;
+  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / denom;
+  // At 0 (or all) falls the bound is 0 (or 1) exactly; the subtraction leaves rounding.
+  lo = falls == 0 ? 0.0 : std::max(0.0, centre - half);
+  hi = falls == runs ? 1.0 : std::min(1.0, centre + half);
+}
+
+}  // namespace kuavo::cli

@@ -1,0 +1,74 @@
+// `kuavo campaign SPEC`: the spec (a JSON file), the run matrix it expands to, each run's
+// deterministic push, and the fall-rate interval. Offline code (heap, exceptions-free
+// parsing, no clocks); cmd_campaign.cpp runs the matrix.
+//
+// Spec keys (kShowConditionsSpec is the example):
+//   "name"           label
+//   "motions"        ["dance" (the built-in dance, retargeted once) | PATH.motion, ...]
+//   "grounds"        ["floor" | "carpet", ...]
+//   "perturbations"  [set name (none, show) | PATH.json, ...] (kuavo simulate --perturb)
+//   "seeds"          runs per cell; "first_seed" (default 1)
+//   "planner"        "mpc" | "kinematic" (default mpc)
+//   "duration_s"     0 or absent: each motion's length plus the settling second
+//   "push"           {"impulse_Ns", "duration_s", "start_after_s", "end_before_s"}: one
+//                    horizontal push a run, direction uniform in [0, 2π) and start uniform
+//                    in [start_after_s, run length − end_before_s], both drawn from the seed;
+//                    absent: no push
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace kuavo::cli {
+
+inline constexpr const char* kShowConditionsSpec = R"({
+  "name": "show conditions",
+  "motions": ["dance"],
+  "grounds": ["carpet"],
+  "perturbations": ["show"],
+  "seeds": 100,
+  "first_seed": 1,
+  "planner": "mpc",
+  "push": {"impulse_Ns": 10.0, "duration_s": 0.1, "start_after_s": 1.0, "end_before_s": 1.0}
+}
+)";
+
+struct PushSpec {
+  bool enabled = false;
+  double impulse_Ns = 0.0;
+  double duration_s = 0.1;
+  double start_after_s = 1.0;
+  double end_before_s = 1.0;
+};
+
+struct CampaignSpec {
+  std::string name;
+  std::vector<std::string> motions, grounds, perturbations;
+  int seeds = 0;
+  std::uint64_t first_seed = 1;
+  std::string planner = "mpc";
+  double duration_s = 0.0;
+  PushSpec push;
+};
+
+// false with a message for malformed JSON, unknown keys, empty lists or bad values.
+bool parse_campaign_spec(const std::string& json_text, CampaignSpec& out, std::string& error);
+
+// A motion entry's short name: "dance" stays, a path gives its file stem.
+std::string motion_name(const std::string& entry);
+
+struct PushDraw {
+  double start_s = 0.0;
+  double direction_rad = 0.0;
+  double force_N = 0.0;  // impulse / duration, horizontal
+};
+// The push of run `seed` in a run of run_length_s: a pure function of its arguments.
+// false when the window [start_after, length − end_before] is empty.
+bool draw_push(const PushSpec& spec, std::uint64_t seed, double run_length_s, PushDraw& out);
+
+// Wilson score interval for `falls` out of `runs` at 95 % (z = 1.959964): unlike the
+// normal approximation it stays inside [0, 1] and is not [0, 0] at zero falls.
+void wilson_interval_95(int falls, int runs, double& lo, double& hi);
+
+}  // namespace kuavo::cli

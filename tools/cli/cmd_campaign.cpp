@@ -1,0 +1,334 @@
+// kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]
+// kuavo campaign --example
+// A matrix of motions × grounds × perturbation sets × seeds (campaign_spec.h), each run its
+// own `kuavo simulate` process with its seed, the job list run by GNU parallel (all cores
+// by default; --sshloginfile spreads it over machines that see the same paths). Resumable:
+// a run whose DIR/runs/ID.json exists is skipped (a run writes ID.json.part and renames it
+// when done, so an interrupted run is redone). Writes DIR/runs.csv (every run, in matrix
+// order, no wall-clock figures: the same campaign gives the same table) and
+// DIR/summary.json (runs, falls, per motion the fall rate's 95 % Wilson interval). A run
+// that produced no summary or whose simulation failed counts as a fall (conservative) and
+// is also counted in "sim_failures".
+#include <sys/resource.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <vector>
+
+#include "controllers/model/model.h"
+#include "controllers/planner/motion_plan.h"
+#include "sim/motion_loop.h"
+#include "tools/cli/campaign_spec.h"
+#include "tools/cli/commands.h"
+#include "tools/mocap/motion_plan_io.h"
+
+namespace kuavo::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]\n"
+               "       kuavo campaign --example      print the \"show conditions\" spec\n");
+  return 2;
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct Motion {
+  std::string name;
+  std::string path;  // absolute
+  double run_length_s = 0.0;
+};
+
+struct Run {
+  std::string id, motion, ground, perturbation, perturbation_arg;
+  std::uint64_t seed = 0;
+  bool pushed = false;
+  PushDraw push;
+  std::string command;
+};
+
+std::string read_file(const std::string& path, bool& ok) {
+  std::ifstream in(path);
+  ok = static_cast<bool>(in);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The built-in dance, retargeted once into DIR/motions by this same binary.
+bool prepare_builtin_dance(const std::string& self, const fs::path& dir, std::string& path) {
+  const fs::path out = dir / "motions" / "dance.motion";
+  path = out.string();
+  if (fs::exists(out)) return true;
+  const fs::path part = dir / "motions" / "dance.motion.part";
+  const std::string cmd = quote(self) + " retarget -o " + quote(part.string()) + " --report " +
+                          quote((dir / "motions" / "dance.retarget.json").string()) + " > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0 || !fs::exists(part)) return false;
+  fs::rename(part, out);
+  return true;
+}
+
+double number_or(const nlohmann::json& j, const char* key, double fallback) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+}
+
+}  // namespace
+
+int run_campaign(int argc, char** argv) {
+  std::string spec_path, out_dir = "campaign", sshloginfile, jobs = "100%";
+  int seeds_override = 0;
+  for (int i = 1; i < argc; ++i) {
+    const char* a = argv[i];
+    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
+    if (!std::strcmp(a, "--example")) {
+      std::fputs(kShowConditionsSpec, stdout);
+      return 0;
+    } else if (!std::strcmp(a, "--out") && v) {
+      out_dir = v;
+    } else if (!std::strcmp(a, "--seeds") && v) {
+      seeds_override = std::atoi(v);
+      if (seeds_override < 1 || seeds_override > 100000) {
+        std::fprintf(stderr, "kuavo campaign: --seeds must be 1..100000, got '%s'\n", v);
+        return 2;
+      }
+    } else if (!std::strcmp(a, "--jobs") && v) {
+      if (std::atoi(v) < 1) {
+        std::fprintf(stderr, "kuavo campaign: --jobs must be >= 1, got '%s'\n", v);
+        return 2;
+      }
+      jobs = v;
+    } else if (!std::strcmp(a, "--sshloginfile") && v) {
+      sshloginfile = v;
+    } else if (a[0] != '-' && spec_path.empty()) {
+      spec_path = a;
+      continue;
+    } else {
+      return usage();
+    }
+    ++i;
+  }
+  if (spec_path.empty()) return usage();
+  bool ok = false;
+  const std::string text = read_file(spec_path, ok);
+  if (!ok) {
+    std::fprintf(stderr, "kuavo campaign: cannot read %s\n", spec_path.c_str());
+    return 2;
+  }
+  CampaignSpec spec;
+  std::string error;
+  if (!parse_campaign_spec(text, spec, error)) {
+    std::fprintf(stderr, "kuavo campaign: %s: %s\n", spec_path.c_str(), error.c_str());
+    return 2;
+  }
+  if (seeds_override > 0) spec.seeds = seeds_override;
+  if (std::system("parallel --version > /dev/null 2>&1") != 0) {
+    std::fprintf(stderr, "kuavo campaign: GNU parallel is not installed (Debian package 'parallel')\n");
+    return 2;
+  }
+
+  std::error_code ec;
+  const fs::path dir = fs::absolute(out_dir);
+  fs::create_directories(dir / "runs", ec);
+  fs::create_directories(dir / "motions", ec);
+  if (ec) {
+    std::fprintf(stderr, "kuavo campaign: cannot create %s: %s\n", dir.c_str(), ec.message().c_str());
+    return 2;
+  }
+  const std::string self = fs::canonical("/proc/self/exe").string();
+
+  // Motions: paths and run lengths (the motion's length plus the settling second, or the spec's duration).
+  auto robot = std::make_unique<model::Model>();
+  model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, *robot);
+  auto plan = std::make_unique<planner::MotionPlan>();
+  std::vector<Motion> motions;
+  for (const std::string& entry : spec.motions) {
+    Motion m;
+    m.name = motion_name(entry);
+    if (entry == "dance") {
+      if (!prepare_builtin_dance(self, dir, m.path)) {
+        std::fprintf(stderr, "kuavo campaign: retargeting the built-in dance failed\n");
+        return 1;
+      }
+    } else {
+      m.path = fs::absolute(entry).string();
+    }
+    if (!mocap::load_motion_plan(m.path, *robot, *plan, error)) {
+      std::fprintf(stderr, "kuavo campaign: %s\n", error.c_str());
+      return 2;
+    }
+    m.run_length_s = spec.duration_s > 0.0 ? spec.duration_s
+                                           : planner::motion_plan_duration_s(*plan) + sim::MotionRunConfig{}.settle_s;
+    for (const Motion& other : motions) {
+      if (other.name == m.name) {
+        std::fprintf(stderr, "kuavo campaign: two motions are named '%s'\n", m.name.c_str());
+        return 2;
+      }
+    }
+    motions.push_back(m);
+  }
+  for (std::string& p : spec.perturbations) {
+    if (p != "none" && p != "show") p = fs::absolute(p).string();  // remote machines see absolute paths
+  }
+
+  // The matrix, in a fixed order.
+  std::vector<Run> runs;
+  for (const Motion& m : motions) {
+    for (const std::string& g : spec.grounds) {
+      for (const std::string& p : spec.perturbations) {
+        for (int k = 0; k < spec.seeds; ++k) {
+          Run r;
+          r.motion = m.name;
+          r.ground = g;
+          r.perturbation = motion_name(p);
+          r.perturbation_arg = p;
+          r.seed = spec.first_seed + static_cast<std::uint64_t>(k);
+          r.id = r.motion + "__" + g + "__" + r.perturbation + "__" + std::to_string(r.seed);
+          std::string cmd = quote(self) + " simulate " + quote(m.path) + " --planner " + spec.planner + " --ground " + g +
+                            " --perturb " + quote(p) + " --seed " + std::to_string(r.seed) + " --perturb-seed " +
+                            std::to_string(r.seed);
+          if (spec.duration_s > 0.0) {
+            char d[64];
+            std::snprintf(d, sizeof d, " --duration %.6g", spec.duration_s);
+            cmd += d;
+          }
+          if (spec.push.enabled) {
+            if (!draw_push(spec.push, r.seed, m.run_length_s, r.push)) {
+              std::fprintf(stderr, "kuavo campaign: the push window is empty for motion '%s' (%.3f s)\n", m.name.c_str(),
+                           m.run_length_s);
+              return 2;
+            }
+            r.pushed = true;
+            char p_arg[128];
+            std::snprintf(p_arg, sizeof p_arg, " --push %.3f:%.6f,%.6f,0:%.6g", r.push.start_s,
+                          r.push.force_N * std::cos(r.push.direction_rad), r.push.force_N * std::sin(r.push.direction_rad),
+                          spec.push.duration_s);
+            cmd += p_arg;
+          }
+          const std::string base = (dir / "runs" / r.id).string();
+          cmd += " --summary " + quote(base + ".json.part") + " > /dev/null 2> " + quote(base + ".err") + "; test -s " +
+                 quote(base + ".json.part") + " && mv " + quote(base + ".json.part") + " " + quote(base + ".json");
+          r.command = cmd;
+          runs.push_back(r);
+        }
+      }
+    }
+  }
+
+  // Pending runs through GNU parallel.
+  const fs::path job_file = dir / "jobs.txt";
+  int pending = 0;
+  std::vector<bool> to_do(runs.size(), false);
+  {
+    std::ofstream jf(job_file);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (fs::exists(dir / "runs" / (runs[i].id + ".json"))) continue;
+      jf << runs[i].command << "\n";
+      to_do[i] = true;
+      ++pending;
+    }
+  }
+  std::fprintf(stderr, "kuavo campaign: %zu runs, %d to do, %zu already done\n", runs.size(), pending,
+               runs.size() - static_cast<std::size_t>(pending));
+  if (pending > 0) {
+    std::string cmd = "parallel --will-cite --halt never -j " + quote(jobs) + " --joblog " +
+                      quote((dir / "joblog.txt").string());
+    if (!sshloginfile.empty()) cmd += " --sshloginfile " + quote(sshloginfile);
+    cmd += " < " + quote(job_file.string());
+    std::fflush(stderr);
+    std::system(cmd.c_str());  // a failed run shows as a missing or failed summary below
+  }
+  struct rusage children {};
+  getrusage(RUSAGE_CHILDREN, &children);
+  const double cpu_s = static_cast<double>(children.ru_utime.tv_sec + children.ru_stime.tv_sec) +
+                       1e-6 * static_cast<double>(children.ru_utime.tv_usec + children.ru_stime.tv_usec);
+
+  // The table.
+  std::ofstream csv(dir / "runs.csv");
+  csv << "run,motion,ground,perturbation,seed,push_start_s,push_direction_deg,ok,fell,fell_at_s,sim_time_s,"
+         "zmp_margin_m_min,tracking_rms_legs_rad,tracking_rms_arms_rad,com_err_m_max,torque_ratio_max,"
+         "torque_saturations,wbc_not_ok_ticks,mpc_failures,error,log_sha256\n";
+  struct Tally {
+    int runs = 0, falls = 0;
+  };
+  std::map<std::string, Tally> per_motion;
+  int total_runs = 0, total_falls = 0, failures = 0;
+  double sim_seconds = 0.0;  // of the runs this invocation did
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    bool have = false;
+    const std::string summary_text = read_file((dir / "runs" / (r.id + ".json")).string(), have);
+    nlohmann::json s = have ? nlohmann::json::parse(summary_text, nullptr, false) : nlohmann::json();
+    const bool parsed = have && !s.is_discarded() && s.is_object();
+    const bool run_ok = parsed && s.value("ok", false);
+    const bool fell = parsed && s.value("fell", false);
+    std::string err = !have ? "no summary (see runs/" + r.id + ".err)" : !parsed ? "unreadable summary" : s.value("error", "");
+    for (char& c : err) c = c == ',' || c == '\n' ? ';' : c;
+    char row[1024];
+    std::snprintf(row, sizeof row, "%s,%s,%s,%s,%llu,%.3f,%.2f,%d,%d,%.3f,%.3f,%.5f,%.5f,%.5f,%.5f,%.4f,%llu,%llu,%llu,%s,%s\n",
+                  r.id.c_str(), r.motion.c_str(), r.ground.c_str(), r.perturbation.c_str(),
+                  static_cast<unsigned long long>(r.seed), r.pushed ? r.push.start_s : -1.0,
+                  r.pushed ? r.push.direction_rad * 180.0 / 3.14159265358979323846 : 0.0, run_ok ? 1 : 0, fell ? 1 : 0,
+                  parsed ? number_or(s, "fell_at_s", -1.0) : -1.0, parsed ? number_or(s, "sim_time_s", 0.0) : 0.0,
+                  parsed ? number_or(s, "zmp_margin_m_min", 0.0) : 0.0,
+                  parsed && s.contains("tracking_rms_rad") ? number_or(s["tracking_rms_rad"], "legs", 0.0) : 0.0,
+                  parsed && s.contains("tracking_rms_rad") ? number_or(s["tracking_rms_rad"], "arms", 0.0) : 0.0,
+                  parsed ? number_or(s, "com_err_m_max", 0.0) : 0.0, parsed ? number_or(s, "torque_ratio_max", 0.0) : 0.0,
+                  static_cast<unsigned long long>(parsed ? number_or(s, "torque_saturations", 0.0) : 0.0),
+                  static_cast<unsigned long long>(parsed ? number_or(s, "wbc_not_ok_ticks", 0.0) : 0.0),
+                  static_cast<unsigned long long>(parsed ? number_or(s, "mpc_failures", 0.0) : 0.0), err.c_str(),
+                  parsed ? s.value("log_sha256", "").c_str() : "");
+    csv << row;
+    const bool counted_fall = fell || !run_ok;
+    Tally& t = per_motion[r.motion];
+    ++t.runs;
+    ++total_runs;
+    t.falls += counted_fall;
+    total_falls += counted_fall;
+    failures += !run_ok;
+    if (parsed && to_do[i]) sim_seconds += number_or(s, "sim_time_s", 0.0);
+  }
+  csv.close();
+
+  nlohmann::ordered_json summary;
+  summary["name"] = spec.name;
+  summary["runs"] = total_runs;
+  summary["falls"] = total_falls;
+  summary["sim_failures"] = failures;
+  summary["interval"] = "Wilson score, 95 %";
+  summary["motions"] = nlohmann::ordered_json::object();
+  for (const Motion& m : motions) {
+    const Tally& t = per_motion[m.name];
+    double lo = 0.0, hi = 1.0;
+    wilson_interval_95(t.falls, t.runs, lo, hi);
+    // Rounded so the file is the same text on every machine.
+    summary["motions"][m.name] = {{"runs", t.runs},
+                                  {"falls", t.falls},
+                                  {"fall_rate_ci95", {std::round(lo * 1e5) / 1e5, std::round(hi * 1e5) / 1e5}}};
+  }
+  std::ofstream(dir / "summary.json") << summary.dump(2) << "\n";
+  std::fputs((summary.dump(2) + "\n").c_str(), stdout);
+  if (pending > 0 && cpu_s > 0.0) {
+    // Throughput for BENCHMARKS.md: CPU time of every child (parallel, the simulate
+    // processes), so other load on the machine does not count.
+    std::fprintf(stderr, "kuavo campaign: %d runs, %.1f simulated s in %.1f core-s (children's CPU time): %.3f sim-s per core-s\n",
+                 pending, sim_seconds, cpu_s, sim_seconds / cpu_s);
+  }
+  return 0;
+}
+
+}  // namespace kuavo::cli
