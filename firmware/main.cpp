@@ -21,6 +21,7 @@
 #include "drivers/config/drivers_config_json.h"
 #include "drivers/imu/serial_port.h"
 #include "firmware/control_cycle.h"
+#include "firmware/control_task.h"
 #include "firmware/dance.h"
 #include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
@@ -69,48 +70,18 @@ void print_plan(const d::DriversConfig& c, const d::BusLoadReport& r) {
   std::printf("imu: %s at %d baud\n", c.imu_device.c_str(), c.imu_baud);
 }
 
-// The control task's body: drivers receive -> dance hand-over -> firmware cycle -> drivers send.
+// The control task's body on the robot: the firmware's (firmware/control_task.h) with the
+// SIGINT/SIGTERM e-stop as its input.
 struct FirmwareTask {
-  fw::Firmware* firmware;
-  fw::RobotIo* io;
-  fw::DanceControl* dance = nullptr;  // nullptr without --dance
-  bool stand = false;
-  bool dance_pending = false;  // ask for the dance once ready
-  hal::TimeNs estop_since_ns = -1;
-  hal::TimeNs danced_until_ns = -1;  // the dance's finish ended (damping, no fault)
+  fw::ControlTask* task;
   std::atomic<bool>* done;
-  hal::CommandFrame command{};
-
   void operator()(const rtos::CycleInfo& info) noexcept {
-    const hal::TimeNs now = info.wake_ns;
-    // Kernel receive stamps are not enabled until rtos_shim offers the
-    // CLOCK_REALTIME -> CLOCK_MONOTONIC offset; samples carry the cycle time.
-    fw::robot_receive_rt(*io, info.cycle, now, 0);
     fw::CycleInputs in;
     in.estop = g_estop.load(std::memory_order_relaxed);
-    in.watch.bus = io->status;
-    const fw::Mode mode = firmware->mode.mode;
-    if (stand && mode == fw::Mode::kDamping && firmware->mode.latched == fw::Fault::kNone) {
-      in.request = fw::Request::kStandUp;
-      stand = false;
-    }
-    if (dance_pending && mode == fw::Mode::kReady) {
-      in.request = fw::Request::kDance;
-      dance_pending = false;
-    }
-    if (dance != nullptr) fw::dance_before_cycle_rt(*dance, *firmware, now, in);
-    fw::CycleController controller{firmware, dance};
-    fw::firmware_cycle_rt(*firmware, io->sensors, in, now, controller, command);
-    fw::robot_send_rt(*io, info.cycle, command, now);
-    if (in.estop && estop_since_ns < 0) estop_since_ns = now;
-    if (mode == fw::Mode::kFinish && firmware->mode.mode == fw::Mode::kDamping && !dance_pending && dance != nullptr &&
-        firmware->mode.latched == fw::Fault::kNone) {
-      danced_until_ns = now;
-    }
-    // Keep sending damping for 0.5 s after the e-stop or the dance, then let main exit.
-    // After a fault the robot stays in damping until the operator's SIGINT.
-    if (estop_since_ns >= 0 && now - estop_since_ns > 500'000'000) done->store(true);
-    if (danced_until_ns >= 0 && now - danced_until_ns > 500'000'000) done->store(true);
+    // Kernel receive stamps are not enabled until rtos_shim offers the
+    // CLOCK_REALTIME -> CLOCK_MONOTONIC offset; samples carry the cycle time.
+    fw::control_task_step_rt(*task, info.cycle, info.wake_ns, in, nullptr);
+    if (task->done) done->store(true);
   }
 };
 
@@ -119,7 +90,7 @@ struct PlannerTask {
   fw::DancePlanner* planner;
   fw::DanceChannels* channels;
   void operator()(const rtos::CycleInfo&) noexcept {
-    if (fw::dance_plan_rt(*planner, *channels)) channels->plan.publish_rt();
+    if (fw::planning_task_step_rt(*planner, *channels)) channels->plan.publish_rt();
   }
 };
 
@@ -249,7 +220,13 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::atomic<bool> done{false};
-  static FirmwareTask task{&firmware, &io, dancing ? &dance : nullptr, stand || dancing, dancing, -1, -1, &done};
+  static fw::ControlTask control;
+  control.firmware = &firmware;
+  control.io = &io;
+  control.dance = dancing ? &dance : nullptr;
+  control.stand = stand || dancing;
+  control.dance_pending = dancing;
+  static FirmwareTask task{&control, &done};
   static PlannerTask planner_body{&planner, &channels};
   rtos::PeriodicTask planner_task;
   if (dancing) {
