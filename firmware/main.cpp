@@ -35,10 +35,12 @@ namespace rtos = kuavo::rtos;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: kuavo_fw [--config FILE] [--csp-legs] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
+    "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
-    "  --csp-legs           leg drives in CiA 402 CSP (drive-side PD, gains written at start-up;\n"
-    "                       firmware/README.md) instead of CST; needed to step\n"
+    "  --legs csp|cst       the leg drives' CiA 402 mode (firmware/README.md, leg binding). csp\n"
+    "                       (default): the drives close the leg PD in their own loop (gains written\n"
+    "                       at start-up), the only binding that steps; cst: torque from the 500 Hz\n"
+    "                       sample (stands and dances in place, unstable at a foot's lift-off)\n"
     "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
     "                       and loads, exit\n"
     "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
@@ -98,7 +100,7 @@ struct PlannerTask {
 
 int main(int argc, char** argv) {
   std::string config_path, dance_path;
-  bool check = false, require_rt = false, stand = false, csp_legs = false;
+  bool check = false, require_rt = false, stand = false, csp_legs = true;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
@@ -107,7 +109,14 @@ int main(int argc, char** argv) {
     }
     if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
     else if (!std::strcmp(a, "--check")) check = true;
-    else if (!std::strcmp(a, "--csp-legs")) csp_legs = true;
+    else if (!std::strcmp(a, "--legs") && i + 1 < argc) {
+      const char* v = argv[++i];
+      if (std::strcmp(v, "csp") != 0 && std::strcmp(v, "cst") != 0) {
+        std::fprintf(stderr, "kuavo_fw: --legs must be csp or cst, got '%s'\n%s", v, kUsage);
+        return 2;
+      }
+      csp_legs = std::strcmp(v, "csp") == 0;
+    }
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
     else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
@@ -138,7 +147,7 @@ int main(int argc, char** argv) {
   // The leg drives hold the WBC's output gains (the law the dance commands).
   if (csp_legs && (!d::use_csp_leg_drives(drivers, kuavo::wbc::WbcConfig{}.leg_kp, kuavo::wbc::WbcConfig{}.leg_kd, msg) ||
                    d::validate_drivers_config(drivers, loads, msg) != d::DriverError::kOk)) {
-    std::fprintf(stderr, "kuavo_fw: --csp-legs: %s\n", msg.c_str());
+    std::fprintf(stderr, "kuavo_fw: --legs csp: %s\n", msg.c_str());
     return 2;
   }
   const fw::FirmwareConfig fw_config{};
@@ -164,6 +173,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", why);
       return 2;
     }
+    fw::dance_set_ankle_motors(dance, drivers);  // the WBC plans what the ankle motors can deliver
     std::printf("dance: %s, %d frames at %.0f Hz (%.2f s); balance filter moved the CoM by up to %.3f m\n",
                 dance_path.c_str(), motion.frame_count, motion.rate_hz, kuavo::planner::motion_plan_duration_s(motion),
                 report.max_correction_m);

@@ -155,6 +155,7 @@ bool FirmwareLoop::enable_dance(const planner::MotionPlan& motion, const stack::
     error_ = why;
     return false;
   }
+  dance_set_ankle_motors(dance(), config_);
   dance_standing_pose(fw(), motion);
   controller_.inner.dance = &dance();
   control_.dance = &dance();

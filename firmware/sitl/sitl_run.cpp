@@ -99,8 +99,11 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     const double t_s = 1e-9 * static_cast<double>(loop->now_ns());
     const sim::PlantTruth& truth = loop->plant().truth();
     ++run.control_ticks;
-    if (!loop->on_gantry()) sim::record_plant_state(truth, t_s, run);
-    if (f.mode.latched != Fault::kNone && (out.faults.empty() || out.faults.back() != f.mode.latched)) {
+    // Once the dance has ended in damping the robot sinks as damping lets it (kuavo_fw
+    // exits 0.5 s later): that is not the dance's, and neither is a reading it causes.
+    const bool dance_over = loop->control_task().danced_until_ns >= 0;
+    if (!loop->on_gantry() && !dance_over) sim::record_plant_state(truth, t_s, run);
+    if (!dance_over && f.mode.latched != Fault::kNone && (out.faults.empty() || out.faults.back() != f.mode.latched)) {
       out.faults.push_back(f.mode.latched);
       if (out.fault_at_s < 0.0) out.fault_at_s = t_s;
     }

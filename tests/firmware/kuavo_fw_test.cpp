@@ -53,10 +53,12 @@ TEST(KuavoFw, CheckPrintsThePlanAndLoads) {
   EXPECT_NE(r.output.find("configuration ok"), std::string::npos);
 }
 
-TEST(KuavoFw, CheckWithCspLegsReportsTheBinding) {
-  FwRun r = run_fw("--check");
+TEST(KuavoFw, CheckReportsTheLegBindingCspByDefault) {
+  FwRun r = run_fw("--legs cst --check");
   EXPECT_NE(r.output.find("CiA 402 drives: 0 in CSP, 14 in CST"), std::string::npos) << r.output;
-  r = run_fw("--csp-legs --check");
+  r = run_fw("--legs fast --check");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = run_fw("--check");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("CiA 402 drives: 12 in CSP, 2 in CST"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("54.0 %"), std::string::npos) << r.output;  // bus loads unchanged
