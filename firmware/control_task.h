@@ -31,6 +31,11 @@ struct ControlTask {
   hal::TimeNs danced_until_ns = -1;  // the dance's finish ended in damping without a fault
   bool done = false;                 // the image may exit (damping held kExitAfterDamping_ns)
   hal::CommandFrame command{};       // this cycle's, as sent
+  // The timing command's stamps (firmware/timing.h): rtos_shim's clock, nullptr off.
+  stack::StageClock stage_clock = nullptr;
+  struct Stamps {
+    std::int64_t start_ns = 0, received_ns = 0, cycled_ns = 0, sent_ns = 0;
+  } stamps{};
 };
 
 // One control cycle at `now_ns`. `in` carries what the caller knows (e-stop, an operator's
@@ -41,7 +46,9 @@ struct ControlTask {
 template <class Controller>
 void control_task_step_rt(ControlTask& t, std::uint64_t cycle, hal::TimeNs now_ns, CycleInputs in,
                           const hal::ImuSample* imu, Controller& controller) noexcept {
+  if (t.stage_clock != nullptr) t.stamps.start_ns = t.stage_clock();
   robot_receive_rt(*t.io, cycle, now_ns, 0);
+  if (t.stage_clock != nullptr) t.stamps.received_ns = t.stage_clock();
   if (imu != nullptr) t.io->sensors.imu = *imu;
   in.watch.bus = t.io->status;
   const Mode mode = t.firmware->mode.mode;
@@ -55,7 +62,9 @@ void control_task_step_rt(ControlTask& t, std::uint64_t cycle, hal::TimeNs now_n
   }
   if (t.dance != nullptr) dance_before_cycle_rt(*t.dance, *t.firmware, now_ns, in);
   firmware_cycle_rt(*t.firmware, t.io->sensors, in, now_ns, controller, t.command);
+  if (t.stage_clock != nullptr) t.stamps.cycled_ns = t.stage_clock();
   robot_send_rt(*t.io, cycle, t.command, now_ns);
+  if (t.stage_clock != nullptr) t.stamps.sent_ns = t.stage_clock();
   if (in.estop && t.estop_since_ns < 0) t.estop_since_ns = now_ns;
   if (mode == Mode::kFinish && t.firmware->mode.mode == Mode::kDamping && t.dance != nullptr &&
       t.firmware->mode.latched == Fault::kNone) {

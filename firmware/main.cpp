@@ -25,6 +25,7 @@
 #include "firmware/dance.h"
 #include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
+#include "firmware/timing.h"
 #include "rtos_shim/periodic_task.h"
 
 namespace fw = kuavo::firmware;
@@ -48,7 +49,13 @@ constexpr const char* kUsage =
     "  --dance MOTION_FILE  a robot motion file from `kuavo retarget` (this robot's variant): stand up\n"
     "                       to its first frame, dance it with the online stack (estimator, MPC 50 Hz,\n"
     "                       WBC 500 Hz), finish, and exit 0 after 0.5 s of damping\n"
-    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file\n"
+    "  --timing MOTION_FILE worst-case timing (no buses needed): the whole dance's control ticks and\n"
+    "                       MPC iterations through the task bodies under the real-time set-up,\n"
+    "                       sensors simulated from the motion through emulated buses; prints\n"
+    "                       p50/p99/p99.99/max per stage and deadline misses. Run before every show\n"
+    "  --evict-cache        with --timing: write 64 MB before each control tick (cold caches)\n"
+    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file,\n"
+    "            3 --timing: a deadline was missed, 4 --timing: the dance did not run to its end\n"
     "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
 
 std::atomic<bool> g_estop{false};
@@ -96,10 +103,42 @@ struct PlannerTask {
   }
 };
 
+// --timing: the control task's real-time set-up on the timing loop's own thread.
+int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig& drivers, const fw::FirmwareConfig& fw_config,
+                       const kuavo::planner::MotionPlan& motion, const rtos::RtConfig& rt, bool evict_cache,
+                       fw::DanceControl& dance, fw::DancePlanner& planner, fw::DanceChannels& channels) {
+  static fw::Firmware firmware;
+  static fw::RobotIo io;
+  static fw::LogSink log;
+  fw::firmware_init(firmware, model, fw_config, &log);
+  fw::dance_standing_pose(firmware, motion);
+  fw::TimingConfig config;
+  config.evict_caches = evict_cache;
+  config.rt = rt;
+  fw::TimingReport report;
+  if (!fw::run_timing(model, drivers, fw_config, motion, config, firmware, dance, planner, channels, io, report)) {
+    std::fprintf(stderr, "kuavo_fw: --timing: %s\n", report.error.c_str());
+    return 1;
+  }
+  std::printf("timing: real time %s; caches %s; %llu control ticks with the stack, dance %s\n",
+              report.realtime_status.c_str(), evict_cache ? "evicted before each tick" : "warm",
+              static_cast<unsigned long long>(report.dance_ticks),
+              report.danced_to_end ? "ran to its end" : fw::to_string(report.fault));
+  std::fputs(fw::timing_table(report, fw_config.control_period_ns, fw_config.planner_period_ns).c_str(), stdout);
+  const std::uint64_t misses =
+      report.cycle.deadline_misses + report.mpc.deadline_misses + (evict_cache ? 0 : report.control_overruns);
+  if (misses > 0) {
+    std::printf("timing: %llu deadline misses\n", static_cast<unsigned long long>(misses));
+    return 3;
+  }
+  return report.danced_to_end ? 0 : 4;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string config_path, dance_path;
+  bool timing = false, evict_cache = false;
   bool check = false, require_rt = false, stand = false, csp_legs = true;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
@@ -120,6 +159,8 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
     else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
+    else if (!std::strcmp(a, "--timing") && i + 1 < argc) dance_path = argv[++i], timing = true;
+    else if (!std::strcmp(a, "--evict-cache")) evict_cache = true;
     else {
       std::fprintf(stderr, "kuavo_fw: unknown argument '%s'\n%s", a, kUsage);
       return 2;
@@ -184,12 +225,14 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
   rtos::RtConfig rt;
   rt.fifo_priority = fw_config.fifo_priority;
   rt.cpu = fw_config.cpu;
   rt.lock_memory = true;
   rt.on_failure = require_rt ? rtos::RtFailurePolicy::kRequire : rtos::RtFailurePolicy::kBestEffort;
+  if (timing) return run_timing_command(model, drivers, fw_config, motion, rt, evict_cache, dance, planner, channels);
+
+  // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
   rtos::RtStatus rt_status;
   std::thread([&] { rt_status = rtos::apply_realtime_to_this_thread(rt); }).join();
   if (!rt_status.ok()) {

@@ -4,8 +4,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
@@ -24,25 +22,6 @@ bool parse_leg_binding(const char* text, LegBinding& out) {
   return false;
 }
 const char* to_string(LegBinding b) { return b == LegBinding::kCsp ? "csp" : "cst"; }
-
-// One bus: a socketpair, the firmware's end and the emulator's.
-struct FirmwareLoop::Wire {
-  int fd[2]{-1, -1};
-  d::CanPort host, device;
-  bool ok = false;
-  Wire() {
-    ok = socketpair(AF_UNIX, SOCK_SEQPACKET, 0, fd) == 0;
-    if (!ok) return;
-    const int buf = 1 << 20;  // a whole cycle's frames in flight
-    for (int f : fd) setsockopt(f, SOL_SOCKET, SO_SNDBUF, &buf, sizeof(buf));
-    host = d::attach_can_port(fd[0], false);
-    device = d::attach_can_port(fd[1], false);
-  }
-  ~Wire() {
-    if (fd[0] >= 0) close(fd[0]);
-    if (fd[1] >= 0) close(fd[1]);
-  }
-};
 
 void LegDriveLoop::add_joint_torques(const std::array<double, model::kNumJoints>& q,
                                      const std::array<double, model::kNumJoints>& v,
@@ -94,35 +73,7 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
   if (ok_ && d::validate_drivers_config(config_, report, msg) != d::DriverError::kOk) ok_ = false, error_ = msg;
   io_ = std::make_unique<RobotIo>();
   if (ok_ && !build_robot_io(config_, lc.firmware.ruiwo_divider, *io_, msg)) ok_ = false, error_ = msg;
-  const std::size_t n = ok_ ? io_->ports.size() : 0;
-  ruiwo_.resize(n);
-  drives_.resize(n);
-  for (std::size_t b = 0; b < n; ++b) {
-    wires_.push_back(std::make_unique<Wire>());
-    if (!wires_[b]->ok) ok_ = false, error_ = "socketpair failed";
-    io_->ports[b] = wires_[b]->host;
-    // Each bus's fault injection draws from its own generator, seeded from the run's seed.
-    const auto fault_seed = static_cast<std::uint32_t>(lc.seed * 1000 + b);
-    if (io_->is_ruiwo[b]) {
-      ruiwo_[b] = std::make_unique<emu::RuiwoEmulator>();
-      std::uint8_t ids[d::ruiwo::kMaxMotorsPerBus];
-      for (int i = 0; i < io_->ruiwo[b].count; ++i) ids[i] = io_->ruiwo[b].motors[i].motor_id;
-      emu::init_ruiwo_emulator(*ruiwo_[b], ids, io_->ruiwo[b].count);
-      emu::arm_fault_injection(ruiwo_[b]->faults, 100 + fault_seed);
-    } else {
-      drives_[b] = std::make_unique<emu::Cia402Emulator>();
-      for (const auto& c : io_->canopen[b].cfg) emu::add_drive(*drives_[b], c);
-      emu::arm_fault_injection(drives_[b]->faults, 200 + fault_seed);
-    }
-  }
-  for (int side = 0; side < 2; ++side) {
-    legs_[side].transmission = config_.legs[side];
-    legs_[side].first_joint = side == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
-    for (const d::DriveEntry& e : config_.drives) {
-      const int k = e.slot - legs_[side].first_joint;
-      if (k >= 0 && k < d::kLegActuators) legs_[side].node_ids[k] = e.config.node_id;
-    }
-  }
+  if (ok_ && !buses_.init(config_, *io_, lc.seed, msg)) ok_ = false, error_ = msg;
   log_ = std::make_unique<LogSink>();
   firmware_init(fw(), m, lc.firmware, log_.get());
   control_ = ControlTask{};
@@ -145,8 +96,6 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
 }
 
 FirmwareLoop::~FirmwareLoop() = default;
-
-drivers::CanPort& FirmwareLoop::device_port(std::size_t b) { return wires_[b]->device; }
 
 bool FirmwareLoop::enable_dance(const planner::MotionPlan& motion, const stack::StackConfig& config,
                                 hal::TimeNs plan_latency_ns) {
@@ -173,26 +122,12 @@ void FirmwareLoop::tick(CycleInputs in) {
     pj.position_rad[j] = truth.q[7 + j];
     pj.velocity_rad_s[j] = truth.v[6 + j];
   }
-  // Devices sample the plant; drives answer last tick's SYNC.
+  // Devices sample the plant; drives answer last tick's SYNC. A fallen robot's ankle may
+  // leave the linkage's reach: counted, the drives then report their last position (the
+  // firmware is in damping by then).
+  binding_failures_ += buses_.drives_answer_rt(pj, now_);
   for (std::size_t b = 0; b < buses(); ++b) {
-    if (ruiwo_[b]) {
-      emu::write_ruiwo_motors(io_->ruiwo[b], pj, *ruiwo_[b]);
-      continue;
-    }
-    emu::Cia402Emulator& e = *drives_[b];
-    // A fallen robot's ankle may leave the linkage's reach: counted, the
-    // drives then report their last position (the firmware is in damping by then).
-    for (const auto& leg : legs_) binding_failures_ += emu::write_leg_drives(leg, pj, e) != d::DriverError::kOk;
-    for (int i = 0; i < e.count; ++i) {
-      const int slot = io_->canopen[b].slot[i];
-      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) {
-        e.drives[i].position_rad = pj.position_rad[slot];
-        e.drives[i].velocity_rad_s = pj.velocity_rad_s[slot];
-      }
-    }
-    const std::uint32_t before = e.frames_in;
-    emu::serve_rt(e, wires_[b]->device, now_);
-    inspect_drives(b, e.frames_in - before);
+    if (buses_.drives(b) != nullptr) inspect_drives(b, buses_.frames_received(b));
   }
   imu_.sample(truth, now_, imu_frame_);
   // The planning task's result lands its latency after the state it used.
@@ -231,11 +166,9 @@ void FirmwareLoop::tick(CycleInputs in) {
     }
   }
   // Ruiwo boards answer this tick's commands (read next Ruiwo cycle).
+  buses_.ruiwo_answer_rt();
   for (std::size_t b = 0; b < buses(); ++b) {
-    if (!ruiwo_[b]) continue;
-    const std::uint32_t before = ruiwo_[b]->frames_in;
-    emu::serve_rt(*ruiwo_[b], wires_[b]->device);
-    inspect_ruiwo(b, ruiwo_[b]->frames_in - before);
+    if (buses_.ruiwo(b) != nullptr) inspect_ruiwo(b, buses_.frames_received(b));
   }
   // Motor torques -> plant.
   if (!gantry_) advance_plant(pj);
@@ -289,14 +222,14 @@ void FirmwareLoop::advance_plant(const emu::PlantJoints& pj) {
   std::array<double, model::kNumJoints> tau{};
   hal::CommandFrame applied;  // what the motors do, in joint space
   for (std::size_t b = 0; b < buses(); ++b) {
-    if (ruiwo_[b]) {
+    if (buses_.ruiwo(b) != nullptr) {
       // A Ruiwo board closes its MIT law at its own (kHz) rate: hand the law
       // the board decoded from the wire to the plant's continuous drive model
       // rather than a torque sampled every 2 ms (which would chatter on the
       // light wrist links).
       const d::ruiwo::Bus& wiring = io_->ruiwo[b];
-      for (int i = 0; i < ruiwo_[b]->count; ++i) {
-        const emu::EmulatedRuiwoMotor& mo = ruiwo_[b]->motors[i];
+      for (int i = 0; i < buses_.ruiwo(b)->count; ++i) {
+        const emu::EmulatedRuiwoMotor& mo = buses_.ruiwo(b)->motors[i];
         const d::ruiwo::MotorConfig& mc = wiring.motors[i];
         hal::JointCommand& c = applied.joints[mc.joint];
         if (!mo.enabled) continue;  // disabled: no torque
@@ -311,17 +244,17 @@ void FirmwareLoop::advance_plant(const emu::PlantJoints& pj) {
     }
     // CSP legs: the plant runs the drives' loop itself (leg_loop_), nothing held here.
     if (!csp_legs_) {
-      for (const auto& leg : legs_) binding_failures_ += emu::add_leg_torques(leg, pj, *drives_[b], tau) != d::DriverError::kOk;
+      for (const auto& leg : buses_.legs()) binding_failures_ += emu::add_leg_torques(leg, pj, *buses_.drives(b), tau) != d::DriverError::kOk;
     }
-    for (int i = 0; i < drives_[b]->count; ++i) {
+    for (int i = 0; i < buses_.drives(b)->count; ++i) {
       const int slot = io_->canopen[b].slot[i];
-      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) tau[slot] += emu::drive_torque_Nm(drives_[b]->drives[i]);
+      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) tau[slot] += emu::drive_torque_Nm(buses_.drives(b)->drives[i]);
     }
   }
   // CiA 402 drives in CST: the torque the firmware computed, held for the tick.
   for (std::size_t b = 0; b < buses(); ++b) {
-    if (!drives_[b]) continue;
-    for (int i = 0; i < drives_[b]->count; ++i) {
+    if (buses_.drives(b) == nullptr) continue;
+    for (int i = 0; i < buses_.drives(b)->count; ++i) {
       // The ankle pair's slots are the two ankle joints, which the linkage couples.
       const int j = io_->canopen[b].slot[i];
       applied.joints[j] = hal::JointCommand{};  // kDisabled: CSP leg torques come from leg_loop_
@@ -352,8 +285,8 @@ void FirmwareLoop::inspect_ruiwo(std::size_t b, std::uint32_t frames) {
   const d::ruiwo::Bus& bus = io_->ruiwo[b];
   // One wire quantum of each field (ruiwo_codec.h ranges and bit widths).
   const double q_quantum = 25.0 / 65535.0, tau_quantum = 100.0 / 4095.0, gain_quantum = 250.0 / 4095.0;
-  for (int i = 0; i < ruiwo_[b]->count; ++i) {
-    const d::ruiwo::PtmCommand& c = ruiwo_[b]->motors[i].command;
+  for (int i = 0; i < buses_.ruiwo(b)->count; ++i) {
+    const d::ruiwo::PtmCommand& c = buses_.ruiwo(b)->motors[i].command;
     const d::ruiwo::MotorConfig& mc = bus.motors[i];
     const int j = mc.joint;
     if (!std::isfinite(c.position_rad) || !std::isfinite(c.torque_Nm) || !std::isfinite(c.kp_Nm_per_rad) ||
@@ -375,7 +308,7 @@ void FirmwareLoop::inspect_ruiwo(std::size_t b, std::uint32_t frames) {
 
 void FirmwareLoop::inspect_drives(std::size_t b, std::uint32_t frames) {
   check_.frames_inspected += frames;
-  const emu::Cia402Emulator& e = *drives_[b];
+  const emu::Cia402Emulator& e = *buses_.drives(b);
   for (int i = 0; i < e.count; ++i) {
     const d::canopen::DriveConfig& c = e.drives[i].config;
     const double tau = e.drives[i].target_torque_permille * c.rated_torque_Nm / 1000.0;

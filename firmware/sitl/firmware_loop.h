@@ -28,6 +28,7 @@
 #include "drivers/emulator/plant_binding.h"
 #include "drivers/emulator/ruiwo_emulator.h"
 #include "firmware/control_task.h"
+#include "firmware/emulated_buses.h"
 #include "sim/ground_contact.h"
 #include "sim/plant.h"
 #include "sim/sensor_model.h"
@@ -143,12 +144,12 @@ class FirmwareLoop {
   const drivers::DriversConfig& drivers_config() const { return config_; }
   RobotIo& io() { return *io_; }
   const RobotIo& io() const { return *io_; }
-  drivers::emulator::RuiwoEmulator* ruiwo(std::size_t b) { return ruiwo_[b].get(); }
-  drivers::emulator::Cia402Emulator* drives(std::size_t b) { return drives_[b].get(); }
-  const drivers::emulator::RuiwoEmulator* ruiwo(std::size_t b) const { return ruiwo_[b].get(); }
-  const drivers::emulator::Cia402Emulator* drives(std::size_t b) const { return drives_[b].get(); }
-  drivers::CanPort& device_port(std::size_t b);
-  std::size_t buses() const { return ruiwo_.size(); }
+  drivers::emulator::RuiwoEmulator* ruiwo(std::size_t b) { return buses_.ruiwo(b); }
+  drivers::emulator::Cia402Emulator* drives(std::size_t b) { return buses_.drives(b); }
+  const drivers::emulator::RuiwoEmulator* ruiwo(std::size_t b) const { return buses_.ruiwo(b); }
+  const drivers::emulator::Cia402Emulator* drives(std::size_t b) const { return buses_.drives(b); }
+  drivers::CanPort& device_port(std::size_t b) { return buses_.device_port(b); }
+  std::size_t buses() const { return buses_.buses(); }
   InjectingController& controller() { return controller_; }
   const hal::CommandFrame& command() const { return control_.command; }
   const ControlTask& control_task() const { return control_; }
@@ -182,14 +183,10 @@ class FirmwareLoop {
   void inspect_ruiwo(std::size_t b, std::uint32_t frames);
   void inspect_drives(std::size_t b, std::uint32_t frames);
 
-  struct Wire;
   const model::Model& model_;
   drivers::DriversConfig config_;
   std::unique_ptr<RobotIo> io_;
-  std::vector<std::unique_ptr<Wire>> wires_;
-  std::vector<std::unique_ptr<drivers::emulator::RuiwoEmulator>> ruiwo_;
-  std::vector<std::unique_ptr<drivers::emulator::Cia402Emulator>> drives_;
-  std::array<drivers::emulator::LegWiring, 2> legs_{};
+  EmulatedBuses buses_;
   std::unique_ptr<LogSink> log_;
   std::unique_ptr<sim::Plant> plant_;
   sim::SensorModel imu_;
@@ -214,7 +211,7 @@ class FirmwareLoop {
   int corrupt_ = 0;
   bool leg_pd_in_drive_ = false;
   bool csp_legs_ = false;
-  LegDriveLoop leg_loop_{legs_, drives_};
+  LegDriveLoop leg_loop_{buses_.legs(), buses_.all_drives()};
   std::size_t planner_allocations_ = 0;
   std::vector<double> cycle_us_, plan_ms_;
 };
