@@ -39,6 +39,8 @@
 #include "controllers/planner/reference_plan.h"
 #include "controllers/stack/online_stack.h"
 #include "controllers/standing/standing_controller.h"
+#include "drivers/config/drivers_config.h"
+#include "drivers/transmission/leg_transmission.h"
 #include "firmware/control_cycle.h"
 #include "rtos_shim/latest_value.h"
 
@@ -108,8 +110,19 @@ struct DanceCounters {
   double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
 };
 
+// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps). The WBC
+// plans ankle torques up to each motor's clamp: a smaller share, leaving the CSP drive's own
+// feedback room on top, fell sooner in the firmware-in-the-loop dance (firmware/README.md).
+struct AnkleMotors {
+  bool active = false;
+  std::array<drivers::LegTransmission, 2> legs{};
+  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // per motor (A, B)
+  std::uint64_t unmapped_ticks = 0;  // ticks an ankle could not be mapped (joint-space limits only)
+};
+
 // The control task's state. ~0.4 MB (the stack's control workspace): static storage.
 struct DanceControl {
+  AnkleMotors ankle_motors;
   const model::Model* model = nullptr;
   stack::StackConfig config{};
   const planner::MotionPlan* motion = nullptr;
@@ -141,6 +154,11 @@ struct DanceControl {
 bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& channels, const model::Model& model,
                 const stack::StackConfig& config, const FirmwareConfig& fw_config,
                 const planner::MotionPlan& motion, const char*& error);
+
+// Binds the ankle motors' torque limits, mapped through the leg transmissions at each tick's
+// sampled ankle angles, into the WBC's QP (controllers/wbc/wbc.h). Start-up; without it the
+// WBC limits joint torques only (as in the simulator, whose plant drives joints).
+void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers);
 
 // Makes the standing controller stand at the motion's first frame: its joint pose, and
 // its CoM target where that pose puts the CoM over the feet. Start-up; after firmware_init.

@@ -21,9 +21,11 @@
 #include "drivers/config/drivers_config_json.h"
 #include "drivers/imu/serial_port.h"
 #include "firmware/control_cycle.h"
+#include "firmware/control_task.h"
 #include "firmware/dance.h"
 #include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
+#include "firmware/timing.h"
 #include "rtos_shim/periodic_task.h"
 
 namespace fw = kuavo::firmware;
@@ -34,10 +36,12 @@ namespace rtos = kuavo::rtos;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: kuavo_fw [--config FILE] [--csp-legs] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
+    "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
-    "  --csp-legs           leg drives in CiA 402 CSP (drive-side PD, gains written at start-up;\n"
-    "                       firmware/README.md) instead of CST; needed to step\n"
+    "  --legs csp|cst       the leg drives' CiA 402 mode (firmware/README.md, leg binding). csp\n"
+    "                       (default): the drives close the leg PD in their own loop (gains written\n"
+    "                       at start-up), the only binding that steps; cst: torque from the 500 Hz\n"
+    "                       sample (stands and dances in place, unstable at a foot's lift-off)\n"
     "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
     "                       and loads, exit\n"
     "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
@@ -45,7 +49,13 @@ constexpr const char* kUsage =
     "  --dance MOTION_FILE  a robot motion file from `kuavo retarget` (this robot's variant): stand up\n"
     "                       to its first frame, dance it with the online stack (estimator, MPC 50 Hz,\n"
     "                       WBC 500 Hz), finish, and exit 0 after 0.5 s of damping\n"
-    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file\n"
+    "  --timing MOTION_FILE worst-case timing (no buses needed): the whole dance's control ticks and\n"
+    "                       MPC iterations through the task bodies under the real-time set-up,\n"
+    "                       sensors simulated from the motion through emulated buses; prints\n"
+    "                       p50/p99/p99.99/max per stage and deadline misses. Run before every show\n"
+    "  --evict-cache        with --timing: write 64 MB before each control tick (cold caches)\n"
+    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file,\n"
+    "            3 --timing: a deadline was missed, 4 --timing: the dance did not run to its end\n"
     "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
 
 std::atomic<bool> g_estop{false};
@@ -69,48 +79,18 @@ void print_plan(const d::DriversConfig& c, const d::BusLoadReport& r) {
   std::printf("imu: %s at %d baud\n", c.imu_device.c_str(), c.imu_baud);
 }
 
-// The control task's body: drivers receive -> dance hand-over -> firmware cycle -> drivers send.
+// The control task's body on the robot: the firmware's (firmware/control_task.h) with the
+// SIGINT/SIGTERM e-stop as its input.
 struct FirmwareTask {
-  fw::Firmware* firmware;
-  fw::RobotIo* io;
-  fw::DanceControl* dance = nullptr;  // nullptr without --dance
-  bool stand = false;
-  bool dance_pending = false;  // ask for the dance once ready
-  hal::TimeNs estop_since_ns = -1;
-  hal::TimeNs danced_until_ns = -1;  // the dance's finish ended (damping, no fault)
+  fw::ControlTask* task;
   std::atomic<bool>* done;
-  hal::CommandFrame command{};
-
   void operator()(const rtos::CycleInfo& info) noexcept {
-    const hal::TimeNs now = info.wake_ns;
-    // Kernel receive stamps are not enabled until rtos_shim offers the
-    // CLOCK_REALTIME -> CLOCK_MONOTONIC offset; samples carry the cycle time.
-    fw::robot_receive_rt(*io, info.cycle, now, 0);
     fw::CycleInputs in;
     in.estop = g_estop.load(std::memory_order_relaxed);
-    in.watch.bus = io->status;
-    const fw::Mode mode = firmware->mode.mode;
-    if (stand && mode == fw::Mode::kDamping && firmware->mode.latched == fw::Fault::kNone) {
-      in.request = fw::Request::kStandUp;
-      stand = false;
-    }
-    if (dance_pending && mode == fw::Mode::kReady) {
-      in.request = fw::Request::kDance;
-      dance_pending = false;
-    }
-    if (dance != nullptr) fw::dance_before_cycle_rt(*dance, *firmware, now, in);
-    fw::CycleController controller{firmware, dance};
-    fw::firmware_cycle_rt(*firmware, io->sensors, in, now, controller, command);
-    fw::robot_send_rt(*io, info.cycle, command, now);
-    if (in.estop && estop_since_ns < 0) estop_since_ns = now;
-    if (mode == fw::Mode::kFinish && firmware->mode.mode == fw::Mode::kDamping && !dance_pending && dance != nullptr &&
-        firmware->mode.latched == fw::Fault::kNone) {
-      danced_until_ns = now;
-    }
-    // Keep sending damping for 0.5 s after the e-stop or the dance, then let main exit.
-    // After a fault the robot stays in damping until the operator's SIGINT.
-    if (estop_since_ns >= 0 && now - estop_since_ns > 500'000'000) done->store(true);
-    if (danced_until_ns >= 0 && now - danced_until_ns > 500'000'000) done->store(true);
+    // Kernel receive stamps are not enabled until rtos_shim offers the
+    // CLOCK_REALTIME -> CLOCK_MONOTONIC offset; samples carry the cycle time.
+    fw::control_task_step_rt(*task, info.cycle, info.wake_ns, in, nullptr);
+    if (task->done) done->store(true);
   }
 };
 
@@ -119,15 +99,47 @@ struct PlannerTask {
   fw::DancePlanner* planner;
   fw::DanceChannels* channels;
   void operator()(const rtos::CycleInfo&) noexcept {
-    if (fw::dance_plan_rt(*planner, *channels)) channels->plan.publish_rt();
+    if (fw::planning_task_step_rt(*planner, *channels)) channels->plan.publish_rt();
   }
 };
+
+// --timing: the control task's real-time set-up on the timing loop's own thread.
+int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig& drivers, const fw::FirmwareConfig& fw_config,
+                       const kuavo::planner::MotionPlan& motion, const rtos::RtConfig& rt, bool evict_cache,
+                       fw::DanceControl& dance, fw::DancePlanner& planner, fw::DanceChannels& channels) {
+  static fw::Firmware firmware;
+  static fw::RobotIo io;
+  static fw::LogSink log;
+  fw::firmware_init(firmware, model, fw_config, &log);
+  fw::dance_standing_pose(firmware, motion);
+  fw::TimingConfig config;
+  config.evict_caches = evict_cache;
+  config.rt = rt;
+  fw::TimingReport report;
+  if (!fw::run_timing(model, drivers, fw_config, motion, config, firmware, dance, planner, channels, io, report)) {
+    std::fprintf(stderr, "kuavo_fw: --timing: %s\n", report.error.c_str());
+    return 1;
+  }
+  std::printf("timing: real time %s; caches %s; %llu control ticks with the stack, dance %s\n",
+              report.realtime_status.c_str(), evict_cache ? "evicted before each tick" : "warm",
+              static_cast<unsigned long long>(report.dance_ticks),
+              report.danced_to_end ? "ran to its end" : fw::to_string(report.fault));
+  std::fputs(fw::timing_table(report, fw_config.control_period_ns, fw_config.planner_period_ns).c_str(), stdout);
+  const std::uint64_t misses =
+      report.cycle.deadline_misses + report.mpc.deadline_misses + (evict_cache ? 0 : report.control_overruns);
+  if (misses > 0) {
+    std::printf("timing: %llu deadline misses\n", static_cast<unsigned long long>(misses));
+    return 3;
+  }
+  return report.danced_to_end ? 0 : 4;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string config_path, dance_path;
-  bool check = false, require_rt = false, stand = false, csp_legs = false;
+  bool timing = false, evict_cache = false;
+  bool check = false, require_rt = false, stand = false, csp_legs = true;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
@@ -136,10 +148,19 @@ int main(int argc, char** argv) {
     }
     if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
     else if (!std::strcmp(a, "--check")) check = true;
-    else if (!std::strcmp(a, "--csp-legs")) csp_legs = true;
+    else if (!std::strcmp(a, "--legs") && i + 1 < argc) {
+      const char* v = argv[++i];
+      if (std::strcmp(v, "csp") != 0 && std::strcmp(v, "cst") != 0) {
+        std::fprintf(stderr, "kuavo_fw: --legs must be csp or cst, got '%s'\n%s", v, kUsage);
+        return 2;
+      }
+      csp_legs = std::strcmp(v, "csp") == 0;
+    }
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
     else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
+    else if (!std::strcmp(a, "--timing") && i + 1 < argc) dance_path = argv[++i], timing = true;
+    else if (!std::strcmp(a, "--evict-cache")) evict_cache = true;
     else {
       std::fprintf(stderr, "kuavo_fw: unknown argument '%s'\n%s", a, kUsage);
       return 2;
@@ -167,7 +188,7 @@ int main(int argc, char** argv) {
   // The leg drives hold the WBC's output gains (the law the dance commands).
   if (csp_legs && (!d::use_csp_leg_drives(drivers, kuavo::wbc::WbcConfig{}.leg_kp, kuavo::wbc::WbcConfig{}.leg_kd, msg) ||
                    d::validate_drivers_config(drivers, loads, msg) != d::DriverError::kOk)) {
-    std::fprintf(stderr, "kuavo_fw: --csp-legs: %s\n", msg.c_str());
+    std::fprintf(stderr, "kuavo_fw: --legs csp: %s\n", msg.c_str());
     return 2;
   }
   const fw::FirmwareConfig fw_config{};
@@ -193,6 +214,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", why);
       return 2;
     }
+    fw::dance_set_ankle_motors(dance, drivers);  // the WBC plans what the ankle motors can deliver
     std::printf("dance: %s, %d frames at %.0f Hz (%.2f s); balance filter moved the CoM by up to %.3f m\n",
                 dance_path.c_str(), motion.frame_count, motion.rate_hz, kuavo::planner::motion_plan_duration_s(motion),
                 report.max_correction_m);
@@ -203,12 +225,14 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
   rtos::RtConfig rt;
   rt.fifo_priority = fw_config.fifo_priority;
   rt.cpu = fw_config.cpu;
   rt.lock_memory = true;
   rt.on_failure = require_rt ? rtos::RtFailurePolicy::kRequire : rtos::RtFailurePolicy::kBestEffort;
+  if (timing) return run_timing_command(model, drivers, fw_config, motion, rt, evict_cache, dance, planner, channels);
+
+  // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
   rtos::RtStatus rt_status;
   std::thread([&] { rt_status = rtos::apply_realtime_to_this_thread(rt); }).join();
   if (!rt_status.ok()) {
@@ -249,7 +273,13 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::atomic<bool> done{false};
-  static FirmwareTask task{&firmware, &io, dancing ? &dance : nullptr, stand || dancing, dancing, -1, -1, &done};
+  static fw::ControlTask control;
+  control.firmware = &firmware;
+  control.io = &io;
+  control.dance = dancing ? &dance : nullptr;
+  control.stand = stand || dancing;
+  control.dance_pending = dancing;
+  static FirmwareTask task{&control, &done};
   static PlannerTask planner_body{&planner, &channels};
   rtos::PeriodicTask planner_task;
   if (dancing) {

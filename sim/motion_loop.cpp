@@ -37,12 +37,7 @@ std::string log_header(const model::Model& model) {
   return h;
 }
 
-struct Balance {
-  bool defined = false;
-  Eigen::Vector2d cop = Eigen::Vector2d::Zero();
-  double margin_m = 0.0;
-  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
-};
+}  // namespace
 
 Balance balance_of(const PlantTruth& t) {
   Balance b;
@@ -69,8 +64,6 @@ Balance balance_of(const PlantTruth& t) {
   for (int i = 1; i < n; ++i) b.lo = b.lo.cwiseMin(corners[i]), b.hi = b.hi.cwiseMax(corners[i]);
   return b;
 }
-
-}  // namespace
 
 Percentiles percentiles(std::vector<double> samples) {
   Percentiles p;

@@ -34,6 +34,17 @@ struct MotionRunConfig {
   PlantPerturbation perturbation;
 };
 
+// The centre of pressure of the ground's normal forces and its margin to the support
+// polygon (the loaded feet's sole corners), from the plant's truth. Undefined (defined
+// false) while the feet carry little load.
+struct Balance {
+  bool defined = false;
+  Eigen::Vector2d cop = Eigen::Vector2d::Zero();
+  double margin_m = 0.0;
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();  // the polygon's bounding box
+};
+Balance balance_of(const PlantTruth& t);
+
 struct Percentiles {
   double p50 = 0.0, p99 = 0.0, max = 0.0;
 };

@@ -47,6 +47,7 @@ bool stack_start(const model::Model& model, const StackConfig& config, ControlWo
 wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& ws,
                                      const hal::SensorFrame& sensors, hal::TimeNs now_ns, const StateOverride& state,
                                      hal::CommandFrame& command) {
+  if (ws.stage_clock != nullptr) ws.stamps.start_ns = ws.stage_clock();
   // The reference first: its contact flags are the estimator's contact schedule.
   planner::reference_plan_at_rt(ws.active, now_ns, ws.reference);
   if (ws.blend_pending) {
@@ -76,7 +77,10 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
   const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
   ++ws.ticks;
-  return wbc::wbc_step_rt(model, config.wbc, ws.wbc, q, v, ws.reference, now_ns, command);
+  if (ws.stage_clock != nullptr) ws.stamps.estimator_done_ns = ws.stage_clock();
+  const wbc::WbcStatus status = wbc::wbc_step_rt(model, config.wbc, ws.wbc, q, v, ws.reference, now_ns, command);
+  if (ws.stage_clock != nullptr) ws.stamps.wbc_done_ns = ws.stage_clock();
+  return status;
 }
 
 void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,

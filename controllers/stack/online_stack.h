@@ -66,7 +66,16 @@ struct StackConfig {
 // nullptr if usable, else what is wrong. Load time.
 const char* stack_validate_config(const StackConfig& config);
 
+// Stage stamps for the firmware's timing command (firmware/timing.h). The controllers read no
+// clock: the caller hands one in (rtos_shim's); nullptr (the default) stamps nothing.
+using StageClock = std::int64_t (*)() noexcept;
+struct StageStamps {
+  std::int64_t start_ns = 0, estimator_done_ns = 0, wbc_done_ns = 0;  // of the last tick
+};
+
 struct ControlWorkspace {
+  StageClock stage_clock = nullptr;
+  StageStamps stamps{};
   estimator::EstimatorState estimator;
   estimator::EstimateOutput estimate;
   wbc::WbcWorkspace wbc;

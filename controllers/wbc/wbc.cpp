@@ -11,7 +11,9 @@ using dynamics::Mat3;
 constexpr int kNv = model::kNv;
 constexpr int kNj = model::kNumJoints;
 constexpr int kForce0 = kNumAccelerations;  // index of the first force variable
-constexpr int kTorqueRow0 = kNumFrictionRows;
+constexpr int kMotorRow0 = kNumFrictionRows;
+constexpr int kTorqueRow0 = kNumFrictionRows + kNumAnkleMotorRows;
+constexpr int kAnklePitch = 4;  // within a leg; roll follows
 constexpr int kPointsPerFoot = kNumPoints / 2;  // points [0, 4) left foot, [4, 8) right
 static_assert(model::kRightLegFirst == model::kLeftLegFirst + model::kLegJoints);
 
@@ -185,6 +187,27 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
       qp.c_upper.segment<kFrictionRowsPerPoint>(r).setConstant(qp::kInfinity);
       qp.x_lower.segment<3>(x).setZero();
       qp.x_upper.segment<3>(x).setZero();
+    }
+  }
+
+  // Ankle motors: the two ankle torque rows of each leg (swing forces already cut out) mapped
+  // through the linkage; bounds on the motor torque, less the mapped bias.
+  const AnkleMotorLimits& motors = ws.ankle_motor_limits;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int jp = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + kAnklePitch;
+    for (int k = 0; k < 2; ++k) {
+      const int r = kMotorRow0 + 2 * leg + k;
+      if (!motors.active) {
+        qp.C.row(r).setZero();
+        qp.c_lower(r) = -qp::kInfinity;
+        qp.c_upper(r) = qp::kInfinity;
+        continue;
+      }
+      const double gp = motors.joint_to_motor[leg](k, 0), gr = motors.joint_to_motor[leg](k, 1);
+      qp.C.row(r) = gp * qp.C.row(kTorqueRow0 + jp) + gr * qp.C.row(kTorqueRow0 + jp + 1);
+      const double mapped_bias = gp * bias(6 + jp) + gr * bias(6 + jp + 1);
+      qp.c_lower(r) = -motors.limit_Nm[leg](k) - mapped_bias;
+      qp.c_upper(r) = motors.limit_Nm[leg](k) - mapped_bias;
     }
   }
 

@@ -5,7 +5,10 @@
 //   torques eliminated: τ = M_j q̈ + b_j − J_jᵀ f is recovered afterwards (rows 6.. of the EoM)
 //   equalities:   the 6 floating-base rows  M_b q̈ + b_b = J_bᵀ f
 //   inequalities: friction pyramid, 4 rows per stance point (|f_x|, |f_y| ≤ μ f_z);
-//                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows
+//                 ankle motor limits: each ankle pair's two motor torques, J⁻ᵀ (τ_pitch, τ_roll)
+//                 through the linkage, within the motors' limits, 4 rows (off: ±∞) -- a joint-space
+//                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B))
+//                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
 //                 joint q̈ within the joint-limit-aware window
 //   cost:         Σ weights · task errors² (stance points still, swing points tracking, base
@@ -34,7 +37,8 @@ inline constexpr int kNumVars = kNumAccelerations + kNumForces;    // 58
 inline constexpr int kNumEqualities = 6;                           // floating base
 inline constexpr int kFrictionRowsPerPoint = 4;
 inline constexpr int kNumFrictionRows = kFrictionRowsPerPoint * kNumPoints;  // rows [0, 32)
-inline constexpr int kNumInequalities = kNumFrictionRows + model::kNumJoints;  // + torque rows
+inline constexpr int kNumAnkleMotorRows = 4;  // [left A, left B, right A, right B], rows [32, 36)
+inline constexpr int kNumInequalities = kNumFrictionRows + kNumAnkleMotorRows + model::kNumJoints;  // torque rows last
 
 using Qp = qp::DenseQp<kNumVars, kNumEqualities, kNumInequalities>;
 using QpWorkspace = qp::DenseQpWorkspace<kNumVars, kNumEqualities, kNumInequalities>;
@@ -54,8 +58,19 @@ struct WbcDiagnostics {
   dynamics::JointVector torque_Nm = dynamics::JointVector::Zero();
 };
 
+// The ankle pairs in motor space, set by the hardware binding before each tick (the firmware:
+// firmware/dance.cpp, from the drivers' leg transmissions at the sampled ankle angles).
+// motor torques (A, B) = joint_to_motor[leg] · (τ_pitch, τ_roll); |motor k| ≤ limit_Nm[leg][k].
+// Inactive (the simulator's plant drives joints directly): no rows.
+struct AnkleMotorLimits {
+  bool active = false;
+  std::array<Eigen::Matrix2d, 2> joint_to_motor{Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()};
+  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+};
+
 // ~190 KB with the QP: static storage only.
 struct WbcWorkspace {
+  AnkleMotorLimits ankle_motor_limits;
   dynamics::Data data;
   dynamics::FrameJacobian frame_jacobian = dynamics::FrameJacobian::Zero();
   ContactJacobian contact_jacobian = ContactJacobian::Zero();

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "drivers/emulator/bus_fault.h"
 #include "tests/firmware/firmware_loop.h"
 
 namespace kuavo::firmware {
@@ -92,7 +93,7 @@ TEST(FirmwareInLoop, BusOff) {
     FirmwareLoop loop;
     const hal::TimeNs t = inject_and_time(loop, [bus](FirmwareLoop& l) {
       const emu::FaultInjection& f = l.ruiwo(bus) ? l.ruiwo(bus)->faults : l.drives(bus)->faults;
-      ASSERT_TRUE(emu::inject_bus_fault(f, l.wire(bus).device, emu::BusFault::kBusOff));
+      ASSERT_TRUE(emu::inject_bus_fault(f, l.device_port(bus), emu::BusFault::kBusOff));
     });
     report(bus == kLegBus ? "bus-off (leg bus)" : "bus-off (arm bus)", loop, t);
     EXPECT_GE(t, 0);

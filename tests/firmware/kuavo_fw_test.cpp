@@ -53,10 +53,12 @@ TEST(KuavoFw, CheckPrintsThePlanAndLoads) {
   EXPECT_NE(r.output.find("configuration ok"), std::string::npos);
 }
 
-TEST(KuavoFw, CheckWithCspLegsReportsTheBinding) {
-  FwRun r = run_fw("--check");
+TEST(KuavoFw, CheckReportsTheLegBindingCspByDefault) {
+  FwRun r = run_fw("--legs cst --check");
   EXPECT_NE(r.output.find("CiA 402 drives: 0 in CSP, 14 in CST"), std::string::npos) << r.output;
-  r = run_fw("--csp-legs --check");
+  r = run_fw("--legs fast --check");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = run_fw("--check");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("CiA 402 drives: 12 in CSP, 2 in CST"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("54.0 %"), std::string::npos) << r.output;  // bus loads unchanged
@@ -159,3 +161,32 @@ TEST(KuavoFw, UnprivilegedRealTimeIsReportedAndRequireRtRefuses) {
 }
 
 }  // namespace
+
+namespace {
+
+// The figure of a stage row of the --timing table ("cycle   1750  87.3 ..."): its samples.
+long stage_samples(const std::string& out, const std::string& stage) {
+  const std::size_t at = out.find("\n" + stage + " ");
+  if (at == std::string::npos) return -1;
+  return std::strtol(out.c_str() + at + 1 + stage.size(), nullptr, 10);
+}
+
+}  // namespace
+
+// --timing runs the whole motion through the task bodies in real time (a 2 s standing motion:
+// ~6 s). The counts are the motion's, not the machine's: the stack runs in dance (2 s motion +
+// 0.5 s settle) and finish (1 s), 500 Hz -> 1750 ticks; the planner at 50 Hz over the same
+// 3.5 s -> 175 iterations (+-2: the planner's releases are not aligned with the dance's start).
+// Wall-clock figures are only printed (a loaded machine may miss a deadline: exit 3).
+TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
+  const std::string motion = write_standing_motion("fw_timing_s45.motion", kuavo::model::Variant::kS45);
+  FwRun r = run_fw("--timing " + motion);
+  std::printf("%s", r.output.c_str());
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.output;
+  EXPECT_NE(r.output.find("dance ran to its end"), std::string::npos) << r.output;
+  for (const char* stage : {"drivers", "estimator", "wbc", "output", "cycle"}) EXPECT_EQ(stage_samples(r.output, stage), 1750) << stage;
+  EXPECT_NEAR(stage_samples(r.output, "mpc"), 175, 2);
+  EXPECT_EQ(r.exit_code == 3, r.output.find("deadline misses") != std::string::npos) << r.output;
+  r = run_fw("--timing /nonexistent/dance.motion");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}

@@ -1,0 +1,59 @@
+// One firmware-in-the-loop run, as kuavo_fw_sim makes it: the robot hangs on its gantry
+// while the firmware boots, self-checks and stands up (to the motion's first frame), is
+// released in ready, stands 0.2 s, is asked to dance (as an operator would), dances,
+// finishes, and is in damping 0.5 s later -- or a fault latches (damping) or it falls, and
+// the run ends 0.5 s after. Without a motion it stands for stand_s.
+//
+// The CSV log (one row per 2 ms tick) holds only virtual-time quantities: same
+// configuration and seed, same bytes (its sha256 is in the summary). The summary carries
+// `kuavo simulate`'s figures for the dance plus the firmware's own.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "firmware/sitl/firmware_loop.h"
+#include "sim/motion_loop.h"
+
+namespace kuavo::firmware::sitl {
+
+struct SitlConfig {
+  LoopConfig loop{};
+  std::string log_path;       // empty: no file (the hash is still computed)
+  double stand_s = 5.0;       // without a motion
+  hal::TimeNs plan_latency_ns = 4'000'000;  // the planning task's result, applied this much later
+  hal::TimeNs settle_ns = 200'000'000;      // standing in ready off the gantry before the dance
+  AllocationCounter count_allocations = nullptr;
+};
+
+struct BusFigures {
+  std::string interface;
+  double planned_load = 0.0;        // fraction of the bus time (drivers/bus/bus_plan.h)
+  double frames_per_s = 0.0;        // frames the emulator received and sent, over the run
+};
+
+struct SitlSummary {
+  sim::MotionSummary motion;        // kuavo simulate's keys (tracking over the dance mode)
+  bool danced_to_end = false;       // finish came from the motion's end, then damping, no fault
+  std::string final_mode;
+  std::vector<Fault> faults;        // latched, in order (one per clear; a run has no clears)
+  double fault_at_s = -1.0;
+  DanceCounters dance{};            // the output stage: references on a stop, torques clipped
+  std::array<std::uint64_t, 6> leg_torque_clamps{};  // drivers' clamps per leg slot (both legs)
+  std::uint64_t refused_commands = 0, csp_holds = 0, drive_loop_saturations = 0;
+  std::uint64_t ruiwo_clamp_events = 0;
+  std::uint64_t binding_failures = 0;
+  WireCheck wire{};
+  std::size_t allocations_control = 0, allocations_planner = 0;  // while dancing
+  bool allocations_counted = false;
+  std::vector<BusFigures> buses;
+  std::string legs;
+};
+
+SitlSummary run_firmware_sim(const model::Model& model, const planner::MotionPlan* motion, const SitlConfig& config);
+
+std::string sitl_summary_json(const SitlSummary& s);
+
+}  // namespace kuavo::firmware::sitl

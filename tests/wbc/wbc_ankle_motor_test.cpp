@@ -1,0 +1,85 @@
+// The ankle motor rows (wbc.h): with the ankle pairs' joint -> motor torque maps set, every
+// solved tick's ankle torques map to motor torques within the motors' limits -- checked on
+// the returned joint torques through the map given, apart from the QP's rows -- while the
+// answer still satisfies the equations of motion. The same states without the rows ask the
+// motors for more (the scenario binds).
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "tests/wbc/wbc_fixture.h"
+
+namespace kuavo::test {
+namespace {
+
+constexpr int kNj = model::kNumJoints;
+constexpr double kMotorLimit_Nm = 8.0;  // tight enough to bind in single support
+
+// A 4Pro-like linkage map: pitch = τA + τB, roll = 0.46 (τA − τB) (firmware/README.md),
+// inverted: motor (A, B) = G · (τ_pitch, τ_roll).
+Eigen::Matrix2d linkage_map() {
+  Eigen::Matrix2d joint_from_motor;
+  joint_from_motor << 1.0, 1.0, 0.46, -0.46;
+  return joint_from_motor.inverse();
+}
+
+double worst_motor_excess_Nm(const dynamics::JointVector& tau, const Eigen::Matrix2d& g) {
+  double worst = -1e9;
+  for (int leg : {model::kLeftLegFirst, model::kRightLegFirst}) {
+    const Eigen::Vector2d motor = g * Eigen::Vector2d(tau[leg + 4], tau[leg + 5]);
+    worst = std::max(worst, motor.cwiseAbs().maxCoeff() - kMotorLimit_Nm);
+  }
+  return worst;
+}
+
+TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  const Eigen::Matrix2d g = linkage_map();
+  int binding = 0, solved_with_rows = 0;
+  double worst_with_rows = -1e9;
+  for (int trial = 0; trial < 60; ++trial) {
+    std::mt19937_64 rng(100 + trial);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    wbc::wbc_init(m, cfg, ws);
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    const int mode = trial % 3;  // 0 both feet, 1 left swing, 2 right swing
+    for (int c = 0; c < wbc::kNumPoints; ++c) ref.in_contact[c] = mode == 0 || (mode == 1 ? c >= 4 : c < 4);
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    for (int k = 0; k < model::kNv; ++k) v[k] = 0.2 * u(rng);
+    // Without the rows: the reference answer (and whether the limit binds here).
+    ASSERT_FALSE(ws.ankle_motor_limits.active);
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    const bool free_solved = ws.diagnostics.qp_status == qp::QpStatus::kSolved;
+    const dynamics::JointVector free_tau = ws.diagnostics.torque_Nm;
+    if (free_solved && worst_motor_excess_Nm(free_tau, g) > 0.0) ++binding;
+    // With the rows.
+    wbc::wbc_init(m, cfg, ws);
+    ws.ankle_motor_limits.active = true;
+    for (int leg = 0; leg < 2; ++leg) {
+      ws.ankle_motor_limits.joint_to_motor[leg] = g;
+      ws.ankle_motor_limits.limit_Nm[leg].setConstant(kMotorLimit_Nm);
+    }
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    ws.ankle_motor_limits.active = false;
+    if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
+    ++solved_with_rows;
+    worst_with_rows = std::max(worst_with_rows, worst_motor_excess_Nm(ws.diagnostics.torque_Nm, g));
+    // The command carries the QP's torque.
+    for (int j = 0; j < kNj; ++j) EXPECT_EQ(command.joints[j].torque_ff_Nm, ws.diagnostics.torque_Nm[j]);
+  }
+  std::printf("[ figures  ] ankle motors at %.0f N m: %d of 60 free answers exceed it; %d solved with the rows, worst "
+              "motor excess %.2e N m\n",
+              kMotorLimit_Nm, binding, solved_with_rows, worst_with_rows);
+  EXPECT_GT(binding, 10);          // the limit binds: the rows have work to do
+  EXPECT_GT(solved_with_rows, 30);
+  EXPECT_LE(worst_with_rows, 1e-6);
+}
+
+}  // namespace
+}  // namespace kuavo::test
