@@ -195,6 +195,14 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
       st.D.middleRows(rows, m) = mdu.topRows(m);
       st.e.segment(rows, m) = -motion.head(m);
       violation = std::max(violation, motion.head(m).cwiseAbs().maxCoeff());
+      if (n >= 3 && cfg.stance_position_gain_1_s > 0.0) {
+        // Hold the sole centre on its foothold, not only at rest: v = k (c_ref − c) (base axes).
+        Vec3 ref = Vec3::Zero();
+        for (int c = first; c < first + kPointsPerFoot; ++c) ref += knot.point_position_m.segment<3>(3 * c);
+        ref /= kPointsPerFoot;
+        const Vec3 world = ws.x[k].segment<3>(kXBasePosition) + p.rotation * centre;
+        st.e.segment<3>(rows) += cfg.stance_position_gain_1_s * (p.rotation.transpose() * (ref - world));
+      }
       rows += m;
       if (n == 2) {
         // Two corners (toes or heels): the foot may only roll about the line through them, so
@@ -345,10 +353,16 @@ int mpc_num_stages(const MpcConfig& c) { return static_cast<int>(std::lround(c.h
 
 const char* mpc_validate_config(const MpcConfig& c) {
   if (!(c.dt_s >= 0.005 && c.dt_s <= 0.05)) return "dt_s must be in [0.005, 0.05] s";
-  if (!(c.horizon_s >= 0.6 - 1e-9 && c.horizon_s <= 1.4 + 1e-9)) return "horizon_s must be in [0.6, 1.4] s";
+  if (c.plan_output && !(c.horizon_s >= 0.6 - 1e-9 && c.horizon_s <= 1.4 + 1e-9)) {
+    return "horizon_s must be in [0.6, 1.4] s";
+  }
+  if (!c.plan_output && !(c.horizon_s >= 0.2 - 1e-9 && c.horizon_s <= 1.4 + 1e-9)) {
+    return "horizon_s (an offline window) must be in [0.2, 1.4] s";
+  }
   const int n = mpc_num_stages(c);
   if (n > kMaxStages || n + 1 > planner::kMaxWindowKnots) return "horizon_s / dt_s exceeds kMaxStages (70)";
-  if (n < kMpcPlanKnots + 1) return "horizon shorter than the plan handed to the WBC";
+  if (c.plan_output && n < kMpcPlanKnots + 1) return "horizon shorter than the plan handed to the WBC";
+  if (n < 2) return "horizon shorter than two stages";
   if (!(c.friction_coefficient > 0.0 && c.friction_coefficient <= 2.0)) return "friction_coefficient must be in (0, 2]";
   auto bad = [](double w) { return !(std::isfinite(w) && w >= 0.0); };
   for (int i = 0; i < 3; ++i) {
@@ -374,6 +388,9 @@ const char* mpc_validate_config(const MpcConfig& c) {
   if (bad(c.weight_swing_xy)) return "weight_swing_xy must be finite and >= 0";
   if (!(c.swing_position_gain_1_s >= 0.0 && std::isfinite(c.swing_position_gain_1_s))) {
     return "swing_position_gain_1_s must be finite and >= 0";
+  }
+  if (!(c.stance_position_gain_1_s >= 0.0 && c.stance_position_gain_1_s <= 100.0)) {
+    return "stance_position_gain_1_s must be in [0, 100]";
   }
   return nullptr;
 }
@@ -428,6 +445,15 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
                           const planner::PlanWindow& reference) {
   if (!ws.initialized) return MpcStatus::kNotInitialized;
   if (!q.allFinite() || !v.allFinite()) return MpcStatus::kBadInput;
+  StateVector x0;
+  state_from_configuration(model, ws.world_data, q, v, x0);
+  return mpc_build_qp_from_state_rt(model, cfg, ws, x0, reference);
+}
+
+MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+                                     const StateVector& x_initial, const planner::PlanWindow& reference) {
+  if (!ws.initialized) return MpcStatus::kNotInitialized;
+  if (!x_initial.allFinite()) return MpcStatus::kBadInput;
   const int T = ws.horizon;
   if (reference.count < T + 1 || reference.count > planner::kMaxWindowKnots ||
       !(std::abs(reference.dt_s - cfg.dt_s) <= kDtTolerance_s)) {
@@ -471,8 +497,7 @@ MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& cfg, MpcWo
   }
   ws.reference_cached = T + 1;
 
-  StateVector x0;
-  state_from_configuration(model, ws.world_data, q, v, x0);
+  StateVector x0 = x_initial;
   x0[kXEuler] = ws.x_ref[0][kXEuler] + wrap_angle(x0[kXEuler] - ws.x_ref[0][kXEuler]);
 
   // Warm start: the previous solution shifted by the stages elapsed since its knot 0.

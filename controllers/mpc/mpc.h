@@ -122,6 +122,17 @@ struct MpcConfig {
   // out of trouble and falls (at 13.5 s on the floor, 13.9 s on carpet); 50 and 0 dance both
   // grounds to the end. 50 keeps the touchdown spot loosely tied to the plan.
   double weight_swing_xy = 50.0;
+
+  // Stance feet: the sole centre's velocity row becomes v = k (foothold − position), which
+  // holds a stance foot on its foothold instead of only at rest (Euler integration of the
+  // rest condition lets it creep ~1 cm/s over a stance). 0 = rest only (the online MPC: the
+  // measured foot is where it is); the offline optimization uses 10 s⁻¹.
+  double stance_position_gain_1_s = 0.0;
+
+  // The online MPC hands kMpcPlanKnots knots (0.2 s) to the WBC and needs a horizon of
+  // 0.6–1.4 s. The offline trajectory optimization (tools/mocap/dynamic_retarget.h) reads the
+  // trajectory itself and takes windows from 0.2 s: it sets this false.
+  bool plan_output = true;
 };
 
 // nullptr if usable, else what is wrong. Load time.
@@ -217,6 +228,11 @@ MpcStatus mpc_step_rt(const model::Model& model, const MpcConfig& config, MpcWor
 MpcStatus mpc_build_qp_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
                           const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                           const planner::PlanWindow& reference);
+// (1') the same from the initial state in MPC coordinates (the offline trajectory
+// optimization, tools/mocap/dynamic_retarget.h, chains its windows on the optimized state);
+// mpc_build_qp_rt converts (q, v) and calls it.
+MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
+                                     const StateVector& x_initial, const planner::PlanWindow& reference);
 // (2) solve ws.qp into ws.solution and apply the step to ws.x, ws.u;
 MpcStatus mpc_solve_qp_rt(MpcWorkspace& ws);
 // (3) fill the plan from the updated trajectory (count 0 unless status is kOk).
