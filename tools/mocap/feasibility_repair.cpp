@@ -1,0 +1,574 @@
+#include "tools/mocap/feasibility_repair.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "tools/mocap/leg_ik_lm.h"
+#include "controllers/standing/standing_controller.h"
+
+namespace kuavo::mocap {
+namespace {
+
+using dynamics::ConfigVector;
+using dynamics::Mat3;
+using dynamics::Vec3;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kFeet = 2;
+constexpr int kCorners = model::kNumContactPoints / kFeet;
+// A stance foot the legs miss by more than this is lowered toward (base lowered 1 cm a try).
+constexpr double kStanceIkTolerance_m = 2e-3;
+constexpr double kBaseLowerStep_m = 0.01;
+constexpr int kMaxBaseLowerSteps = 20;
+// The pelvis stays within this of the feet midpoint's human offset [m] (a weight shift; a
+// pelvis that flew ahead in a leap is brought back over the feet).
+constexpr double kMaxPelvisOffset_m = 0.20;
+// Swing-foot gesture ramps in and out over this, so a foot leaves and lands on the arc [s].
+constexpr double kGestureRamp_s = 0.15;
+// A touchdown moved by less than this is not reported (placement noise) [m, rad].
+constexpr double kReportMove_m = 0.01;
+constexpr double kReportTurn_rad = 0.05;
+// Repairs of one kind closer than this are listed as one [s].
+constexpr double kMergeGap_s = 0.05;
+
+double wrap(double a) { return std::remainder(a, 2.0 * kPi); }
+double smooth_step(double s) {
+  s = std::clamp(s, 0.0, 1.0);
+  return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+}
+Mat3 rot_z(double yaw) { return Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix(); }
+
+struct FootPose {
+  Vec3 centre = Vec3::Zero();  // sole centre, world (z: its height above the floor)
+  double yaw = 0.0;
+};
+
+// Sole centre and heading of both feet at q.
+std::array<FootPose, kFeet> foot_poses(const model::Model& robot, dynamics::Data& data, const ConfigVector& q) {
+  dynamics::forward_kinematics(robot, data, q);
+  std::array<FootPose, kFeet> out;
+  for (int f = 0; f < kFeet; ++f) {
+    Vec3 c = Vec3::Zero();
+    for (int k = 0; k < kCorners; ++k) c += dynamics::frame_position(robot, data, f * kCorners + k);
+    out[f].centre = c / kCorners;
+    const Mat3 r = data.rotation[robot.frames[f * kCorners].body];
+    out[f].yaw = std::atan2(r(1, 0), r(0, 0));
+  }
+  return out;
+}
+
+struct Interval {
+  int a = 0, b = 0;  // frames [a, b)
+  FootPose pose;
+  bool placed = false;
+};
+
+class RepairLog {
+ public:
+  explicit RepairLog(double rate_hz) : rate_hz_(rate_hz) {}
+  void add(RepairKind kind, int frame_a, int frame_b, const std::string& reason) {
+    const double a = frame_a / rate_hz_, b = frame_b / rate_hz_;
+    for (auto it = list_.rbegin(); it != list_.rend(); ++it) {
+      if (it->kind == kind && a <= it->end_s + kMergeGap_s && it->reason == reason) {
+        it->end_s = std::max(it->end_s, b);
+        return;
+      }
+    }
+    list_.push_back({a, b, kind, reason});
+  }
+  std::vector<Repair> take() {
+    std::stable_sort(list_.begin(), list_.end(), [](const Repair& x, const Repair& y) { return x.start_s < y.start_s; });
+    return std::move(list_);
+  }
+
+ private:
+  double rate_hz_;
+  std::vector<Repair> list_;
+};
+
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, f, a, b, c);
+  return buf;
+}
+
+}  // namespace
+
+const char* to_string(RepairKind k) {
+  switch (k) {
+    case RepairKind::kLeadIn: return "lead_in";
+    case RepairKind::kFlight: return "flight_to_support";
+    case RepairKind::kRetime: return "retime";
+    case RepairKind::kStepSkipped: return "step_skipped";
+    case RepairKind::kStride: return "stride";
+    case RepairKind::kTurn: return "turn";
+    case RepairKind::kTilt: return "tilt";
+    case RepairKind::kTail: return "tail";
+    case RepairKind::kForcedDouble: return "forced_double_support";
+  }
+  return "unknown";
+}
+
+bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>& out, std::string& error) {
+  std::istringstream in(text);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    std::string a, b, verb, what, extra;
+    if (!(ls >> a)) continue;
+    RepairOverride o;
+    char* end = nullptr;
+    o.start_s = std::strtod(a.c_str(), &end);
+    bool ok = end && *end == '\0' && (ls >> b);
+    if (ok) {
+      o.end_s = std::strtod(b.c_str(), &end);
+      ok = end && *end == '\0';
+    }
+    ok = ok && (ls >> verb >> what) && !(ls >> extra) && std::isfinite(o.start_s) && std::isfinite(o.end_s) &&
+         o.start_s >= 0.0 && o.end_s > o.start_s;
+    if (ok && verb == "force") {
+      ok = what == "double";
+      o.force_double = true;
+    } else if (ok && verb == "forbid") {
+      if (what == "all") o.forbid_all = true;
+      else if (what == "flight") o.forbid = RepairKind::kFlight;
+      else if (what == "retime") o.forbid = RepairKind::kRetime;
+      else if (what == "stride") o.forbid = RepairKind::kStride;
+      else if (what == "turn") o.forbid = RepairKind::kTurn;
+      else ok = false;
+    } else {
+      ok = false;
+    }
+    if (!ok) {
+      error = "line " + std::to_string(n) +
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|all' or 'START_S END_S force double' "
+              "(0 <= START_S < END_S)";
+      return false;
+    }
+    out.push_back(o);
+  }
+  return true;
+}
+
+int count_steps(const std::vector<ContactLabel>& labels) {
+  int steps = 0;
+  for (std::size_t i = 1; i < labels.size(); ++i) {
+    steps += (left_in_contact(labels[i - 1]) && !left_in_contact(labels[i])) ? 1 : 0;
+    steps += (right_in_contact(labels[i - 1]) && !right_in_contact(labels[i])) ? 1 : 0;
+  }
+  return steps;
+}
+
+bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& geometric,
+                   const std::vector<ContactLabel>& labels, double rate_hz, const RepairConfig& cfg,
+                   const std::vector<RepairOverride>& overrides, RepairedMotion& out, std::string& error) {
+  const int n_dance = static_cast<int>(geometric.size());
+  if (n_dance < 2 || labels.size() != geometric.size()) {
+    error = "repair: the geometric motion needs at least 2 frames and one contact label per frame";
+    return false;
+  }
+  if (!(rate_hz >= 10.0 && rate_hz <= 1000.0)) {
+    error = "repair: frame rate must be in [10, 1000] Hz";
+    return false;
+  }
+  for (int i = 0; i < n_dance; ++i) {
+    if (!geometric[i].allFinite()) {
+      error = "repair: geometric frame " + std::to_string(i) + " is not finite";
+      return false;
+    }
+  }
+  const auto frames_of = [&](double s) { return static_cast<int>(std::lround(s * rate_hz)); };
+  const int lead = frames_of(cfg.lead_in_s + cfg.blend_in_s);
+  const int blend_start = frames_of(cfg.lead_in_s);
+  const int tail = frames_of(cfg.tail_s);
+  const int n = lead + n_dance + tail;
+  const int min_swing = std::max(1, frames_of(cfg.min_swing_s));
+  const int min_ds = std::max(1, frames_of(cfg.min_double_support_s));
+  const auto dance_frame = [&](int i) { return std::clamp(i - lead, 0, n_dance - 1); };
+  const auto in_dance = [&](int i) { return i >= lead && i < lead + n_dance; };
+  const auto dance_time = [&](int i) { return (i - lead) / rate_hz; };
+  const auto forbidden = [&](RepairKind kind, int i) {
+    if (!in_dance(i)) return false;
+    const double t = dance_time(i);
+    for (const RepairOverride& o : overrides) {
+      if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == kind)) return true;
+    }
+    return false;
+  };
+  const auto forced_double = [&](int i) {
+    if (!in_dance(i)) return false;
+    const double t = dance_time(i);
+    for (const RepairOverride& o : overrides) {
+      if (o.force_double && t >= o.start_s && t < o.end_s) return true;
+    }
+    return false;
+  };
+
+  RepairLog log(rate_hz);
+  auto data = std::make_unique<dynamics::Data>();
+
+  // Human (geometric) feet and the schedule it asks for.
+  std::vector<std::array<FootPose, kFeet>> human(n_dance);
+  for (int d = 0; d < n_dance; ++d) human[d] = foot_poses(robot, *data, geometric[d]);
+  std::vector<std::array<bool, kFeet>> want(n);
+  for (int i = 0; i < n; ++i) {
+    if (!in_dance(i) || forced_double(i)) {
+      want[i] = {true, true};
+    } else {
+      const ContactLabel c = labels[dance_frame(i)];
+      want[i] = {left_in_contact(c), right_in_contact(c)};
+    }
+  }
+  log.add(RepairKind::kLeadIn, 0, lead,
+          fmt("the motion starts standing in double support (%.1f s) and blends into the dance's first pose (%.1f s)",
+              cfg.lead_in_s, cfg.blend_in_s));
+  for (int i = 0; i < n; ++i) {
+    if (forced_double(i)) log.add(RepairKind::kForcedDouble, i, i + 1, "override: both feet down");
+  }
+
+  // 1. The schedule: a state machine that follows the human's wish frame by frame within
+  // the robot's minimum swing and double-support times, never in flight.
+  std::vector<std::array<bool, kFeet>> on(n);
+  std::array<bool, kFeet> state{true, true};
+  int in_state = min_ds;  // frames since the last change
+  for (int i = 0; i < n; ++i) {
+    const auto w = want[i];
+    const bool both = state[0] && state[1];
+    ++in_state;
+    auto change = [&](std::array<bool, kFeet> s) {
+      state = s;
+      in_state = 0;
+    };
+    if (!w[0] && !w[1]) {
+      if (forbidden(RepairKind::kFlight, i)) {
+        change({false, false});
+      } else {
+        log.add(RepairKind::kFlight, i, i + 1,
+                both ? "both feet in the air (hop): kept in double support, the pelvis keeps its bounce"
+                     : "both feet in the air (leap): the last foot stays down until the other lands");
+        if (!state[0] && !state[1]) change({true, true});
+      }
+    } else if (!state[0] && !state[1]) {
+      change(w);  // an allowed flight ends wherever the human lands
+    } else if (both) {
+      if (w[0] != w[1]) {
+        if (in_state >= min_ds || forbidden(RepairKind::kRetime, i)) {
+          change(w);
+        } else {
+          log.add(RepairKind::kRetime, i, i + 1, "double support lengthened to the robot's weight transfer time");
+        }
+      }
+    } else {
+      const int swing = state[0] ? 1 : 0;
+      if (w[swing]) {  // the human's swing foot is down (touchdown, or a switch of feet)
+        if (in_state >= min_swing || forbidden(RepairKind::kRetime, i)) {
+          change({true, true});
+        } else {
+          log.add(RepairKind::kRetime, i, i + 1, "swing lengthened to the robot's shortest step");
+        }
+      }
+    }
+    on[i] = state;
+  }
+  // The human's own steps that the robot never took.
+  for (int f = 0; f < kFeet; ++f) {
+    for (int i = lead + 1; i < lead + n_dance; ++i) {
+      if (want[i - 1][f] && !want[i][f]) {
+        int j = i;
+        while (j < lead + n_dance && !want[j][f]) ++j;
+        bool lifted = false;
+        for (int k = std::max(0, i - min_swing); k < std::min(n, j + min_swing); ++k) lifted |= !on[k][f];
+        if (!lifted) log.add(RepairKind::kStepSkipped, i, j, "a human step too short to fit the robot's timing");
+        i = j;
+      }
+    }
+  }
+
+  // 2. Stance intervals per foot and their footholds.
+  std::array<std::vector<Interval>, kFeet> stance;
+  for (int f = 0; f < kFeet; ++f) {
+    for (int i = 0; i < n;) {
+      if (!on[i][f]) {
+        ++i;
+        continue;
+      }
+      Interval iv;
+      iv.a = i;
+      while (i < n && on[i][f]) ++i;
+      iv.b = i;
+      // Where the human had this foot down during the interval (inside the dance).
+      Vec3 sum = Vec3::Zero();
+      double sc = 0.0, ss = 0.0;
+      int count = 0;
+      for (int k = std::max(iv.a, lead); k < std::min(iv.b, lead + n_dance); ++k) {
+        if (!want[k][f]) continue;
+        const FootPose& p = human[dance_frame(k)][f];
+        sum += p.centre;
+        sc += std::cos(p.yaw);
+        ss += std::sin(p.yaw);
+        ++count;
+      }
+      if (count > 0) {
+        iv.pose.centre = sum / count;
+        iv.pose.yaw = std::atan2(ss, sc);
+        iv.placed = true;
+      } else if (iv.a >= lead) {
+        iv.pose = human[dance_frame(iv.a)][f];
+        iv.placed = true;
+      }
+      iv.pose.centre.z() = 0.0;
+      stance[f].push_back(iv);
+    }
+  }
+  // Pivots: the human stance foot turning while the robot's stays planted.
+  for (int f = 0; f < kFeet; ++f) {
+    for (const Interval& iv : stance[f]) {
+      double lo = 0.0, hi = 0.0;
+      const int a = std::max(iv.a, lead), b = std::min(iv.b, lead + n_dance);
+      for (int k = a; k < b; ++k) {
+        const double d = wrap(human[dance_frame(k)][f].yaw - iv.pose.yaw);
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+      }
+      if (hi - lo > cfg.pivot_yaw_rad) {
+        log.add(RepairKind::kTurn, a, b,
+                std::string(f == 0 ? "left" : "right") +
+                    fmt(" foot pivots %.0f deg: it stays at its touchdown heading, the following steps turn",
+                        (hi - lo) * 180.0 / kPi));
+      }
+    }
+  }
+
+  // Reachability of each touchdown from the other foot's foothold, in time order.
+  dynamics::ConfigVector q_stand = dynamics::neutral_configuration(robot);
+  q_stand.tail<model::kNumJoints>() =
+      control::centred_standing_pose(robot, *data, control::StandingConfig{}.base_height_m);
+  control::place_on_ground(robot, *data, q_stand);
+  const auto stand_feet = foot_poses(robot, *data, q_stand);
+  const double stand_width = stand_feet[0].centre.y() - stand_feet[1].centre.y();
+  const Vec3 stand_base_from_mid = q_stand.head<3>() - 0.5 * (stand_feet[0].centre + stand_feet[1].centre);
+
+  const auto stance_at = [&](int f, int i) -> Interval* {
+    for (Interval& iv : stance[f]) {
+      if (i >= iv.a && i < iv.b) return &iv;
+    }
+    return nullptr;
+  };
+  // The first footholds: a foot without a human foothold stands beside the other.
+  for (int f = 0; f < kFeet; ++f) {
+    Interval& iv = stance[f].front();
+    if (iv.placed) continue;
+    const Interval& other = stance[1 - f].front();
+    const double side = f == 0 ? 1.0 : -1.0;
+    iv.pose.yaw = other.pose.yaw;
+    iv.pose.centre = other.pose.centre + rot_z(other.pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+    iv.placed = true;
+  }
+  struct Touchdown {
+    int frame, foot;
+    std::size_t index;
+  };
+  std::vector<Touchdown> touchdowns;
+  for (int f = 0; f < kFeet; ++f) {
+    for (std::size_t k = 0; k < stance[f].size(); ++k) touchdowns.push_back({stance[f][k].a, f, k});
+  }
+  std::stable_sort(touchdowns.begin(), touchdowns.end(),
+                   [](const Touchdown& x, const Touchdown& y) { return x.frame < y.frame; });
+  for (const Touchdown& td : touchdowns) {
+    if (td.frame == 0 && td.foot == 0) continue;  // the first foothold of the left foot is the anchor
+    Interval& iv = stance[td.foot][td.index];
+    const Interval* other = stance_at(1 - td.foot, td.frame);
+    if (other == nullptr) continue;  // an allowed flight: nothing to place against
+    const double side = td.foot == 0 ? 1.0 : -1.0;
+    const Mat3 r = rot_z(other->pose.yaw);
+    Vec3 d = r.transpose() * (iv.pose.centre - other->pose.centre);
+    const Vec3 d0 = d;
+    d.x() = std::clamp(d.x(), -cfg.max_step_backward_m, cfg.max_step_forward_m);
+    d.y() = side * std::clamp(side * d.y(), cfg.min_step_width_m, cfg.max_step_width_m);
+    d.z() = 0.0;
+    double rel = wrap(iv.pose.yaw - other->pose.yaw);
+    const double rel0 = rel;
+    rel = std::clamp(rel, -cfg.max_relative_yaw_rad, cfg.max_relative_yaw_rad);
+    const bool moved = (d - Vec3(d0.x(), d0.y(), 0.0)).norm() > kReportMove_m;
+    const bool turned = std::abs(rel - rel0) > kReportTurn_rad;
+    if (moved && !forbidden(RepairKind::kStride, td.frame)) {
+      iv.pose.centre = other->pose.centre + r * d;
+      log.add(RepairKind::kStride, td.frame, iv.b,
+              fmt("touchdown %.2f m from the human's, to a spot the legs reach (%.2f m ahead, %.2f m beside the "
+                  "stance foot)",
+                  (d - Vec3(d0.x(), d0.y(), 0.0)).norm(), d.x(), side * d.y()));
+    }
+    if (turned && !forbidden(RepairKind::kTurn, td.frame)) {
+      iv.pose.yaw = other->pose.yaw + rel;
+      log.add(RepairKind::kTurn, td.frame, iv.b,
+              fmt("feet %.0f deg apart in heading, limited to %.0f deg (hip yaw range): the turn goes on in the "
+                  "next steps",
+                  std::abs(rel0) * 180.0 / kPi, cfg.max_relative_yaw_rad * 180.0 / kPi));
+    }
+  }
+
+  // 3. Feet, frame by frame: stance at the foothold, swing from foothold to foothold, raised
+  // to the arc and following the human's gesture in between.
+  const int ramp = std::max(1, frames_of(kGestureRamp_s));
+  std::vector<std::array<FootPose, kFeet>> feet(n);
+  for (int f = 0; f < kFeet; ++f) {
+    const auto& list = stance[f];
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      for (int i = list[k].a; i < list[k].b; ++i) feet[i][f] = list[k].pose;
+      if (k + 1 == list.size()) {
+        for (int i = list[k].b; i < n; ++i) feet[i][f] = list[k].pose;  // an allowed flight to the end
+        continue;
+      }
+      const Interval& p = list[k];
+      const Interval& nx = list[k + 1];
+      const int b0 = p.b - 1, a1 = nx.a;  // last stance frame, first stance frame
+      const FootPose& h0 = human[dance_frame(b0)][f];
+      const FootPose& h1 = human[dance_frame(a1)][f];
+      for (int i = p.b; i < nx.a; ++i) {
+        const double s = static_cast<double>(i - b0) / (a1 - b0);
+        const double w = smooth_step(s);
+        FootPose fp;
+        fp.centre = p.pose.centre + w * (nx.pose.centre - p.pose.centre);
+        fp.yaw = p.pose.yaw + w * wrap(nx.pose.yaw - p.pose.yaw);
+        // The human's gesture: its foot's departure from its own line between lift and land.
+        const double g = smooth_step(static_cast<double>(std::min(i - b0, a1 - i)) / ramp);
+        const FootPose& h = human[dance_frame(i)][f];
+        Vec3 gesture = h.centre - (h0.centre + s * (h1.centre - h0.centre));
+        gesture.z() = 0.0;
+        fp.centre += g * gesture;
+        const double arc = cfg.swing_lift_m * std::sin(kPi * s);
+        fp.centre.z() = std::max(arc, g * std::clamp(h.centre.z(), 0.0, cfg.max_foot_height_m));
+        feet[i][f] = fp;
+      }
+    }
+    for (int i = 0; i < stance[f].front().a; ++i) feet[i][f] = stance[f].front().pose;
+  }
+
+  // 4. Base and legs. The pelvis keeps the human's offset from its feet midpoint (bounded),
+  // height, tilt (bounded) and yaw within the hip-yaw range of the stance feet; arms and
+  // head as geometric; legs by IK to the feet.
+  std::vector<Vec3> base_pos(n);
+  std::vector<Mat3> base_rot(n);
+  for (int i = 0; i < n; ++i) {
+    const int d = dance_frame(i);
+    const ConfigVector& g = geometric[d];
+    const Vec3 human_mid = 0.5 * (human[d][0].centre + human[d][1].centre);
+    const Vec3 robot_mid = 0.5 * (feet[i][0].centre + feet[i][1].centre);
+    Vec3 offset = g.head<3>() - human_mid;
+    offset.z() = 0.0;
+    if (offset.norm() > kMaxPelvisOffset_m) offset *= kMaxPelvisOffset_m / offset.norm();
+    Vec3 pos = robot_mid + offset;
+    pos.z() = g[2];
+    Eigen::Quaterniond qb(g[6], g[3], g[4], g[5]);
+    Mat3 rot = qb.normalized().toRotationMatrix();
+    // Tilt: the angle between the base z axis and the world z.
+    const double tilt = std::acos(std::clamp(rot(2, 2), -1.0, 1.0));
+    if (tilt > cfg.max_base_tilt_rad && in_dance(i)) {
+      const Vec3 axis = rot.col(2).cross(Vec3::UnitZ());
+      if (axis.norm() > 1e-9) {
+        rot = Eigen::AngleAxisd(tilt - cfg.max_base_tilt_rad, axis.normalized()).toRotationMatrix() * rot;
+      }
+      log.add(RepairKind::kTilt, i, i + 1,
+              fmt("pelvis tilted %.0f deg, limited to %.0f deg", tilt * 180.0 / kPi, cfg.max_base_tilt_rad * 180.0 / kPi));
+    }
+    // Yaw within the stance feet's hip-yaw range (mean of the feet on the floor).
+    double sc = 0.0, ss = 0.0;
+    for (int f = 0; f < kFeet; ++f) {
+      if (!on[i][f]) continue;
+      sc += std::cos(feet[i][f].yaw);
+      ss += std::sin(feet[i][f].yaw);
+    }
+    if (sc != 0.0 || ss != 0.0) {
+      const double feet_yaw = std::atan2(ss, sc);
+      const double yaw = std::atan2(rot(1, 0), rot(0, 0));
+      const double rel = wrap(yaw - feet_yaw);
+      const double limit = 0.5 * cfg.max_relative_yaw_rad + 0.1;
+      const double rel_c = std::clamp(rel, -limit, limit);
+      if (rel_c != rel) rot = rot_z(rel_c - rel) * rot;
+    }
+    base_pos[i] = pos;
+    base_rot[i] = rot;
+  }
+  // Lead-in and tail: standing on the footholds, blended into / out of the dance.
+  const auto standing_base = [&](int i, Vec3& pos, Mat3& rot) {
+    const double yaw = std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
+                                  std::cos(feet[i][0].yaw) + std::cos(feet[i][1].yaw));
+    rot = rot_z(yaw);
+    pos = 0.5 * (feet[i][0].centre + feet[i][1].centre) + rot * stand_base_from_mid;
+    pos.z() = q_stand[2];
+  };
+  const auto blend_base = [&](int i, double w) {
+    Vec3 sp;
+    Mat3 sr;
+    standing_base(i, sp, sr);
+    base_pos[i] = sp + w * (base_pos[i] - sp);
+    base_rot[i] = Eigen::Quaterniond(sr).slerp(w, Eigen::Quaterniond(base_rot[i])).toRotationMatrix();
+  };
+  for (int i = 0; i < lead; ++i) blend_base(i, i < blend_start ? 0.0 : smooth_step(double(i - blend_start) / (lead - blend_start)));
+  for (int i = lead + n_dance; i < n; ++i) blend_base(i, 1.0 - smooth_step(double(i - lead - n_dance + 1) / std::max(1, tail)));
+  if (tail > 0) log.add(RepairKind::kTail, lead + n_dance, n, "both feet down after the dance, blending to standing");
+
+  // Corner offsets of a flat foot from its sole centre, in the foot's heading frame.
+  std::array<Vec3, model::kNumContactPoints> corner_offset;
+  {
+    dynamics::forward_kinematics(robot, *data, q_stand);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const int f = c / kCorners;
+      corner_offset[c] = rot_z(-stand_feet[f].yaw) * (dynamics::frame_position(robot, *data, c) - stand_feet[f].centre);
+      corner_offset[c].z() = 0.0;
+    }
+  }
+
+  out = RepairedMotion{};
+  out.rate_hz = rate_hz;
+  out.lead_frames = lead;
+  out.dance_frames = n_dance;
+  out.q.resize(n);
+  out.contacts.resize(n);
+  ConfigVector q = q_stand;
+  for (int i = 0; i < n; ++i) {
+    const int d = dance_frame(i);
+    // Arms and head: standing in the lead-in and tail, blended, the dance in between.
+    double w = 1.0;
+    if (i < lead) w = i < blend_start ? 0.0 : smooth_step(double(i - blend_start) / (lead - blend_start));
+    if (i >= lead + n_dance) w = 1.0 - smooth_step(double(i - lead - n_dance + 1) / std::max(1, tail));
+    constexpr int kUpper = 7 + 2 * model::kLegJoints;
+    q.tail<model::kNq - kUpper>() =
+        q_stand.tail<model::kNq - kUpper>() + w * (geometric[d].tail<model::kNq - kUpper>() - q_stand.tail<model::kNq - kUpper>());
+    const Eigen::Quaterniond qb(base_rot[i]);
+    q[3] = qb.x(), q[4] = qb.y(), q[5] = qb.z(), q[6] = qb.w();
+    std::array<Vec3, model::kNumContactPoints> targets;
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const FootPose& fp = feet[i][c / kCorners];
+      targets[c] = fp.centre + rot_z(fp.yaw) * corner_offset[c];
+    }
+    double stance_error = 0.0;
+    for (int tries = 0; tries <= kMaxBaseLowerSteps; ++tries) {
+      q.head<3>() = base_pos[i] - Vec3(0.0, 0.0, tries * kBaseLowerStep_m);
+      leg_ik_lm(robot, *data, targets, q);
+      dynamics::forward_kinematics(robot, *data, q);
+      stance_error = 0.0;
+      for (int c = 0; c < model::kNumContactPoints; ++c) {
+        if (!on[i][c / kCorners]) continue;
+        stance_error = std::max(stance_error, (dynamics::frame_position(robot, *data, c) - targets[c]).norm());
+      }
+      if (stance_error <= kStanceIkTolerance_m) break;
+    }
+    out.max_leg_ik_error_m = std::max(out.max_leg_ik_error_m, stance_error);
+    out.q[i] = q;
+    out.contacts[i] = make_label(on[i][0], on[i][1]);
+  }
+  out.repairs = log.take();
+  out.human_steps = count_steps(labels);
+  out.robot_steps = count_steps(out.contacts);
+  return true;
+}
+
+}  // namespace kuavo::mocap

@@ -1,0 +1,125 @@
+// Automatic feasibility repair: a geometric retargeting result → a reference the robot can
+// dance, before the dynamic retargeting (dynamic_retarget.h) optimizes it.
+//
+// What a human dance holds that this robot cannot do as captured, and what each becomes:
+//  - flight (hops, leaps, jetés: neither foot on the floor) → the foot that left last stays
+//    down until the other lands (a leap becomes a step, a hop a double-support bounce: the
+//    pelvis keeps its vertical motion, the feet stay planted);
+//  - swings shorter than the leg can lift and place a foot (min_swing_s) and double-support
+//    phases shorter than a weight transfer (min_double_support_s) → re-timed: touch-down or
+//    lift-off delayed by the missing time; the schedule is re-read from the human at every
+//    frame, so the delay does not accumulate (a step the robot cannot fit is skipped and
+//    reported);
+//  - strides longer than the legs, feet crossing or colliding → the touchdown placed at the
+//    nearest reachable spot relative to the stance foot (stride shortened / widened);
+//  - pivots and pirouettes on one foot (the human stance foot turns, a planted robot foot
+//    cannot) and turns faster than the hip yaw allows → the foot keeps its touchdown heading,
+//    the relative heading of the next touchdown is limited to the hip-yaw range, so the turn
+//    is carried out by the following steps (stepping turns);
+//  - a motion that does not start standing → a lead-in: the robot stands in double support
+//    on the dance's first footholds, then blends into the dance's first pose; a tail that
+//    ends in double support.
+// The geometric stage's upper body, head, pelvis height and orientation (yaw kept within the
+// hip-yaw range of the stance feet) are kept; legs are re-solved by inverse kinematics to the
+// repaired feet: stance feet flat at their footholds, swing feet from lift-off to touchdown
+// foothold, raised to at least a swing arc, following the human's foot otherwise (kicks and
+// leg gestures stay). Every repair is listed with its time range, kind and reason.
+//
+// Overrides (a text file, like the contact overrides): lines
+//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, or all)
+//   start_s end_s force double    (both feet down over the range: a hold or a bounce)
+// times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
+// flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
+// with a message naming the time (the robot cannot fly). Offline; allocates.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "tools/mocap/contact_label.h"
+
+namespace kuavo::mocap {
+
+struct RepairConfig {
+  // Shortest swing the robot lifts and places a foot in, and shortest weight transfer. The
+  // built-in dance steps with 0.4 s swings and 0.1 s double support, Leju's gait with
+  // 0.4–0.6 s swings; 0.3 s is the fastest step the online stack has been shown to track.
+  double min_swing_s = 0.30;
+  double min_double_support_s = 0.10;
+  double lead_in_s = 0.8;   // standing still on the first footholds
+  double blend_in_s = 1.0;  // standing pose → the dance's first pose
+  double tail_s = 1.0;      // both feet down after the dance, blending to standing
+  // Swing foot: apex of the minimum arc [m] (the built-in dance: 0.06), highest foot the
+  // reference keeps from the human [m] (a kick above the knee is out of the leg's reach).
+  double swing_lift_m = 0.06;
+  double max_foot_height_m = 0.35;
+  // Reachable touchdown relative to the stance foot, in its heading frame [m] (centre to
+  // centre of the soles). Leg length 0.71 m, hip width 0.174 m (FACTS.md): a 0.4 m stride
+  // keeps the knees bent at the standing height; feet nearer than 0.15 m laterally collide
+  // (sole width 0.095 m plus the ankle linkages).
+  double max_step_forward_m = 0.40;
+  double max_step_backward_m = 0.30;
+  double min_step_width_m = 0.15;
+  double max_step_width_m = 0.45;
+  // Relative heading of the two feet (hip yaw leg_l2/r2 range −0.87…0.79 rad, kept 0.2 rad
+  // inside it so the pelvis can sit between them).
+  double max_relative_yaw_rad = 0.55;
+  // A human stance foot turning more than this counts as a pivot [rad].
+  double pivot_yaw_rad = 0.35;
+  // Base orientation kept within this of the level pose (bending back in ballet) [rad].
+  double max_base_tilt_rad = 0.45;
+};
+
+enum class RepairKind : int {
+  kLeadIn = 0,       // standing start and blend into the first pose
+  kFlight = 1,       // flight phase → support (step or bounce)
+  kRetime = 2,       // swing or double support lengthened (touchdown/lift-off delayed)
+  kStepSkipped = 3,  // a human step too short to fit: the foot stayed down
+  kStride = 4,       // touchdown moved to a reachable spot (stride shortened, width fixed)
+  kTurn = 5,         // pivot / fast turn: heading limited, turn carried by the next steps
+  kTilt = 6,         // base tilt limited
+  kTail = 7,         // both feet brought down at the end
+  kForcedDouble = 8, // override: both feet down
+};
+const char* to_string(RepairKind k);
+
+struct Repair {
+  double start_s = 0.0, end_s = 0.0;  // output motion's clock (lead-in included)
+  RepairKind kind = RepairKind::kLeadIn;
+  std::string reason;
+};
+
+struct RepairOverride {
+  double start_s = 0.0, end_s = 0.0;  // dance clock
+  bool force_double = false;
+  bool forbid_all = false;
+  RepairKind forbid = RepairKind::kFlight;
+};
+// Parses the override text; false with a message naming the line.
+bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>& out, std::string& error);
+
+struct RepairedMotion {
+  double rate_hz = 100.0;
+  std::vector<dynamics::ConfigVector> q;  // the reference for the dynamic stage
+  std::vector<ContactLabel> contacts;
+  // Output frame i shows geometric frame i − lead_frames (clamped to the clip).
+  int lead_frames = 0;
+  int dance_frames = 0;
+  std::vector<Repair> repairs;
+  int human_steps = 0;  // swing phases in the human schedule, and in the repaired one
+  int robot_steps = 0;
+  double max_leg_ik_error_m = 0.0;  // stance feet (swing feet go as far as the legs reach)
+};
+
+// geometric: the geometric stage's frames and its robot contact labels (same length ≥ 2).
+// false with a message on bad input (non-finite frames, lengths, a forbidden repair that
+// leaves the motion impossible is NOT an error here: see the header).
+bool repair_motion(const model::Model& robot, const std::vector<dynamics::ConfigVector>& geometric,
+                   const std::vector<ContactLabel>& labels, double rate_hz, const RepairConfig& config,
+                   const std::vector<RepairOverride>& overrides, RepairedMotion& out, std::string& error);
+
+// Count of swing phases (a foot leaving the floor and coming back) in a label sequence.
+int count_steps(const std::vector<ContactLabel>& labels);
+
+}  // namespace kuavo::mocap
