@@ -61,6 +61,64 @@ TEST(mocap_cli, DefaultDanceReportAndMotionFile) {
   EXPECT_FALSE(load_motion_file(kOut + ".motion", s45, h, q, labels, error));  // made for s42
 }
 
+// --stage dynamic on the built-in dance: the report's "dynamic" object with the keys,
+// the geometric and dynamic results side by side, the repairs with their ranges, and the
+// dynamic CSV. The invariants asserted are the TO's constraints as the independent oracle
+// (dynamics_check, RNEA) sees them: the base wrench the TO's forces leave unexplained is a
+// fraction of the weight on average, and every window converged.
+TEST(mocap_cli, DynamicStageReportAndCsv) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  ASSERT_EQ(run("--stage dynamic -o " + kOut + "_dyn.motion --report " + kOut + "_dyn.json --dynamic-csv " + kOut +
+                    "_dyn.csv",
+                "_dyn"),
+            0)
+      << slurp(kOut + "_dyn.stderr");
+  const auto report = nlohmann::json::parse(slurp(kOut + "_dyn.json"));
+  ASSERT_TRUE(report.contains("dynamic"));
+  const auto& d = report["dynamic"];
+  for (const char* key : {"solve_s", "frames", "windows", "sqp_iterations", "torque_violations", "friction_violations",
+                          "zmp_outside_m_max", "max_torque_ratio", "repairs", "geometric", "dynamic"})
+    EXPECT_TRUE(d.contains(key)) << key;
+  EXPECT_TRUE(d["sqp_iterations"].contains("mean"));
+  EXPECT_LE(d["sqp_iterations"]["max"].get<int>(), 200);
+  EXPECT_EQ(d["windows_at_iteration_cap"].get<int>(), 0);
+  for (const char* side : {"geometric", "dynamic"}) {
+    const auto& e = d[side]["expressiveness"];
+    for (const char* group : {"hands", "feet", "pelvis"}) {
+      EXPECT_TRUE(e["keypoint_error_m"][group].contains("mean")) << side << ' ' << group;
+    }
+    EXPECT_GT(e["com_path_m"].get<double>(), 1.0) << side;  // the dance moves
+  }
+  // Lead-in first, every repair with a range inside the motion and a reason.
+  const auto& repairs = d["repairs"];
+  ASSERT_FALSE(repairs.empty());
+  EXPECT_EQ(repairs[0]["kind"].get<std::string>(), "lead_in");
+  const double duration = d["frames"].get<int>() / 100.0;
+  for (const auto& r : repairs) {
+    EXPECT_LE(r["start_s"].get<double>(), r["end_s"].get<double>());
+    EXPECT_LE(r["end_s"].get<double>(), duration + 0.011);  // within one frame
+    EXPECT_FALSE(r["reason"].get<std::string>().empty());
+  }
+  // The built-in dance's steps survive (the repair may merge, not drop, most of them).
+  EXPECT_GE(d["steps"]["robot"].get<int>(), 0.8 * d["steps"]["human"].get<int>());
+  // The oracle's base residual: mean below a fifth of the weight (m g ≈ 540 N).
+  EXPECT_LT(d["dynamic"]["base_residual"]["force_N_mean"].get<double>(), 108.0);
+  // CSV: one row per frame, q + momentum + 24 forces + 28 torques + contact.
+  std::ifstream csv(kOut + "_dyn.csv");
+  std::string header, line;
+  ASSERT_TRUE(std::getline(csv, header));
+  EXPECT_NE(header.find("tau_"), std::string::npos);
+  EXPECT_NE(header.find("L_x"), std::string::npos);
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, d["frames"].get<int>());
+  // The dynamic-only options are refused with the geometric stage.
+  EXPECT_EQ(run("-o " + kOut + "_x.motion --report " + kOut + "_x.json --horizon 0.8", "_geo_horizon"), 2);
+  EXPECT_NE(slurp(kOut + "_geo_horizon.stderr").find("--stage dynamic only"), std::string::npos);
+  EXPECT_EQ(run("--stage dynamic -o " + kOut + "_x.motion --report " + kOut + "_x.json --horizon 2", "_bad_horizon"), 2);
+  EXPECT_NE(slurp(kOut + "_bad_horizon.stderr").find("[0.2, 1.4]"), std::string::npos);
+}
+
 TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string bvh = kOut + "_broken.bvh";

@@ -1,0 +1,150 @@
+#include "tools/cli/retarget_dynamic.h"
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "tools/mocap/dynamics_check.h"
+#include "tools/mocap/motion_metrics.h"
+#include "tools/mocap/motion_plan_io.h"
+
+namespace kuavo::cli {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json check_json(const mocap::DynamicsCheck& c, const model::Model& robot) {
+  ordered_json j;
+  j["torque_violations"] = c.torque_violations;
+  j["friction_violations"] = c.friction_violations;
+  j["zmp_outside_m_max"] = c.zmp_outside_m_max;
+  j["max_torque_ratio"] = c.max_torque_ratio;
+  j["max_torque_ratio_joint"] = c.max_torque_ratio_joint >= 0 ? model::joint_name(robot, c.max_torque_ratio_joint) : "";
+  j["base_residual"] = {{"force_N_max", c.base_force_residual_N_max},
+                        {"force_N_mean", c.base_force_residual_N_mean},
+                        {"moment_Nm_max", c.base_moment_residual_Nm_max},
+                        {"moment_Nm_mean", c.base_moment_residual_Nm_mean}};
+  return j;
+}
+
+ordered_json metrics_json(const mocap::MotionMetrics& m) {
+  ordered_json j;
+  j["keypoint_error_m"] = {{"hands", {{"mean", m.hands_mean_m}, {"max", m.hands_max_m}}},
+                           {"feet", {{"mean", m.feet_mean_m}, {"max", m.feet_max_m}}},
+                           {"pelvis", {{"mean", m.pelvis_mean_m}, {"max", m.pelvis_max_m}}}};
+  j["joint_speed_rad_s_mean"] = {{"legs", m.legs_speed_rad_s}, {"arms", m.arms_speed_rad_s}, {"head", m.head_speed_rad_s}};
+  j["com_path_m"] = m.com_path_m;
+  j["steps"] = m.steps;
+  j["duration_s"] = m.duration_s;
+  return j;
+}
+
+bool write_csv(const std::string& path, const model::Model& robot, const std::vector<dynamics::ConfigVector>& q,
+               const std::vector<mocap::ContactLabel>& contacts, const std::vector<mocap::ForceVector>& forces,
+               const mocap::DynamicsCheck& check, double rate_hz) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return false;
+  out << "t_s,base_x,base_y,base_z,qx,qy,qz,qw";
+  for (int j = 0; j < model::kNumJoints; ++j) out << ',' << model::joint_name(robot, j);
+  out << ",p_x,p_y,p_z,L_x,L_y,L_z";
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    for (const char* a : {"x", "y", "z"}) out << ",f_" << model::frame_name(robot, c) << '_' << a;
+  }
+  for (int j = 0; j < model::kNumJoints; ++j) out << ",tau_" << model::joint_name(robot, j);
+  out << ",contact\n";
+  std::vector<dynamics::VelocityVector> v, a;
+  mocap::frame_rates(q, rate_hz, v, a);
+  auto data = std::make_unique<dynamics::Data>();
+  char buf[32];
+  const auto put = [&](double x) {
+    std::snprintf(buf, sizeof buf, ",%.6g", x);
+    out << buf;
+  };
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.4f", i / rate_hz);
+    out << buf;
+    for (int k = 0; k < model::kNq; ++k) put(q[i][k]);
+    dynamics::forward_kinematics(robot, *data, q[i]);
+    dynamics::forward_velocities(robot, *data, v[i]);
+    dynamics::crba(robot, *data);
+    dynamics::centroidal_dynamics(robot, *data);
+    const dynamics::Vec6 h = data->centroidal_matrix * v[i];
+    for (int k = 0; k < 6; ++k) put(h[k]);
+    for (int k = 0; k < 3 * model::kNumContactPoints; ++k) put(forces[i][k]);
+    for (int k = 0; k < model::kNumJoints; ++k) put(check.tau_Nm[i][k]);
+    out << ',' << mocap::to_string(contacts[i]) << '\n';
+  }
+  return static_cast<bool>(out);
+}
+
+}  // namespace
+
+int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
+                      const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
+                      DynamicStageResult& result, ordered_json& report, std::string& error) {
+  const double rate = targets.rate_hz;
+  if (!mocap::repair_motion(robot, geometric.q, geometric.contacts, rate, options.repair, options.overrides,
+                            result.repaired, error)) {
+    return 2;
+  }
+  auto plan = std::make_unique<planner::MotionPlan>();
+  if (!mocap::motion_plan_from_frames(result.repaired.q, result.repaired.contacts, rate, "repaired motion", *plan,
+                                      error)) {
+    return 2;
+  }
+  if (!mocap::dynamic_retarget(robot, *plan, options.dynamic, result.dynamic, error)) return 1;
+  result.q = result.dynamic.q;
+  result.contacts = result.dynamic.contacts;
+
+  const double mu = options.dynamic.ocp.friction_coefficient;
+  mocap::DynamicsCheck geo_check, dyn_check;
+  mocap::check_dynamics(robot, geometric.q, geometric.contacts, rate, nullptr, mu, geo_check);
+  mocap::check_dynamics(robot, result.q, result.contacts, rate, &result.dynamic.forces_N, mu, dyn_check);
+  mocap::MotionMetrics geo_metrics, dyn_metrics;
+  mocap::motion_metrics(robot, targets, geometric.q, geometric.contacts, rate, 0, geo_metrics);
+  mocap::motion_metrics(robot, targets, result.q, result.contacts, rate, result.repaired.lead_frames, dyn_metrics);
+
+  const mocap::DynamicStats& s = result.dynamic.stats;
+  ordered_json d;
+  d["solve_s"] = s.solve_s;
+  d["frames"] = static_cast<int>(result.q.size());
+  d["windows"] = s.windows;
+  d["window_s"] = options.dynamic.ocp.horizon_s;
+  d["commit_stages"] = options.dynamic.commit_stages;
+  d["sqp_iterations"] = {{"mean", s.sqp_iterations_mean}, {"max", s.sqp_iterations_max}};
+  d["windows_at_iteration_cap"] = s.windows_not_converged;
+  d["foothold_correction_m_max"] = s.foothold_correction_max_m;
+  d["base_drop_m_max"] = s.base_drop_max_m;
+  d["foothold_miss_m_max"] = s.foothold_miss_max_m;
+  d["foothold_miss_frames"] = s.foothold_miss_frames;
+  d["qp_restarts"] = s.qp_failures;
+  d["lead_in_frames"] = result.repaired.lead_frames;
+  ordered_json geo = check_json(geo_check, robot);
+  ordered_json dyn = check_json(dyn_check, robot);
+  geo["expressiveness"] = metrics_json(geo_metrics);
+  dyn["expressiveness"] = metrics_json(dyn_metrics);
+  d["geometric"] = geo;
+  d["dynamic"] = dyn;
+  // The flat keys of the issue, for the dynamic result.
+  d["torque_violations"] = dyn_check.torque_violations;
+  d["friction_violations"] = dyn_check.friction_violations;
+  d["zmp_outside_m_max"] = dyn_check.zmp_outside_m_max;
+  d["max_torque_ratio"] = dyn_check.max_torque_ratio;
+  ordered_json repairs = ordered_json::array();
+  for (const mocap::Repair& r : result.repaired.repairs) {
+    repairs.push_back({{"start_s", r.start_s}, {"end_s", r.end_s}, {"kind", mocap::to_string(r.kind)}, {"reason", r.reason}});
+  }
+  d["repairs"] = repairs;
+  d["steps"] = {{"human", result.repaired.human_steps}, {"robot", result.repaired.robot_steps}};
+  report["dynamic"] = d;
+
+  if (!options.csv_path.empty() &&
+      !write_csv(options.csv_path, robot, result.q, result.contacts, result.dynamic.forces_N, dyn_check, rate)) {
+    error = options.csv_path + ": cannot write";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace kuavo::cli

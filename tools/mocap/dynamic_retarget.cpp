@@ -1,0 +1,480 @@
+#include "tools/mocap/dynamic_retarget.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <cmath>
+#include <memory>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "tools/mocap/leg_ik_lm.h"
+
+namespace kuavo::mocap {
+namespace {
+
+using dynamics::ConfigVector;
+using dynamics::Mat3;
+using dynamics::Vec3;
+using dynamics::VelocityVector;
+using mpc::InputVector;
+using mpc::kNumMpcJoints;
+using mpc::kNx;
+using mpc::StateVector;
+
+constexpr int kForces = 3 * model::kNumContactPoints;
+// Forward-difference step of the torque derivatives in the leg joints and base angles [rad].
+constexpr double kTorqueFdStep_rad = 1e-6;
+// Step-norm scale of the forces: a force step is measured against the robot's weight.
+// Stance foot re-solve: corners the legs miss by more than this are an error [m].
+constexpr double kFootholdTolerance_m = 2e-3;
+constexpr double kMaxBaseDrop_m = 0.02;
+// Step control of the SQP iterations: a step larger than this fraction of the previous one
+// counts as no progress; the smallest step fraction.
+constexpr double kContraction = 0.8;
+// The torque terms act on the 12 leg joints, whose torques the contact forces and the leg
+// configuration set within one stage. An arm's torque is its own gravity plus its
+// acceleration, which spans two stages' inputs (q̈ = Δu/dt): no stage term can move it, a
+// penalty on it only pushes the joint angles with a gradient that has no authority. The
+// oracle checks the arms. The gradient is capped (Huber: linear past the cap) so a wild
+// warm-start guess at a window's tail cannot throw the step.
+constexpr int kLegs = 2 * model::kLegJoints;
+constexpr double kTorqueExcessCap_Nm = 20.0;
+constexpr double kMinStep = 1.0 / 64.0;
+// Cold restarts of one window after a failed QP before the retargeting gives up.
+constexpr int kMaxRestarts = 3;
+
+// OCS2's relaxed log barrier (as controllers/mpc): B'(h), B''(h).
+void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
+  if (h > delta) {
+    d1 = -mu / h;
+    d2 = mu / (h * h);
+  } else {
+    d1 = mu * (h - 2.0 * delta) / (delta * delta);
+    d2 = mu / (delta * delta);
+  }
+}
+
+// Generalized velocity taking qa to qb in dt (conventions.h: base twist in qa's base axes).
+VelocityVector config_rate(const ConfigVector& qa, const ConfigVector& qb, double dt) {
+  VelocityVector v;
+  const Eigen::Quaterniond ra(qa[6], qa[3], qa[4], qa[5]), rb(qb[6], qb[3], qb[4], qb[5]);
+  const Mat3 r = ra.toRotationMatrix();
+  v.head<3>() = r.transpose() * (qb.head<3>() - qa.head<3>()) / dt;
+  Eigen::Quaterniond dq = ra.conjugate() * rb;
+  if (dq.w() < 0.0) dq.coeffs() *= -1.0;  // the short way round (q and −q are one rotation)
+  const Eigen::AngleAxisd d(dq);
+  v.segment<3>(3) = d.angle() * d.axis() / dt;
+  v.tail<model::kNumJoints>() = (qb.tail<model::kNumJoints>() - qa.tail<model::kNumJoints>()) / dt;
+  return v;
+}
+
+// Uniform Catmull-Rom between p1 (s = 0) and p2 (s = 1).
+template <class V>
+V catmull_rom(const V& p0, const V& p1, const V& p2, const V& p3, double s) {
+  const double s2 = s * s, s3 = s2 * s;
+  return 0.5 * ((2.0 * p1) + (-p0 + p2) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2 +
+                (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * s3);
+}
+
+double quasi_static_torques(const model::Model& robot, dynamics::Data& data, const ConfigVector& q,
+                            const InputVector& u, const planner::ContactFlags& contact,
+                            Eigen::Matrix<double, kNumMpcJoints, 1>& tau,
+                            Eigen::Matrix<double, kNumMpcJoints, kForces>* d_df) {
+  dynamics::forward_kinematics(robot, data, q);
+  dynamics::forward_velocities(robot, data, VelocityVector::Zero());
+  dynamics::rnea(robot, data, VelocityVector::Zero(), true);
+  tau = data.tau.segment<kNumMpcJoints>(6);
+  if (d_df) d_df->setZero();
+  dynamics::FrameJacobian j;
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    if (!contact[c]) continue;
+    dynamics::frame_jacobian(robot, data, c, j);
+    const auto jl = j.topRows<3>().middleCols<kNumMpcJoints>(6);
+    tau.noalias() -= jl.transpose() * u.segment<3>(mpc::kUForces + 3 * c);
+    if (d_df) d_df->middleCols<3>(3 * c) = -jl.transpose();
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+mpc::MpcConfig DynamicRetargetConfig::default_ocp() {
+  mpc::MpcConfig c;
+  c.plan_output = false;
+  c.horizon_s = 1.0;
+  // Offline the swing feet follow the reference swing closely (Leju's 500 m⁻²; the online
+  // MPC keeps 50 so the robot may step out of trouble).
+  c.weight_swing_xy = 2.0e4;
+  c.stance_position_gain_1_s = 10.0;
+  return c;
+}
+
+void stage_torque(const model::Model& robot, dynamics::Data& data, const StateVector& x, const InputVector& u,
+                  const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, bool with_derivatives,
+                  StageTorque& out) {
+  const ConfigVector q = mpc::configuration_from_state(x, head_rad);
+  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
+  quasi_static_torques(robot, data, q, u, contact, out.tau_Nm, with_derivatives ? &d_df : nullptr);
+  if (!with_derivatives) return;
+  out.d_du.setZero();
+  out.d_du.leftCols<kForces>() = d_df;
+  out.d_dx.setZero();
+  Eigen::Matrix<double, kNumMpcJoints, 1> tau_p;
+  const auto column = [&](int i) {
+    StateVector xp = x;
+    xp[i] += kTorqueFdStep_rad;
+    quasi_static_torques(robot, data, mpc::configuration_from_state(xp, head_rad), u, contact, tau_p, nullptr);
+    out.d_dx.col(i) = (tau_p - out.tau_Nm) / kTorqueFdStep_rad;
+  };
+  for (int e = 0; e < 3; ++e) column(mpc::kXEuler + e);
+  for (int j = 0; j < kNumMpcJoints; ++j) column(mpc::kXJoints + j);
+}
+
+bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan, const DynamicRetargetConfig& cfg,
+                      DynamicResult& out, std::string& error) {
+  const auto t_start = std::chrono::steady_clock::now();
+  if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
+    error = std::string("dynamic retargeting: ") + why;
+    return false;
+  }
+  if (cfg.commit_stages < 1 || cfg.max_sqp_iterations < 1 || !(cfg.step_tolerance > 0.0)) {
+    error = "dynamic retargeting: commit_stages and max_sqp_iterations must be >= 1, step_tolerance > 0";
+    return false;
+  }
+  if (plan.frame_count < 2) {
+    error = "dynamic retargeting: the motion needs at least 2 frames";
+    return false;
+  }
+  if (!plan.foot_contact[0][0] || !plan.foot_contact[0][1]) {
+    error = "dynamic retargeting: the motion must start standing in double support";
+    return false;
+  }
+  for (int i = 0; i < plan.frame_count; ++i) {
+    if (!plan.q[i].allFinite() || !plan.v[i].allFinite()) {
+      error = "dynamic retargeting: frame " + std::to_string(i) + " is not finite";
+      return false;
+    }
+    if (!plan.foot_contact[i][0] && !plan.foot_contact[i][1]) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "dynamic retargeting: flight at %.2f s (frame %d): the robot cannot leave the floor with both "
+                    "feet (a flight repair was forbidden?)",
+                    i / plan.rate_hz, i);
+      error = buf;
+      return false;
+    }
+  }
+
+  const mpc::MpcConfig& ocp = cfg.ocp;
+  auto ws = std::make_unique<mpc::MpcWorkspace>();
+  mpc::mpc_init(robot, ocp, *ws);
+  auto window = std::make_unique<planner::PlanWindow>();
+  auto data = std::make_unique<dynamics::Data>();
+  const int T = ws->horizon;
+  const double dt = ocp.dt_s;
+  const hal::TimeNs dt_ns = static_cast<hal::TimeNs>(std::llround(dt * 1e9));
+  const double duration = planner::motion_plan_duration_s(plan);
+  const int S = static_cast<int>(std::ceil(duration / dt - 1e-9));
+  const double mg = robot.total_mass_kg * model::kGravity_m_s2;
+
+  std::vector<StateVector> xs(S + 1);
+  std::vector<InputVector> us(S + 1);
+  std::vector<mpc::HeadVector> heads(S + 1);
+  std::vector<planner::ContactFlags> flags(S + 1);
+  StateVector x0;
+  mpc::state_from_configuration(robot, *data, plan.q[0], plan.v[0], x0);
+  // Where each stance corner landed in the committed trajectory: the stance rows hold it
+  // there (not on the reference's foothold, which the swing cost only approaches; pulling a
+  // landed foot onto it would slide it).
+  using Anchors = std::array<Vec3, model::kNumContactPoints>;
+  std::vector<Anchors> anchors(S + 1);
+  Anchors anchor;
+  std::array<bool, model::kNumContactPoints> anchored{};
+  dynamics::forward_kinematics(robot, *data, plan.q[0]);
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    anchor[c] = dynamics::frame_position(robot, *data, c);
+    anchored[c] = true;  // the motion starts in double support
+  }
+  anchors[0] = anchor;
+
+  const auto& lim = robot.limits;
+  const Eigen::Matrix<double, kNumMpcJoints, 1> soft_start = cfg.torque_soft_start * lim.torque_Nm.head<kNumMpcJoints>();
+  Eigen::Matrix<double, kNumMpcJoints, 1> vel_limit = lim.velocity_rad_s.head<kNumMpcJoints>();
+  std::vector<Eigen::Matrix<double, kNumMpcJoints, 1>> lag(T + 1);
+  StageTorque st_torque;
+  long iterations_total = 0;
+  DynamicStats& stats = out.stats;
+  stats = DynamicStats{};
+
+  for (int s0 = 0; s0 < S;) {
+    planner::motion_plan_window_rt(robot, *data, plan, plan.start_ns + s0 * dt_ns, dt, T + 1, *window);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      if (!anchored[c]) continue;
+      for (int k = 0; k <= T && window->knots[k].in_contact[c]; ++k) {
+        window->knots[k].point_position_m.segment<3>(3 * c) = anchor[c];
+      }
+    }
+    int it = 0;
+    bool converged = false;
+    double alpha = 1.0, previous_step = std::numeric_limits<double>::infinity();
+    int progress = 0, restarts = 0;
+    while (it < cfg.max_sqp_iterations) {
+      // The builds rewrite what they own; the terms below touch R's force block across
+      // corners and S, which they do not: cleared here.
+      for (int k = 0; k < T; ++k) {
+        ws->qp.stages[k].R.topLeftCorner<kForces, kForces>().setZero();
+        ws->qp.stages[k].S.setZero();
+      }
+      // A touchdown inside the window holds the corner where the current iterate lands it.
+      for (int k = 1; k <= T; ++k) {
+        const planner::ContactFlags& now = window->knots[k].in_contact;
+        const planner::ContactFlags& before = window->knots[k - 1].in_contact;
+        bool fk_done = false;
+        for (int c = 0; c < model::kNumContactPoints; ++c) {
+          if (!now[c] || before[c]) continue;
+          if (!fk_done) {
+            dynamics::forward_kinematics(robot, *data, mpc::configuration_from_state(ws->x[k], ws->head_rad[k]));
+            fk_done = true;
+          }
+          const Vec3 landed = dynamics::frame_position(robot, *data, c);
+          for (int m = k; m <= T && window->knots[m].in_contact[c]; ++m) {
+            window->knots[m].point_position_m.segment<2>(3 * c) = landed.head<2>();
+          }
+        }
+      }
+      mpc::MpcStatus status = mpc::mpc_build_qp_from_state_rt(robot, ocp, *ws, x0, *window);
+      if (status != mpc::MpcStatus::kOk) {
+        error = std::string("dynamic retargeting: window at ") + std::to_string(s0 * dt) + " s: " + mpc::to_string(status);
+        return false;
+      }
+      // The dynamic part of the torques (M q̈ + C q̇) of the current iterate, held fixed.
+      // The last stage's acceleration would involve x_T, which only u_{T−1} sets: a lag there
+      // feeds back on itself (the iteration then walks off along x_T); it takes stage T−2's.
+      for (int k = 0; k + 1 < T; ++k) {
+        const ConfigVector qk = mpc::configuration_from_state(ws->x[k], ws->head_rad[k]);
+        const ConfigVector qn = mpc::configuration_from_state(ws->x[k + 1], ws->head_rad[k + 1]);
+        const ConfigVector qp = k > 0 ? mpc::configuration_from_state(ws->x[k - 1], ws->head_rad[k - 1]) : qk;
+        const VelocityVector v_out = config_rate(qk, qn, dt);
+        const VelocityVector v_in = k > 0 ? config_rate(qp, qk, dt) : v_out;
+        const VelocityVector v = 0.5 * (v_in + v_out);
+        const VelocityVector a = k > 0 ? VelocityVector((v_out - v_in) / dt) : VelocityVector::Zero();
+        dynamics::forward_kinematics(robot, *data, qk);
+        dynamics::forward_velocities(robot, *data, v);
+        dynamics::rnea(robot, *data, a, false);
+        lag[k] = data->tau.segment<kNumMpcJoints>(6);
+        dynamics::forward_velocities(robot, *data, VelocityVector::Zero());
+        dynamics::rnea(robot, *data, VelocityVector::Zero(), false);
+        lag[k] -= data->tau.segment<kNumMpcJoints>(6);
+      }
+      lag[T - 1] = T >= 2 ? lag[T - 2] : Eigen::Matrix<double, kNumMpcJoints, 1>::Zero();
+      for (int k = 0; k < T; ++k) {
+        auto& stage = ws->qp.stages[k];
+        const planner::ContactFlags& contact = window->knots[k].in_contact;
+        stage_torque(robot, *data, ws->x[k], ws->u[k], ws->head_rad[k], contact, false, st_torque);
+        const Eigen::Matrix<double, kNumMpcJoints, 1> tau = st_torque.tau_Nm + lag[k];
+        const bool legs_near_limit =
+            (tau.head<kLegs>().cwiseAbs().array() > soft_start.head<kLegs>().array()).any();
+        if (cfg.torque_penalty_weight > 0.0 && k + cfg.commit_stages < T && legs_near_limit) {
+          stage_torque(robot, *data, ws->x[k], ws->u[k], ws->head_rad[k], contact, true, st_torque);
+          for (int j = 0; j < kLegs; ++j) {
+            const double excess = std::min(std::abs(tau[j]) - soft_start[j], kTorqueExcessCap_Nm);
+            if (excess <= 0.0) continue;
+            // ½ w e², e = |τ| − τ_soft: gradient w e sign(τ) ∇τ, Gauss-Newton Hessian w ∇τ∇τᵀ.
+            const double w = dt * cfg.torque_penalty_weight;
+            const double g = w * excess * (tau[j] > 0.0 ? 1.0 : -1.0);
+            const auto gx = st_torque.d_dx.row(j).transpose();
+            const auto gu = st_torque.d_du.row(j).transpose();
+            // Hessian: the force block exactly, the state part on the diagonal and no cross
+            // term (the whole rank-one product, scaled by w·|∂τ/∂q|² ~ 1e4 against the joint
+            // weights ~6, left the Riccati's Schur complements to roundoff: not_convex).
+            stage.Q.diagonal().noalias() += w * gx.cwiseAbs2();
+            stage.q.noalias() += g * gx;
+            stage.R.topLeftCorner<kForces, kForces>().noalias() += w * gu.head<kForces>() * gu.head<kForces>().transpose();
+            stage.r.head<kForces>().noalias() += g * gu.head<kForces>();
+          }
+          ws->swing_block_written[k] = true;  // the next build clears Q's joint block
+        }
+        for (int j = 0; j < kNumMpcJoints; ++j) {
+          const int col = mpc::kUJointVelocity + j;
+          const double w = ws->u[k][col];
+          double d1a, d2a, d1b, d2b;
+          relaxed_barrier(vel_limit[j] - w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1a, d2a);
+          relaxed_barrier(vel_limit[j] + w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1b, d2b);
+          stage.R(col, col) += dt * (d2a + d2b);
+          stage.r[col] += dt * (d1b - d1a);
+        }
+      }
+      status = mpc::mpc_solve_qp_rt(*ws);
+      ++it;
+      if (status != mpc::MpcStatus::kOk && restarts < kMaxRestarts) {
+        // A QP the Riccati cannot factor (a Schur complement lost definiteness far from the
+        // reference): the window starts over from the reference, a cold start.
+        ++stats.qp_failures;
+        ++restarts;
+        mpc::mpc_reset(*ws);
+        alpha = 1.0;
+        previous_step = std::numeric_limits<double>::infinity();
+        progress = 0;
+        continue;
+      }
+      if (status != mpc::MpcStatus::kOk) {
+        ++stats.qp_failures;
+        error = "dynamic retargeting: the QP of the window at " + std::to_string(s0 * dt) + " s failed (" +
+                qp::to_string(ws->qp_status) + ", iteration " + std::to_string(it) + ")";
+        return false;
+      }
+      double step = 0.0;
+      for (int k = 0; k <= T; ++k) {
+        step = std::max(step, ws->solution.x[k].cwiseAbs().maxCoeff());
+        if (k < T) {
+          step = std::max(step, ws->solution.u[k].tail<kNumMpcJoints>().cwiseAbs().maxCoeff());
+          step = std::max(step, ws->solution.u[k].head<kForces>().cwiseAbs().maxCoeff() / mg);
+        }
+      }
+      if (!std::isfinite(step)) {
+        error = "dynamic retargeting: non-finite iterate in the window at " + std::to_string(s0 * dt) + " s";
+        return false;
+      }
+      // Step control: the torque terms (lagged dynamic part, derivatives by differences) make
+      // the full-step iteration cycle between two points near the limits; a step that does
+      // not contract is taken at a fraction (halved each time, doubled back on progress).
+      if (step > (1.0 - (1.0 - kContraction) * alpha) * previous_step) {
+        alpha = std::max(kMinStep, 0.5 * alpha);
+        progress = 0;
+      } else if (++progress >= 2) {
+        alpha = std::min(1.0, 2.0 * alpha);
+      }
+      previous_step = step;
+      if (alpha < 1.0) {
+        for (int k = 0; k <= T; ++k) {
+          ws->x[k] -= (1.0 - alpha) * ws->solution.x[k];
+          if (k < T) ws->u[k] -= (1.0 - alpha) * ws->solution.u[k];
+        }
+        ws->u[T] = ws->u[T - 1];
+      }
+      if (step < cfg.step_tolerance) {
+        converged = true;
+        break;
+      }
+    }
+    ++stats.windows;
+    iterations_total += it;
+    stats.sqp_iterations_max = std::max(stats.sqp_iterations_max, it);
+    if (!converged) ++stats.windows_not_converged;
+    const int n_commit = std::min(cfg.commit_stages, S - s0);
+    for (int j = 0; j < n_commit; ++j) {
+      xs[s0 + j] = ws->x[j];
+      us[s0 + j] = ws->u[j];
+      heads[s0 + j] = ws->head_rad[j];
+      flags[s0 + j] = window->knots[j].in_contact;
+    }
+    x0 = ws->x[n_commit];
+    heads[s0 + n_commit] = ws->head_rad[n_commit];
+    flags[s0 + n_commit] = window->knots[n_commit].in_contact;
+    for (int j = 1; j <= n_commit; ++j) {
+      const planner::ContactFlags& now = window->knots[j].in_contact;
+      bool fk_done = false;
+      for (int c = 0; c < model::kNumContactPoints; ++c) {
+        if (!now[c]) {
+          anchored[c] = false;
+        } else if (!anchored[c]) {  // touchdown: held where it landed, on the floor's height
+          if (!fk_done) {
+            dynamics::forward_kinematics(robot, *data, mpc::configuration_from_state(ws->x[j], ws->head_rad[j]));
+            fk_done = true;
+          }
+          const Vec3 landed = dynamics::frame_position(robot, *data, c);
+          anchor[c] = Vec3(landed.x(), landed.y(), window->knots[j].point_position_m[3 * c + 2]);
+          anchored[c] = true;
+        }
+      }
+      anchors[s0 + j] = anchor;
+    }
+    s0 += n_commit;
+  }
+  xs[S] = x0;
+  us[S] = us[S - 1];
+  stats.sqp_iterations_mean = stats.windows > 0 ? static_cast<double>(iterations_total) / stats.windows : 0.0;
+
+  // Stages → frames: Catmull-Rom through the stage poses (smooth accelerations for the
+  // inverse dynamics), forces linear between nodes (node k carries u_{k−1}, see below).
+  const int n = plan.frame_count;
+  out.q.resize(n);
+  out.contacts.resize(n);
+  out.forces_N.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = i / plan.rate_hz;
+    const int k = std::clamp(static_cast<int>(std::floor(t / dt)), 0, S - 1);
+    const double s = std::clamp(t / dt - k, 0.0, 1.0);
+    const auto at = [&](int m) -> const StateVector& { return xs[std::clamp(m, 0, S)]; };
+    // The Euler angles of the four stages on one branch (a yaw through ±π would otherwise
+    // interpolate the long way round).
+    std::array<StateVector, 4> p = {at(k - 1), at(k), at(k + 1), at(k + 2)};
+    for (StateVector& pi : p) {
+      for (int e = 0; e < 3; ++e) {
+        const double d = p[1][mpc::kXEuler + e] - pi[mpc::kXEuler + e];
+        pi[mpc::kXEuler + e] += 2.0 * M_PI * std::round(d / (2.0 * M_PI));
+      }
+    }
+    const StateVector x = catmull_rom<StateVector>(p[0], p[1], p[2], p[3], s);
+    const mpc::HeadVector head = heads[k] + s * (heads[k + 1] - heads[k]);
+    out.q[i] = mpc::configuration_from_state(x, head);
+    const std::array<bool, 2>& fc = plan.foot_contact[i];
+    out.contacts[i] = make_label(fc[0], fc[1]);
+    // Force at t: explicit Euler moves the position with ṙ_k and ṙ with u_k, so the
+    // second difference of the stage positions at node k is dt²(u_{k−1}/m − g): node k
+    // carries u_{k−1}, and the force is linear between nodes.
+    const double tm = t / dt - 1.0;
+    const int k0 = std::clamp(static_cast<int>(std::floor(tm)), 0, S - 1);
+    const int k1 = std::min(k0 + 1, S - 1);
+    const double w = std::clamp(tm - k0, 0.0, 1.0);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const bool in = fc[c / 4];
+      Vec3 f = Vec3::Zero();
+      if (in) {
+        const Vec3 f0 = us[k0].segment<3>(3 * c), f1 = us[k1].segment<3>(3 * c);
+        f = flags[k0][c] && flags[k1][c] ? Vec3((1.0 - w) * f0 + w * f1) : (flags[k1][c] ? f1 : f0);
+      }
+      out.forces_N[i].segment<3>(3 * c) = f;
+    }
+  }
+  // Stance feet exactly on their footholds (the reference's, which the repair placed).
+  std::array<Vec3, model::kNumContactPoints> targets;
+  for (int i = 0; i < n; ++i) {
+    dynamics::forward_kinematics(robot, *data, plan.q[i]);
+    std::array<Vec3, model::kNumContactPoints> reference;
+    for (int c = 0; c < model::kNumContactPoints; ++c) reference[c] = dynamics::frame_position(robot, *data, c);
+    dynamics::forward_kinematics(robot, *data, out.q[i]);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const Vec3 now = dynamics::frame_position(robot, *data, c);
+      const bool stance = plan.foot_contact[i][c / 4];
+      // The stage whose anchors hold this frame's stance (a touchdown between stages: the next).
+      const double ts = i / plan.rate_hz / dt;
+      const int ka = std::clamp(static_cast<int>(std::floor(ts)), 0, S);
+      const int kb = std::min(ka + 1, S);
+      const int kc = flags[ka][c] ? ka : kb;
+      const Vec3 held = flags[kc][c] ? anchors[kc][c] : reference[c];
+      targets[c] = stance ? held : now;
+      if (stance) stats.foothold_correction_max_m = std::max(stats.foothold_correction_max_m, (now - targets[c]).norm());
+    }
+    double miss = leg_ik_lm(robot, *data, targets, out.q[i]);
+    // A leg at full stretch cannot reach a foothold the TO crept past: the base lowers by
+    // up to kMaxBaseDrop_m (counted in the stats), as the repair's IK does.
+    for (double drop = 1e-3; !(miss <= kFootholdTolerance_m) && drop <= kMaxBaseDrop_m + 1e-12; drop += 1e-3) {
+      out.q[i][2] -= 1e-3;
+      miss = leg_ik_lm(robot, *data, targets, out.q[i]);
+      stats.base_drop_max_m = std::max(stats.base_drop_max_m, drop);
+    }
+    // Out of reach even then: the nearest pose is kept and the miss reported (the report's
+    // foothold_miss_m_max; the simulator is the judge of whether the dance survives it).
+    if (!(miss <= kFootholdTolerance_m)) ++stats.foothold_miss_frames;
+    stats.foothold_miss_max_m = std::max(stats.foothold_miss_max_m, miss);
+  }
+  stats.solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return true;
+}
+
+}  // namespace kuavo::mocap

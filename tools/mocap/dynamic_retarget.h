@@ -1,0 +1,94 @@
+// Dynamic motion retargeting (the paper's offline trajectory optimization).
+//
+// The same optimal control problem as the online MPC (controllers/mpc: centroidal dynamics,
+// x = [ṙ, h, base pose, 26 joints], u = [8 sole-corner forces, 26 joint velocities]; stance
+// feet fixed and swing feet on the reference by equality rows, swing forces exactly zero,
+// friction pyramids μ = 0.5 and joint position limits as relaxed barriers), solved offline
+// to convergence over a receding horizon, plus what only the offline problem can afford:
+//  - joint torque limits: the torques of the full rigid-body model, τ = g(q) − J_cᵀf plus the
+//    dynamic part M q̈ + C q̇ of the current iterate (held fixed within one SQP iteration, so
+//    it is exact at convergence), as a quadratic hinge above torque_soft_start × the model's
+//    limit whose gradient comes from the exact ∂τ/∂f and finite differences in the legs and
+//    base orientation (off by default: see torque_penalty_weight);
+//  - joint velocity limits on the joint-velocity inputs (barrier).
+// Each window (horizon window_s) is iterated (one Riccati solve per SQP iteration, the step
+// damped when it stops contracting) until the step is below step_tolerance or
+// max_sqp_iterations (a QP the Riccati cannot factor restarts the window cold from the
+// reference, at most 3 times); it then commits its first
+// commit_stages stages, and the next window starts from the committed state, warm-started
+// from the previous solution shifted. The committed stages (50 Hz) are interpolated to the
+// motion's frame rate, and the legs re-solved so stance feet sit exactly where they landed
+// in the TO (the linearized constraint lets them creep over a stance; a leg that cannot
+// reach lowers the base up to 2 cm, and a miss beyond that is reported, not hidden).
+// Offline: allocates (the MPC workspace, ~15 MB, on the heap), not real-time.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "controllers/mpc/mpc.h"
+#include "controllers/planner/motion_plan.h"
+#include "tools/mocap/contact_label.h"
+
+namespace kuavo::mocap {
+
+struct DynamicRetargetConfig {
+  mpc::MpcConfig ocp = default_ocp();
+  int commit_stages = 5;           // 0.1 s per window at dt 0.02
+  int max_sqp_iterations = 200;    // per window (the paper's cap)
+  double step_tolerance = 1e-3;    // max |δx|, |δu| (forces per m·g) of a converged window
+  // Torque limits as a quadratic hinge ½ w (|τ| − s·L)² above s·L (L: the model's limit):
+  // exactly zero below, so only stages near a limit pay for its derivatives, C¹ at the hinge
+  // (a log barrier cut off somewhere has a jump there, and the SQP cycles across it). With
+  // w = 100 (N·m)⁻² per second a torque 0.15 L past s·L costs more than any tracking term, so
+  // the result stays below L: the oracle (dynamics_check.h) checks |τ| ≤ L.
+  // Off by default (0): with w = 100 the built-in dance's windows stop converging from 3 s
+  // (the lagged dynamic part and the diagonal state Hessian make the step cycle) and a QP
+  // fails at 4.3 s; `kuavo retarget --torque-weight W` turns it on for experiments.
+  double torque_soft_start = 0.85;
+  double torque_penalty_weight = 0.0;
+  double velocity_barrier_mu = 0.01;
+  double velocity_barrier_delta_rad_s = 0.1;
+  static mpc::MpcConfig default_ocp();
+};
+
+struct DynamicStats {
+  int windows = 0;
+  double sqp_iterations_mean = 0.0;
+  int sqp_iterations_max = 0;
+  int windows_not_converged = 0;  // at the iteration cap (their last iterate is used)
+  int qp_failures = 0;
+  double solve_s = 0.0;
+  double foothold_correction_max_m = 0.0;
+  double base_drop_max_m = 0.0;  // lowered so a stretched leg reaches its foothold
+  double foothold_miss_max_m = 0.0;  // stance corner left off its foothold after the IK
+  int foothold_miss_frames = 0;      // frames with a miss above 2 mm
+};
+
+struct DynamicResult {
+  std::vector<dynamics::ConfigVector> q;                     // frames at the plan's rate
+  std::vector<ContactLabel> contacts;
+  std::vector<Eigen::Matrix<double, 3 * model::kNumContactPoints, 1>> forces_N;  // per frame, world
+  DynamicStats stats;
+};
+
+// plan: the repaired reference (motion_plan_finish'ed), starting at rest in double support.
+// false with a message (bad config, a flight phase, a motion that does not start in double
+// support, a non-finite iterate).
+bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan, const DynamicRetargetConfig& config,
+                      DynamicResult& out, std::string& error);
+
+// The barrier and torque terms added to one stage of the MPC's QP (exposed for the tests):
+// quasi-static joint torques g(q) − J_cᵀf of stage state x and input u (contact corners
+// flagged), and their derivatives with respect to x (leg joints and base orientation by
+// central differences) and to u (exact).
+struct StageTorque {
+  Eigen::Matrix<double, mpc::kNumMpcJoints, 1> tau_Nm;
+  Eigen::Matrix<double, mpc::kNumMpcJoints, mpc::kNx> d_dx;
+  Eigen::Matrix<double, mpc::kNumMpcJoints, mpc::kNu> d_du;
+};
+void stage_torque(const model::Model& robot, dynamics::Data& data, const mpc::StateVector& x,
+                  const mpc::InputVector& u, const mpc::HeadVector& head_rad, const planner::ContactFlags& contact,
+                  bool with_derivatives, StageTorque& out);
+
+}  // namespace kuavo::mocap
