@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -550,6 +551,10 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       targets[c] = fp.centre + rot_z(fp.yaw) * corner_offset[c];
     }
     double stance_error = 0.0;
+    // Lowering helps a leg too short for its foothold and hurts one at a joint limit: the
+    // best attempt is kept, not the last.
+    ConfigVector best = q;
+    double best_error = std::numeric_limits<double>::infinity();
     for (int tries = 0; tries <= kMaxBaseLowerSteps; ++tries) {
       q.head<3>() = base_pos[i] - Vec3(0.0, 0.0, tries * kBaseLowerStep_m);
       leg_ik_lm(robot, *data, targets, q);
@@ -559,8 +564,14 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
         if (!on[i][c / kCorners]) continue;
         stance_error = std::max(stance_error, (dynamics::frame_position(robot, *data, c) - targets[c]).norm());
       }
+      if (stance_error < best_error) {
+        best_error = stance_error;
+        best = q;
+      }
       if (stance_error <= kStanceIkTolerance_m) break;
     }
+    q = best;
+    stance_error = best_error;
     out.max_leg_ik_error_m = std::max(out.max_leg_ik_error_m, stance_error);
     out.q[i] = q;
     out.contacts[i] = make_label(on[i][0], on[i][1]);

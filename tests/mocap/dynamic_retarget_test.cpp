@@ -1,0 +1,414 @@
+// Dynamic retargeting (tools/mocap/dynamic_retarget.h): the stage torque terms against
+// finite differences and against the inverse-dynamics oracle, bad input refused with a
+// message, and a motion that is already feasible coming back nearly unchanged (checked by
+// the independent oracle, tools/mocap/dynamics_check.h).
+#include "tools/mocap/dynamic_retarget.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+
+#include "controllers/mpc/centroidal_model.h"
+#include "tests/mocap/motion_fixture.h"
+#include "tools/mocap/dynamics_check.h"
+#include "tools/mocap/feasibility_repair.h"
+#include "tools/mocap/motion_plan_io.h"
+
+namespace kuavo::mocap {
+namespace {
+
+using namespace kuavo::mocap::test;
+using mpc::InputVector;
+using mpc::kNu;
+using mpc::kNx;
+using mpc::StateVector;
+using TauVector = Eigen::Matrix<double, mpc::kNumMpcJoints, 1>;
+
+constexpr int kForces = 3 * model::kNumContactPoints;
+constexpr double kMu = 0.5;  // DynamicRetargetConfig's OCP friction coefficient (mpc::MpcConfig)
+
+planner::ContactFlags both_feet() {
+  planner::ContactFlags c{};
+  c.fill(true);
+  return c;
+}
+
+// A pose that exercises every term: knees bent deeper than standing, arms out of their
+// hanging pose, the base rolled, pitched and turned, the head turned.
+ConfigVector bent_pose() {
+  ConfigVector q = dynamics::neutral_configuration(robot());
+  q.tail<model::kNumJoints>() = control::centred_standing_pose(robot(), scratch(), 0.70);
+  constexpr int kArms = 7 + 2 * model::kLegJoints;
+  const double arms[2 * model::kArmJoints] = {-0.6, 0.4, 0.3, -0.9, 0.2, -0.1, 0.15,
+                                              0.3, -0.5, -0.2, -0.4, -0.3, 0.2, -0.1};
+  for (int j = 0; j < 2 * model::kArmJoints; ++j) q[kArms + j] = arms[j];
+  q[7 + 26] = 0.2, q[7 + 27] = -0.1;  // head
+  const Mat3 r = (Eigen::AngleAxisd(0.3, Vec3::UnitZ()) * Eigen::AngleAxisd(-0.08, Vec3::UnitY()) *
+                  Eigen::AngleAxisd(0.05, Vec3::UnitX()))
+                     .toRotationMatrix();
+  set_base_rotation(q, r);
+  q.head<2>() = Eigen::Vector2d(0.4, -0.2);
+  control::place_on_ground(robot(), scratch(), q);
+  return q;
+}
+
+StateVector state_of(const ConfigVector& q) {
+  StateVector x;
+  mpc::state_from_configuration(robot(), scratch(), q, dynamics::VelocityVector::Zero(), x);
+  return x;
+}
+
+TauVector torque_at(const StateVector& x, const InputVector& u, const mpc::HeadVector& head,
+                    const planner::ContactFlags& contact) {
+  StageTorque st;
+  stage_torque(robot(), scratch(), x, u, head, contact, false, st);
+  return st.tau_Nm;
+}
+
+// stage_torque's derivatives: the force columns are exact (τ is linear in f: central
+// differences with a 1 N step reproduce them to roundoff), the state columns are forward
+// differences with the implementation's own step, checked here by central differences
+// with a different step (1e-5 rad).
+TEST(mocap_dynamic_retarget, StageTorqueDerivativesMatchFiniteDifferences) {
+  const ConfigVector q = bent_pose();
+  const StateVector x = state_of(q);
+  const mpc::HeadVector head = q.tail<2>();
+  const planner::ContactFlags contact = both_feet();
+  InputVector u = InputVector::Zero();
+  for (int c = 0; c < kCorners; ++c) u.segment<3>(3 * c) = Vec3(4.0 - c, 0.5 * c - 2.0, 50.0 + 7.0 * c);
+  u.tail<mpc::kNumMpcJoints>().setLinSpaced(-0.5, 0.7);  // joint velocities: no part in a quasi-static torque
+
+  StageTorque st;
+  stage_torque(robot(), scratch(), x, u, head, contact, true, st);
+  ASSERT_TRUE(st.tau_Nm.allFinite());
+  ASSERT_TRUE(st.d_dx.allFinite());
+  ASSERT_TRUE(st.d_du.allFinite());
+
+  // Input columns: τ is affine in u, so the central difference is exact up to roundoff
+  // (|τ| ~ 100 N·m · 1e-16 / 1 N ≈ 1e-14).
+  const double hu = 1.0;
+  for (int i = 0; i < kNu; ++i) {
+    InputVector up = u, um = u;
+    up[i] += hu, um[i] -= hu;
+    const TauVector fd = (torque_at(x, up, head, contact) - torque_at(x, um, head, contact)) / (2.0 * hu);
+    EXPECT_LT((st.d_du.col(i) - fd).cwiseAbs().maxCoeff(), 1e-9) << "u column " << i;
+    if (i >= kForces) {
+      EXPECT_EQ(st.d_du.col(i), TauVector::Zero()) << "joint-velocity column " << i;
+    }
+  }
+
+  // State columns. The implementation's forward difference (step h = 1e-6) is off by
+  // ½ h |∂²τ/∂x²|; with corner forces ~100 N on lever arms ≤ 1 m, |∂²τ/∂x²| ≲ 1e3 N·m/rad²,
+  // so ≲ 5e-4 N·m/rad, plus its roundoff ε|τ|/h ≈ 1e-8. The central difference here (1e-5)
+  // is off by h²/6 |∂³τ| ≈ 2e-8 and ε|τ|/h ≈ 1e-9. Tolerance: that 5e-4 N·m/rad bound
+  // (measured: 3.5e-5); a wrong sign, axis or column is off by O(10–100) N·m/rad.
+  const double hx = 1e-5;
+  double worst = 0.0;
+  for (int i = 0; i < kNx; ++i) {
+    StateVector xp = x, xm = x;
+    xp[i] += hx, xm[i] -= hx;
+    const TauVector fd = (torque_at(xp, u, head, contact) - torque_at(xm, u, head, contact)) / (2.0 * hx);
+    const double err = (st.d_dx.col(i) - fd).cwiseAbs().maxCoeff();
+    worst = std::max(worst, err);
+    EXPECT_LT(err, 5e-4) << "x column " << i;
+  }
+  RecordProperty("d_dx_max_error", number(worst));
+  // The derivative is not trivially zero: gravity and the forces load the legs and arms.
+  EXPECT_GT(st.d_dx.middleCols<mpc::kNumMpcJoints>(mpc::kXJoints).cwiseAbs().maxCoeff(), 10.0);
+  EXPECT_GT(st.d_dx.middleCols<3>(mpc::kXEuler).cwiseAbs().maxCoeff(), 1.0);
+}
+
+// A swing foot's corners carry no force term: flags off → τ does not depend on their forces.
+TEST(mocap_dynamic_retarget, StageTorqueIgnoresSwingCorners) {
+  const ConfigVector q = bent_pose();
+  const StateVector x = state_of(q);
+  planner::ContactFlags left_only = both_feet();
+  for (int c = 4; c < kCorners; ++c) left_only[c] = false;
+  InputVector u = InputVector::Zero();
+  for (int c = 0; c < kCorners; ++c) u.segment<3>(3 * c) = Vec3(1.0, 2.0, 60.0);
+  InputVector u2 = u;
+  u2.segment<12>(12).setConstant(500.0);
+  StageTorque a, b;
+  stage_torque(robot(), scratch(), x, u, q.tail<2>(), left_only, true, a);
+  stage_torque(robot(), scratch(), x, u2, q.tail<2>(), left_only, true, b);
+  EXPECT_EQ(a.tau_Nm, b.tau_Nm);
+  EXPECT_EQ(a.d_du.middleCols<12>(12), (Eigen::Matrix<double, mpc::kNumMpcJoints, 12>::Zero()));
+}
+
+// A static pose held by the oracle's least-norm forces: its torques (RNEA) against
+// stage_torque's (the MPC state made by state_from_configuration, the oracle's forces as
+// its input), and against g(q) − Jᵀf written out here.
+void expect_oracle_torques(const ConfigVector& q) {
+  const int n = 5;
+  DynamicsCheck check;
+  check_dynamics(robot(), std::vector<ConfigVector>(n, q),
+                 std::vector<ContactLabel>(n, ContactLabel::kDoubleSupport), kRate_hz, nullptr, kMu, check);
+  ASSERT_LT(check.base_force_residual_N_max, 1e-3);  // the least-norm forces hold the pose
+  const ForceVector& f = check.forces_N[n / 2];
+  double fz = 0.0;
+  for (int c = 0; c < kCorners; ++c) fz += f[3 * c + 2];
+  EXPECT_NEAR(fz, weight_N(), 1e-3);
+
+  InputVector u = InputVector::Zero();
+  u.head<kForces>() = f;
+  StageTorque st;
+  stage_torque(robot(), scratch(), state_of(q), u, q.tail<2>(), both_feet(), false, st);
+  const TauVector oracle = check.tau_Nm[n / 2].head<mpc::kNumMpcJoints>();
+  // Two routes through the same rigid-body model: equal to roundoff (the Euler-angle round
+  // trip of the base orientation costs ~1e-15 rad, × |∂τ/∂e| ~ 100 N·m).
+  EXPECT_LT((st.tau_Nm - oracle).cwiseAbs().maxCoeff(), 1e-9);
+  ::testing::Test::RecordProperty("oracle_difference_Nm", number((st.tau_Nm - oracle).cwiseAbs().maxCoeff()));
+  EXPECT_GT(oracle.head<2 * model::kLegJoints>().cwiseAbs().maxCoeff(), 1.0) << "a loaded pose";
+
+  dynamics::Data& d = scratch();
+  dynamics::forward_kinematics(robot(), d, q);
+  dynamics::forward_velocities(robot(), d, dynamics::VelocityVector::Zero());
+  dynamics::rnea(robot(), d, dynamics::VelocityVector::Zero(), true);
+  dynamics::VelocityVector tau = d.tau;
+  dynamics::FrameJacobian j;
+  for (int c = 0; c < kCorners; ++c) {
+    dynamics::frame_jacobian(robot(), d, c, j);
+    tau -= j.topRows<3>().transpose() * f.segment<3>(3 * c);
+  }
+  EXPECT_LT((st.tau_Nm - tau.segment<mpc::kNumMpcJoints>(6)).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+// Two independent computations of the same static torques, on the standing pose and on the
+// bent, turned and tilted one.
+TEST(mocap_dynamic_retarget, StageTorqueEqualsTheOracleOnAStaticPose) {
+  {
+    SCOPED_TRACE("standing");
+    expect_oracle_torques(standing().q);
+  }
+  {
+    SCOPED_TRACE("bent pose");
+    expect_oracle_torques(bent_pose());
+  }
+}
+
+// ---- dynamic_retarget ----
+
+std::unique_ptr<planner::MotionPlan> plan_of(const std::vector<ConfigVector>& q, const std::vector<ContactLabel>& l) {
+  auto plan = std::make_unique<planner::MotionPlan>();
+  std::string error;
+  EXPECT_TRUE(motion_plan_from_frames(q, l, kRate_hz, "test motion", *plan, error)) << error;
+  return plan;
+}
+
+std::unique_ptr<planner::MotionPlan> standing_plan(double seconds) {
+  const int n = static_cast<int>(std::lround(seconds * kRate_hz)) + 1;
+  return plan_of(std::vector<ConfigVector>(n, standing().q),
+                 std::vector<ContactLabel>(n, ContactLabel::kDoubleSupport));
+}
+
+TEST(mocap_dynamic_retarget, RefusesANonFiniteFrame) {
+  auto plan = standing_plan(0.5);
+  plan->q[17][7 + 3] = std::numeric_limits<double>::quiet_NaN();
+  DynamicResult out;
+  std::string error;
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, DynamicRetargetConfig{}, out, error));
+  EXPECT_NE(error.find("not finite"), std::string::npos) << error;
+  EXPECT_NE(error.find("17"), std::string::npos) << error;
+}
+
+TEST(mocap_dynamic_retarget, RefusesAStartOutsideDoubleSupport) {
+  for (const std::array<bool, 2> start : {std::array<bool, 2>{false, false}, std::array<bool, 2>{true, false},
+                                          std::array<bool, 2>{false, true}}) {
+    auto plan = standing_plan(0.5);
+    for (int i = 0; i < 10; ++i) plan->foot_contact[i] = start;
+    DynamicResult out;
+    std::string error;
+    EXPECT_FALSE(dynamic_retarget(robot(), *plan, DynamicRetargetConfig{}, out, error));
+    EXPECT_NE(error.find("double support"), std::string::npos) << error;
+  }
+}
+
+TEST(mocap_dynamic_retarget, RefusesAFlightAndNamesItsTime) {
+  auto plan = standing_plan(1.0);
+  for (int i = 40; i < 55; ++i) plan->foot_contact[i] = {false, false};
+  DynamicResult out;
+  std::string error;
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, DynamicRetargetConfig{}, out, error));
+  EXPECT_NE(error.find("flight at 0.40 s"), std::string::npos) << error;
+}
+
+TEST(mocap_dynamic_retarget, RefusesABadConfig) {
+  auto plan = standing_plan(0.5);
+  DynamicResult out;
+  std::string error;
+  DynamicRetargetConfig cfg;
+  cfg.commit_stages = 0;
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+  EXPECT_NE(error.find("commit_stages"), std::string::npos) << error;
+  cfg = DynamicRetargetConfig{};
+  cfg.ocp.dt_s = -1.0;
+  error.clear();
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+  EXPECT_FALSE(error.empty());
+}
+
+// The repair with `forbid flight` over a hop keeps the flight (feasibility_repair.h), and
+// the dynamic stage then refuses it, naming the time in the output clock (lead-in included).
+TEST(mocap_dynamic_retarget, ForbiddenFlightRepairIsRefusedDownstream) {
+  const int a = 50;  // the first dance frame in the air
+  const Motion hop = hop_motion(120, a, 70);
+  std::vector<RepairOverride> overrides;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0.45 0.75 forbid flight\n", overrides, error)) << error;
+  RepairedMotion rep;
+  ASSERT_TRUE(repair_motion(robot(), hop.q, hop.labels, kRate_hz, RepairConfig{}, overrides, rep, error)) << error;
+  const int first_flight = rep.lead_frames + a;
+  ASSERT_EQ(rep.contacts[first_flight], ContactLabel::kFlight);
+  auto plan = plan_of(rep.q, rep.contacts);
+  DynamicResult out;
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, DynamicRetargetConfig{}, out, error));
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "flight at %.2f s (frame %d)", first_flight / kRate_hz, first_flight);
+  EXPECT_NE(error.find(expected), std::string::npos) << error;
+}
+
+// What the oracle says of a result, with the optimization's own forces, and how far the
+// result is from its reference.
+struct Acceptance {
+  double base_m = 0.0, orientation_rad = 0.0, joints_rad = 0.0;
+  double force_sum_rel = 0.0;  // max over frames of |Σ f_z / (m g) − 1|
+  DynamicsCheck check;
+};
+
+Acceptance accept(const planner::MotionPlan& plan, const DynamicResult& r) {
+  Acceptance a;
+  const auto frames = static_cast<std::size_t>(plan.frame_count);
+  if (r.q.size() != frames || r.forces_N.size() != frames || r.contacts.size() != frames) {
+    ADD_FAILURE() << "the result has " << r.q.size() << " frames for " << frames;
+    return a;
+  }
+  for (int i = 0; i < plan.frame_count; ++i) {
+    const ConfigVector& p = plan.q[i];
+    const ConfigVector& q = r.q[i];
+    a.base_m = std::max(a.base_m, (q.head<3>() - p.head<3>()).norm());
+    const Eigen::Quaterniond op(p[6], p[3], p[4], p[5]), oq(q[6], q[3], q[4], q[5]);
+    a.orientation_rad = std::max(a.orientation_rad, op.angularDistance(oq));
+    a.joints_rad =
+        std::max(a.joints_rad, (q.tail<model::kNumJoints>() - p.tail<model::kNumJoints>()).cwiseAbs().maxCoeff());
+    double fz = 0.0;
+    for (int c = 0; c < kCorners; ++c) fz += r.forces_N[i][3 * c + 2];
+    a.force_sum_rel = std::max(a.force_sum_rel, std::abs(fz / weight_N() - 1.0));
+  }
+  check_dynamics(robot(), r.q, r.contacts, plan.rate_hz, &r.forces_N, kMu, a.check);
+  return a;
+}
+
+void expect_nearly_unchanged(const planner::MotionPlan& plan, const DynamicResult& r, const Acceptance& a) {
+  ASSERT_EQ(r.q.size(), static_cast<std::size_t>(plan.frame_count));
+  ASSERT_EQ(r.forces_N.size(), r.q.size());
+  for (int i = 0; i < plan.frame_count; ++i) {
+    ASSERT_TRUE(r.q[i].allFinite()) << i;
+    ASSERT_EQ(r.contacts[i], make_label(plan.foot_contact[i][0], plan.foot_contact[i][1])) << i;
+  }
+  EXPECT_EQ(r.stats.foothold_miss_frames, 0);
+  // A feasible reference is the optimum up to the cost's trade-offs (force regularization
+  // against CoM tracking, joint-limit barriers ~1 mrad): a few mm and mrad (measured: standing
+  // 0.1 mm, 0.4 mrad; the weight shift 3.3 mm, 2.6 mrad base, 4.8 mrad joints).
+  EXPECT_LT(a.base_m, 5e-3);
+  EXPECT_LT(a.orientation_rad, 5e-3);
+  EXPECT_LT(a.joints_rad, 1e-2);
+  // The CoM of these motions accelerates at most 0.015 π² ≈ 0.15 m/s² (1.5 % of g); 3 %
+  // allows the discretized dynamics' transients (measured: < 0.1 %).
+  EXPECT_LT(a.force_sum_rel, 0.03);
+  EXPECT_EQ(a.check.torque_violations, 0);
+  EXPECT_EQ(a.check.friction_violations, 0);
+  EXPECT_EQ(a.check.zmp_outside_m_max, 0.0);
+  // Base residual: the oracle differentiates the interpolated frames while the optimization
+  // integrates its centroidal model with explicit Euler at 20 ms and its forces are linear
+  // between nodes; the difference is an error in the CoM acceleration, a fraction of the
+  // ≤ 0.15 m/s² above (≤ 8 N), and its moment on a ≤ 1 m lever. Bounds 1 % of m·g (5.4 N)
+  // and 5.4 N·m (measured: ≤ 0.2 N, ≤ 0.3 N·m); the built-in dance's mean is ~50 N.
+  EXPECT_LT(a.check.base_force_residual_N_mean, 0.01 * weight_N());
+  EXPECT_LT(a.check.base_moment_residual_Nm_mean, 0.01 * weight_N() * 1.0);
+}
+
+DynamicRetargetConfig short_config() {
+  DynamicRetargetConfig cfg;
+  cfg.max_sqp_iterations = 30;  // a feasible reference converges in a few
+  return cfg;
+}
+
+TEST(mocap_dynamic_retarget, StandingComesBackUnchanged) {
+  const auto plan = standing_plan(2.0);
+  DynamicResult out;
+  std::string error;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, short_config(), out, error)) << error;
+  const Acceptance a = accept(*plan, out);
+  expect_nearly_unchanged(*plan, out, a);
+  RecordProperty("base_mm", number(a.base_m * 1e3));
+  RecordProperty("orientation_mrad", number(a.orientation_rad * 1e3));
+  RecordProperty("joints_mrad", number(a.joints_rad * 1e3));
+  RecordProperty("force_sum_pct", number(a.force_sum_rel * 1e2));
+  RecordProperty("residual_N_mean", number(a.check.base_force_residual_N_mean));
+  RecordProperty("residual_Nm_mean", number(a.check.base_moment_residual_Nm_mean));
+  RecordProperty("windows_not_converged", number(out.stats.windows_not_converged));
+  EXPECT_EQ(out.stats.qp_failures, 0);
+}
+
+// A slow sideways weight shift (3 cm and back over 2 s, feet planted): feasible as it is.
+TEST(mocap_dynamic_retarget, SlowWeightShiftComesBackNearlyUnchanged) {
+  const int n = 201;
+  const Motion shift = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.base_shift.y() = 0.03 * 0.5 * (1.0 - std::cos(2.0 * M_PI * i / (n - 1)));
+    return k;
+  });
+  ASSERT_LT(shift.worst_ik_error_m, 1e-6);
+  const auto plan = plan_of(shift.q, shift.labels);
+  DynamicResult out;
+  std::string error;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, short_config(), out, error)) << error;
+  const Acceptance a = accept(*plan, out);
+  expect_nearly_unchanged(*plan, out, a);
+  RecordProperty("base_mm", number(a.base_m * 1e3));
+  RecordProperty("orientation_mrad", number(a.orientation_rad * 1e3));
+  RecordProperty("joints_mrad", number(a.joints_rad * 1e3));
+  RecordProperty("force_sum_pct", number(a.force_sum_rel * 1e2));
+  RecordProperty("residual_N_mean", number(a.check.base_force_residual_N_mean));
+  RecordProperty("residual_Nm_mean", number(a.check.base_moment_residual_Nm_mean));
+  EXPECT_EQ(out.stats.qp_failures, 0);
+}
+
+// A brisk plié bounce (pelvis 4 cm down and up, 1.5 Hz, three times, feet planted): the floor
+// pushes m(g + z̈) with z̈ up to 0.02·(3π)² ≈ 1.8 m/s² (±98 N). The optimization's forces,
+// interpolated to the frames, must be the ones the motion's own accelerations need — the
+// oracle differentiates the frames, so a force sequence shifted by one 20 ms stage leaves
+// ω·dt·98 N ≈ 18 N of residual (mean ~12 N; measured 11.7 N with node k carrying u_k instead
+// of u_{k−1}, 1.5 N as it is). The residual's max is at the two end frames, where the oracle
+// takes q̈ = 0 while this motion starts and ends accelerating (m·1.8 ≈ 98 N): not checked.
+TEST(mocap_dynamic_retarget, BounceForcesAreTheOnesTheFramesNeed) {
+  const int n = 201;
+  const Motion bounce = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.base_shift.z() = -0.02 * (1.0 - std::cos(2.0 * M_PI * 1.5 * i / kRate_hz));
+    return k;
+  });
+  ASSERT_LT(bounce.worst_ik_error_m, 1e-6);
+  const auto plan = plan_of(bounce.q, bounce.labels);
+  DynamicResult out;
+  std::string error;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, short_config(), out, error)) << error;
+  const Acceptance a = accept(*plan, out);
+  EXPECT_EQ(a.check.torque_violations, 0);
+  EXPECT_EQ(a.check.friction_violations, 0);
+  EXPECT_EQ(a.check.zmp_outside_m_max, 0.0);
+  EXPECT_LT(a.base_m, 1e-2);
+  EXPECT_GT(a.force_sum_rel, 0.1) << "the bounce does load and unload the feet";
+  EXPECT_LT(a.check.base_force_residual_N_mean, 5.0);
+  RecordProperty("base_mm", number(a.base_m * 1e3));
+  RecordProperty("force_sum_pct", number(a.force_sum_rel * 1e2));
+  RecordProperty("residual_N_mean", number(a.check.base_force_residual_N_mean));
+  RecordProperty("residual_N_max", number(a.check.base_force_residual_N_max));
+  RecordProperty("residual_Nm_mean", number(a.check.base_moment_residual_Nm_mean));
+}
+
+}  // namespace
+}  // namespace kuavo::mocap

@@ -1,0 +1,662 @@
+// Feasibility repair (tools/mocap/feasibility_repair.h) on small synthetic motions built
+// from the standing configuration with the leg IK: one case per repair kind, the override
+// file, and motions that need nothing. Every result is also held to the invariants the
+// dynamic stage relies on (never in flight unless an override kept it, stance feet flat and
+// still on the floor, swings and double supports no shorter than the robot's minimums,
+// standing at both ends).
+#include "tools/mocap/feasibility_repair.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "tests/mocap/motion_fixture.h"
+
+namespace kuavo::mocap {
+namespace {
+
+using namespace kuavo::mocap::test;
+
+// A leg IK that reaches its targets stops below 1e-9 m; anything above this is a miss (the
+// repair itself accepts a stance foot up to 2 mm off before it lowers the base). Every motion
+// here is within the legs' reach, so feet are checked to this.
+constexpr double kIkConverged_m = 1e-6;
+
+int frames_of(double s) { return static_cast<int>(std::lround(s * kRate_hz)); }
+int lead_frames(const RepairConfig& c = {}) { return frames_of(c.lead_in_s + c.blend_in_s); }
+
+bool has(const RepairedMotion& r, RepairKind k) {
+  return std::any_of(r.repairs.begin(), r.repairs.end(), [&](const Repair& x) { return x.kind == k; });
+}
+const Repair* first(const RepairedMotion& r, RepairKind k) {
+  for (const Repair& x : r.repairs) {
+    if (x.kind == k) return &x;
+  }
+  return nullptr;
+}
+std::string listing(const RepairedMotion& r) {
+  std::string s;
+  for (const Repair& x : r.repairs) {
+    s += std::string(to_string(x.kind)) + " [" + std::to_string(x.start_s) + ", " + std::to_string(x.end_s) +
+         ") " + x.reason + "\n";
+  }
+  return s;
+}
+
+RepairedMotion repair(const Motion& m, const std::vector<RepairOverride>& overrides = {},
+                      const RepairConfig& cfg = {}) {
+  EXPECT_LT(m.worst_ik_error_m, 1e-6) << "the synthetic motion's own feet are where they were put";
+  RepairedMotion out;
+  std::string error;
+  EXPECT_TRUE(repair_motion(robot(), m.q, m.labels, kRate_hz, cfg, overrides, out, error)) << error;
+  return out;
+}
+
+// Invariants of every repaired motion. allow_flight: an override kept a flight; foot_m: how
+// far a stance corner may be off the floor or slide.
+void expect_dancable(const RepairedMotion& r, int dance_frames, const RepairConfig& cfg = {},
+                     bool allow_flight = false, double foot_m = kIkConverged_m) {
+  SCOPED_TRACE(listing(r));
+  const int lead = lead_frames(cfg), n = lead + dance_frames + frames_of(cfg.tail_s);
+  ASSERT_EQ(r.lead_frames, lead);
+  ASSERT_EQ(r.dance_frames, dance_frames);
+  ASSERT_EQ(static_cast<int>(r.q.size()), n);
+  ASSERT_EQ(static_cast<int>(r.contacts.size()), n);
+  EXPECT_EQ(r.contacts.front(), ContactLabel::kDoubleSupport);
+  EXPECT_EQ(r.contacts.back(), ContactLabel::kDoubleSupport);
+  EXPECT_LT(r.max_leg_ik_error_m, foot_m);
+  EXPECT_EQ(r.robot_steps, count_steps(r.contacts));
+  for (int i = 0; i < n; ++i) {
+    ASSERT_TRUE(r.q[i].allFinite()) << i;
+    ASSERT_NEAR(r.q[i].segment<4>(3).norm(), 1.0, 1e-12) << i;
+    if (!allow_flight) {
+      ASSERT_NE(r.contacts[i], ContactLabel::kFlight) << "frame " << i;
+    }
+  }
+  // Stance feet flat on the floor and still over each stance interval.
+  std::vector<std::array<Vec3, kCorners>> corners(n);
+  for (int i = 0; i < n; ++i) corners[i] = corners_of(r.q[i]);
+  for (int f = 0; f < 2; ++f) {
+    const auto down = [&](int i) { return f == 0 ? left_in_contact(r.contacts[i]) : right_in_contact(r.contacts[i]); };
+    int since = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!down(i)) {
+        since = -1;
+        continue;
+      }
+      if (since < 0) since = i;
+      for (int c = 4 * f; c < 4 * f + 4; ++c) {
+        ASSERT_LE(std::abs(corners[i][c].z()), foot_m) << "foot " << f << " frame " << i;
+        ASSERT_LE((corners[i][c] - corners[since][c]).norm(), 2.0 * foot_m)
+            << "foot " << f << " slides at frame " << i;
+      }
+    }
+  }
+  // Swings and weight transfers no shorter than the robot's minimums (between steps).
+  const int min_swing = frames_of(cfg.min_swing_s), min_ds = frames_of(cfg.min_double_support_s);
+  for (int f = 0; f < 2 && !allow_flight; ++f) {
+    for (int i = 1; i < n; ++i) {
+      const bool was = f == 0 ? left_in_contact(r.contacts[i - 1]) : right_in_contact(r.contacts[i - 1]);
+      const bool now = f == 0 ? left_in_contact(r.contacts[i]) : right_in_contact(r.contacts[i]);
+      if (!(was && !now)) continue;
+      int j = i;
+      while (j < n && !(f == 0 ? left_in_contact(r.contacts[j]) : right_in_contact(r.contacts[j]))) ++j;
+      EXPECT_GE(j - i, min_swing) << "swing of foot " << f << " at frame " << i;
+      int k = i - 1;  // the double support before the lift-off
+      while (k >= 0 && r.contacts[k] == ContactLabel::kDoubleSupport) --k;
+      if (k >= 0) {
+        EXPECT_GE(i - 1 - k, min_ds) << "weight transfer before frame " << i;
+      }
+    }
+  }
+  for (std::size_t k = 0; k < r.repairs.size(); ++k) {
+    const Repair& x = r.repairs[k];
+    EXPECT_LE(x.start_s, x.end_s);
+    EXPECT_GE(x.start_s, 0.0);
+    EXPECT_LE(x.end_s, n / kRate_hz + 1e-9);
+    EXPECT_FALSE(x.reason.empty());
+    if (k > 0) {
+      EXPECT_LE(r.repairs[k - 1].start_s, x.start_s) << "listed in time order";
+    }
+  }
+  ASSERT_NE(first(r, RepairKind::kLeadIn), nullptr);
+  EXPECT_EQ(first(r, RepairKind::kLeadIn)->start_s, 0.0);
+  EXPECT_NEAR(first(r, RepairKind::kLeadIn)->end_s, lead / kRate_hz, 1e-12);
+}
+
+// Where the left sole centre is relative to the right's, in the right foot's heading frame:
+// x ahead, y beside.
+Eigen::Vector2d left_from_right(const ConfigVector& q) {
+  const auto f = feet_of(q);
+  const Vec3 d = rot_z(f[1].yaw).transpose() * (f[0].centre - f[1].centre);
+  return d.head<2>();
+}
+
+// ---- overrides ----
+
+TEST(mocap_feasibility_repair, ParsesTheDocumentedOverrideLines) {
+  std::vector<RepairOverride> o;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("# a comment line\n"
+                                     "0.5 1.25 forbid flight\n"
+                                     "\n"
+                                     "  2 3 forbid retime   # trailing comment\n"
+                                     "3 4 forbid stride\n"
+                                     "4 5.5 forbid turn\n"
+                                     "6 7 forbid all\n"
+                                     "0 0.1 force double\n",
+                                     o, error))
+      << error;
+  ASSERT_EQ(o.size(), 6u);
+  EXPECT_EQ(o[0].start_s, 0.5);
+  EXPECT_EQ(o[0].end_s, 1.25);
+  EXPECT_FALSE(o[0].force_double);
+  EXPECT_FALSE(o[0].forbid_all);
+  EXPECT_EQ(o[0].forbid, RepairKind::kFlight);
+  EXPECT_EQ(o[1].forbid, RepairKind::kRetime);
+  EXPECT_EQ(o[2].forbid, RepairKind::kStride);
+  EXPECT_EQ(o[3].forbid, RepairKind::kTurn);
+  EXPECT_EQ(o[3].end_s, 5.5);
+  EXPECT_TRUE(o[4].forbid_all);
+  EXPECT_FALSE(o[4].force_double);
+  EXPECT_TRUE(o[5].force_double);
+  EXPECT_EQ(o[5].start_s, 0.0);
+  EXPECT_EQ(o[5].end_s, 0.1);
+
+  o.clear();
+  EXPECT_TRUE(parse_repair_overrides("", o, error));
+  EXPECT_TRUE(o.empty());
+}
+
+TEST(mocap_feasibility_repair, RejectsMalformedOverrideLinesNamingTheLine) {
+  const char* bad[] = {
+      "1 0.5 forbid flight",         // end before start
+      "1 1 forbid flight",           // empty range
+      "-0.5 1 forbid flight",        // negative start
+      "a 1 forbid flight",           // not a number
+      "0.5 1x forbid flight",        // trailing garbage in a number
+      "nan 1 forbid flight",         // not finite
+      "0 inf forbid flight",         // not finite
+      "0.5 1 forbid jump",           // unknown kind
+      "0.5 1 forbid tilt",           // not a kind the override knows
+      "0.5 1 force single",          // only `force double`
+      "0.5 1 allow flight",          // unknown verb
+      "0.5 1 forbid",                // missing kind
+      "0.5 1",                       // missing verb
+      "0.5",                         // missing end
+      "0.5 1 forbid flight please",  // extra word
+  };
+  for (const char* line : bad) {
+    SCOPED_TRACE(line);
+    std::vector<RepairOverride> o;
+    std::string error;
+    // Blank, comment and good lines count: the bad one is line 4.
+    EXPECT_FALSE(parse_repair_overrides(std::string("\n# overrides\n0 1 forbid all\n") + line + "\n2 3 force double\n",
+                                        o, error));
+    EXPECT_NE(error.find("line 4"), std::string::npos) << error;
+  }
+}
+
+TEST(mocap_feasibility_repair, RefusesBadInput) {
+  const ConfigVector q = standing().q;
+  RepairedMotion out;
+  std::string error;
+  EXPECT_FALSE(repair_motion(robot(), {q}, {ContactLabel::kDoubleSupport}, kRate_hz, {}, {}, out, error));
+  EXPECT_FALSE(error.empty());
+  error.clear();
+  EXPECT_FALSE(repair_motion(robot(), {q, q, q}, {ContactLabel::kDoubleSupport, ContactLabel::kDoubleSupport},
+                             kRate_hz, {}, {}, out, error));
+  EXPECT_FALSE(error.empty());
+  std::vector<ConfigVector> frames(4, q);
+  frames[2][7 + 3] = std::numeric_limits<double>::infinity();
+  error.clear();
+  EXPECT_FALSE(repair_motion(robot(), frames, std::vector<ContactLabel>(4, ContactLabel::kDoubleSupport), kRate_hz,
+                             {}, {}, out, error));
+  EXPECT_NE(error.find("not finite"), std::string::npos) << error;
+  EXPECT_NE(error.find("2"), std::string::npos) << error;
+  error.clear();
+  EXPECT_FALSE(repair_motion(robot(), std::vector<ConfigVector>(4, q),
+                             std::vector<ContactLabel>(4, ContactLabel::kDoubleSupport), 0.0, {}, {}, out, error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(mocap_feasibility_repair, CountsSwingPhases) {
+  using L = ContactLabel;
+  EXPECT_EQ(count_steps({}), 0);
+  EXPECT_EQ(count_steps({L::kDoubleSupport, L::kDoubleSupport}), 0);
+  EXPECT_EQ(count_steps({L::kDoubleSupport, L::kLeftSupport, L::kDoubleSupport, L::kRightSupport, L::kDoubleSupport}),
+            2);
+  EXPECT_EQ(count_steps({L::kDoubleSupport, L::kFlight, L::kDoubleSupport}), 2);  // a hop lifts both feet
+  EXPECT_EQ(count_steps({L::kLeftSupport, L::kRightSupport, L::kLeftSupport}), 2);  // a switch lifts one each time
+}
+
+// ---- motions that need nothing ----
+
+// Standing still while the arms wave: no repair but the lead-in and the tail, and the dance
+// frames come out as they went in (legs re-solved onto the feet they already stand on).
+TEST(mocap_feasibility_repair, StandingNeedsNoRepairAndKeepsItsFrames) {
+  const int n = 150;
+  const Motion m = make_motion(n, [](int i) {
+    Keyframe k = stand_key();
+    k.arms[0] = -0.6 * std::sin(2.0 * M_PI * i / n);       // left shoulder pitch
+    k.arms[7 + 3] = -0.4 * (1.0 - std::cos(M_PI * i / n));  // right elbow
+    return k;
+  });
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  for (const Repair& x : r.repairs) {
+    EXPECT_TRUE(x.kind == RepairKind::kLeadIn || x.kind == RepairKind::kTail) << to_string(x.kind);
+  }
+  EXPECT_EQ(r.human_steps, 0);
+  EXPECT_EQ(r.robot_steps, 0);
+  double worst = 0.0;
+  for (int d = 0; d < n; ++d) worst = std::max(worst, (r.q[r.lead_frames + d] - m.q[d]).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 1e-9);
+  RecordProperty("max_frame_change", number(worst));
+}
+
+// The geometric motion's step forward of 0.2 m, 0.5 s swing, 0.6 s double supports: within
+// every limit. No repair; the schedule is the human's; in double support the frames are
+// unchanged (the leg IK stops below 1e-9 m, measured 9e-11 m: see the bounds); the stance foot
+// stays and the swing lands on the human's foothold. The swing frames themselves differ by
+// design (the repair's own arc, and the pelvis over the repaired feet).
+TEST(mocap_feasibility_repair, SlowValidStepNeedsNoRepair) {
+  const int n = 200, a = 60, b = 110;
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.20);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < a ? l0 : (i >= b ? l1 : swing(l0, l1, i, a, b, 0.05));
+    k.left_down = i < a || i >= b;
+    return k;
+  });
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  for (const Repair& x : r.repairs) {
+    EXPECT_TRUE(x.kind == RepairKind::kLeadIn || x.kind == RepairKind::kTail) << to_string(x.kind);
+  }
+  EXPECT_EQ(r.human_steps, 1);
+  EXPECT_EQ(r.robot_steps, 1);
+  const int lead = r.lead_frames;
+  double whole = 0.0, base = 0.0, upper = 0.0, corner = 0.0, stance_corner = 0.0;
+  for (int d = 0; d < n; ++d) {
+    ASSERT_EQ(r.contacts[lead + d], m.labels[d]) << d;
+    const ConfigVector& q = r.q[lead + d];
+    const auto c_out = corners_of(q), c_in = corners_of(m.q[d]);
+    if (m.labels[d] == ContactLabel::kDoubleSupport) {
+      whole = std::max(whole, (q - m.q[d]).cwiseAbs().maxCoeff());
+      base = std::max(base, (q.head<7>() - m.q[d].head<7>()).cwiseAbs().maxCoeff());
+      upper = std::max(upper, (q.tail<16>() - m.q[d].tail<16>()).cwiseAbs().maxCoeff());
+      for (int c = 0; c < kCorners; ++c) corner = std::max(corner, (c_out[c] - c_in[c]).norm());
+    } else {
+      for (int c = 4; c < kCorners; ++c) stance_corner = std::max(stance_corner, (c_out[c] - c_in[c]).norm());
+    }
+  }
+  // Leg angles: the IK stops with corners within 1e-9 m, which over a lever ≥ 5 cm (ankle
+  // roll to a sole corner) is ≤ 2e-8 rad (measured 4.8e-10); everything else within 1e-9.
+  EXPECT_LT(whole, 2e-8);
+  EXPECT_LT(base, 1e-9);
+  EXPECT_LT(upper, 1e-12);
+  EXPECT_LT(corner, 1e-9);
+  EXPECT_LT(stance_corner, 1e-9);
+  RecordProperty("double_support_frame_change", number(whole));
+  RecordProperty("double_support_base_change", number(base));
+  RecordProperty("double_support_corner_change_m", number(corner));
+  const auto landed = feet_of(r.q[lead + b + 5]);
+  EXPECT_LT((landed[0].centre - l1.centre).norm(), 1e-9);
+}
+
+// ---- one case per repair kind ----
+
+// A hop (both feet 3 cm up for 0.2 s, the pelvis with them): both feet stay down, the
+// pelvis keeps its bounce, the flight is listed over exactly its frames.
+TEST(mocap_feasibility_repair, HopBecomesADoubleSupportBounce) {
+  const int n = 150, a = 50, b = 70;
+  const Motion m = hop_motion(n, a, b);
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* flight = first(r, RepairKind::kFlight);
+  ASSERT_NE(flight, nullptr);
+  EXPECT_NEAR(flight->start_s, (r.lead_frames + a) / kRate_hz, 1e-9);
+  EXPECT_NEAR(flight->end_s, (r.lead_frames + b) / kRate_hz, 1e-9);
+  for (int d = 0; d < n; ++d) {
+    EXPECT_EQ(r.contacts[r.lead_frames + d], ContactLabel::kDoubleSupport) << d;
+    EXPECT_NEAR(r.q[r.lead_frames + d][2], m.q[d][2], 1e-12) << "pelvis height at " << d;
+  }
+  EXPECT_EQ(r.human_steps, 2);
+  EXPECT_EQ(r.robot_steps, 0);
+}
+
+// A leap (right steps, both feet off the floor for 0.1 s, right lands, left follows): the
+// left foot stays down until the right lands.
+TEST(mocap_feasibility_repair, LeapBecomesAStep) {
+  const int n = 200;
+  const Foot l0 = standing().feet[0], r0 = standing().feet[1];
+  const Foot r1 = moved(r0, 0.25), l1 = moved(l0, 0.50);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.right = i < 50 ? r0 : (i >= 90 ? r1 : swing(r0, r1, i, 50, 90, 0.05));
+    k.right_down = i < 50 || i >= 90;
+    k.left = i < 80 ? l0 : (i >= 120 ? l1 : swing(l0, l1, i, 80, 120, 0.05));
+    k.left_down = i < 80 || i >= 120;
+    return k;
+  });
+  ASSERT_EQ(m.labels[85], ContactLabel::kFlight);
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  ASSERT_TRUE(has(r, RepairKind::kFlight));
+  EXPECT_EQ(r.robot_steps, 2);
+  const int lead = r.lead_frames;
+  for (int d = 80; d < 90; ++d) EXPECT_TRUE(left_in_contact(r.contacts[lead + d])) << "the last foot stays down, " << d;
+  // Both end where the human's feet did (within reach: 0.25 m ahead).
+  const auto end = feet_of(r.q[lead + n - 1]);
+  EXPECT_LT((end[0].centre - l1.centre).norm(), 1e-6);
+  EXPECT_LT((end[1].centre - r1.centre).norm(), 1e-6);
+}
+
+// A 0.2 s swing (the robot's shortest is 0.3 s): the touchdown is delayed to 0.3 s.
+TEST(mocap_feasibility_repair, ShortSwingIsRetimed) {
+  const int n = 150, a = 60, b = 80;
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.10);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < a ? l0 : (i >= b ? l1 : swing(l0, l1, i, a, b, 0.04));
+    k.left_down = i < a || i >= b;
+    return k;
+  });
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* retime = first(r, RepairKind::kRetime);
+  ASSERT_NE(retime, nullptr);
+  EXPECT_NEAR(retime->start_s, (r.lead_frames + b) / kRate_hz, 1e-9);
+  EXPECT_FALSE(has(r, RepairKind::kStepSkipped));
+  EXPECT_EQ(r.robot_steps, 1);
+  int lift = -1, land = -1;
+  for (int i = 1; i < static_cast<int>(r.contacts.size()); ++i) {
+    if (left_in_contact(r.contacts[i - 1]) && !left_in_contact(r.contacts[i])) lift = i;
+    if (!left_in_contact(r.contacts[i - 1]) && left_in_contact(r.contacts[i])) land = i;
+  }
+  EXPECT_EQ(lift, r.lead_frames + a) << "lift-off as the human's";
+  EXPECT_EQ(land - lift, frames_of(RepairConfig{}.min_swing_s)) << "the swing lengthened to the minimum, no more";
+  EXPECT_LT((feet_of(r.q.back())[0].centre - l1.centre).norm(), 1e-6) << "landing on the human's foothold";
+}
+
+// A right step, 30 ms of double support, then a 50 ms tap of the left foot: the tap cannot
+// fit after the weight transfer the robot needs, so it is skipped and reported.
+TEST(mocap_feasibility_repair, StepThatCannotFitIsSkipped) {
+  const int n = 160;
+  const Foot r0 = standing().feet[1], r1 = moved(r0, 0.10), l0 = standing().feet[0];
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.right = i < 50 ? r0 : (i >= 90 ? r1 : swing(r0, r1, i, 50, 90, 0.04));
+    k.right_down = i < 50 || i >= 90;
+    k.left = (i >= 93 && i < 98) ? swing(l0, l0, i, 93, 98, 0.02) : l0;
+    k.left_down = !(i >= 93 && i < 98);
+    return k;
+  });
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* skipped = first(r, RepairKind::kStepSkipped);
+  ASSERT_NE(skipped, nullptr);
+  EXPECT_NEAR(skipped->start_s, (r.lead_frames + 93) / kRate_hz, 1e-9);
+  EXPECT_NEAR(skipped->end_s, (r.lead_frames + 98) / kRate_hz, 1e-9);
+  EXPECT_EQ(r.human_steps, 2);
+  EXPECT_EQ(r.robot_steps, 1);
+  for (const ContactLabel c : r.contacts) EXPECT_TRUE(left_in_contact(c));
+}
+
+// A 0.6 m stride (the limit is 0.40 m ahead of the stance foot): the touchdown is placed at
+// the limit, beside where the human put it.
+TEST(mocap_feasibility_repair, LongStrideIsShortened) {
+  const int n = 200, a = 60, b = 110;
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.60);
+  const auto key = [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < a ? l0 : (i >= b ? l1 : swing(l0, l1, i, a, b, 0.05));
+    k.left_down = i < a || i >= b;
+    return k;
+  };
+  const Motion m = make_motion(n, key);
+  ASSERT_GT(left_from_right(m.q.back()).x(), 0.55) << "the precondition: the human's stride is too long";
+  const RepairConfig cfg;
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* stride = first(r, RepairKind::kStride);
+  ASSERT_NE(stride, nullptr);
+  EXPECT_NEAR(stride->start_s, (r.lead_frames + b) / kRate_hz, 1e-9);
+  const Eigen::Vector2d d = left_from_right(r.q.back());
+  // At the limit, at the human's width.
+  EXPECT_NEAR(d.x(), cfg.max_step_forward_m, kIkConverged_m);
+  EXPECT_NEAR(d.y(), left_from_right(m.q.back()).y(), kIkConverged_m);
+  for (int i = r.lead_frames + b; i < static_cast<int>(r.q.size()); ++i) {
+    EXPECT_LE(left_from_right(r.q[i]).x(), cfg.max_step_forward_m + kIkConverged_m) << i;
+  }
+
+  // Forbidden, the stride stays as the human took it.
+  std::vector<RepairOverride> o;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0 10 forbid stride\n", o, error)) << error;
+  // The 0.6 m stride kept puts the rear leg at the edge of its reach while the front foot
+  // swings: the repair accepts a stance foot up to 2 mm off (measured 1.2 mm).
+  const RepairedMotion kept = repair(m, o, cfg);
+  expect_dancable(kept, n, cfg, false, 2e-3);
+  EXPECT_FALSE(has(kept, RepairKind::kStride)) << listing(kept);
+  EXPECT_NEAR(left_from_right(kept.q.back()).x(), left_from_right(m.q.back()).x(), 2e-3);
+}
+
+// The right foot pivots 0.5 rad in place while both feet are down (a planted foot cannot):
+// listed as a turn, and the robot's right foot keeps one heading throughout, the human's
+// mean heading over the stance.
+TEST(mocap_feasibility_repair, PivotingStanceFootKeepsOneHeading) {
+  const int n = 150;
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    const double s = std::clamp((i - 40) / 60.0, 0.0, 1.0);
+    k.right.yaw = 0.5 * s * s * (3.0 - 2.0 * s);
+    return k;
+  });
+  const RepairConfig cfg;
+  ASSERT_GT(feet_of(m.q.back())[1].yaw, cfg.pivot_yaw_rad + 0.1);
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n, cfg);
+  SCOPED_TRACE(listing(r));
+  const Repair* turn = first(r, RepairKind::kTurn);
+  ASSERT_NE(turn, nullptr);
+  EXPECT_NE(turn->reason.find("pivot"), std::string::npos);
+  double sc = 0.0, ss = 0.0;
+  for (const ConfigVector& q : m.q) {
+    const double y = feet_of(q)[1].yaw;
+    sc += std::cos(y), ss += std::sin(y);
+  }
+  const double mean = std::atan2(ss, sc);
+  double worst = 0.0;
+  for (const ConfigVector& q : r.q) worst = std::max(worst, std::abs(feet_of(q)[1].yaw - mean));
+  // The heading from a toe–heel pair 0.24 m apart, each corner within the IK's convergence.
+  EXPECT_LT(worst, 2.0 * kIkConverged_m / 0.24);
+  RecordProperty("right_foot_heading_error_rad", number(worst));
+}
+
+// The left foot lands turned out 0.75 rad against the right (the hip yaw allows 0.55): the
+// touchdown heading is limited, listed as a turn.
+TEST(mocap_feasibility_repair, TouchdownHeadingIsLimitedToTheHipYawRange) {
+  const int n = 200, a = 60, b = 110;
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.05, 0.0, 0.75);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < a ? l0 : (i >= b ? l1 : swing(l0, l1, i, a, b, 0.05));
+    k.left_down = i < a || i >= b;
+    return k;
+  });
+  const RepairConfig cfg;
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n, cfg);
+  SCOPED_TRACE(listing(r));
+  const Repair* turn = first(r, RepairKind::kTurn);
+  ASSERT_NE(turn, nullptr);
+  EXPECT_NEAR(turn->start_s, (r.lead_frames + b) / kRate_hz, 1e-9);
+  const auto f = feet_of(r.q[r.lead_frames + n - 1]);
+  EXPECT_NEAR(f[0].yaw - f[1].yaw, cfg.max_relative_yaw_rad, 2.0 * kIkConverged_m / 0.24);
+}
+
+// A dance that starts with the left foot in the air and the arms raised: the robot first
+// stands on both feet in its standing pose, then blends in; the dance frames' arms follow.
+TEST(mocap_feasibility_repair, StartOffTheFloorGetsALeadIn) {
+  const int n = 150, land = 40;
+  const Foot l0 = standing().feet[0];
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    if (i < land) k.left.centre.z() = 0.05 * (1.0 - static_cast<double>(i) / land);
+    k.left_down = i >= land;
+    k.arms[0] = -1.2;  // left shoulder forward
+    k.arms[7] = -1.0;
+    return k;
+  });
+  ASSERT_EQ(m.labels.front(), ContactLabel::kRightSupport);
+  const RepairConfig cfg;
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n, cfg);
+  SCOPED_TRACE(listing(r));
+  ASSERT_GT(r.lead_frames, 0);
+  EXPECT_EQ(r.lead_frames, frames_of(cfg.lead_in_s + cfg.blend_in_s));
+  constexpr int kUpper = 7 + 2 * model::kLegJoints;
+  const int still = frames_of(cfg.lead_in_s);
+  for (int i = 0; i < still; ++i) {
+    EXPECT_EQ(r.contacts[i], ContactLabel::kDoubleSupport);
+    EXPECT_LT((r.q[i] - r.q[0]).cwiseAbs().maxCoeff(), 1e-12) << "standing still at " << i;
+  }
+  EXPECT_LT((r.q[0].tail<model::kNq - kUpper>() - standing().q.tail<model::kNq - kUpper>()).cwiseAbs().maxCoeff(),
+            1e-12)
+      << "the standing arms and head";
+  const auto f0 = feet_of(r.q[0]);
+  EXPECT_NEAR(f0[1].centre.x(), standing().feet[1].centre.x(), 1e-6);
+  EXPECT_NEAR(f0[0].centre.y() - f0[1].centre.y(), standing().feet[0].centre.y() - standing().feet[1].centre.y(),
+              1e-6)
+      << "the left foot stands beside the right at the standing width";
+  for (int d = 0; d < n; ++d) {
+    EXPECT_LT((r.q[r.lead_frames + d].tail<model::kNq - kUpper>() - m.q[d].tail<model::kNq - kUpper>())
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12)
+        << "dance arms at " << d;
+  }
+  EXPECT_LT((feet_of(r.q[r.lead_frames + n - 1])[0].centre - l0.centre).norm(), 1e-6);
+}
+
+// A dance that ends with the right foot in the air: the tail brings it down and the robot
+// ends standing in double support in its standing pose.
+TEST(mocap_feasibility_repair, EndOffTheFloorGetsATail) {
+  const int n = 200, lift = 150;
+  const Foot r0 = standing().feet[1], r1 = moved(r0, 0.10);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    if (i >= lift) k.right = swing(r0, r1, i, lift, n + 20, 0.08);  // still in the air at the end
+    k.right_down = i < lift;
+    return k;
+  });
+  ASSERT_EQ(m.labels.back(), ContactLabel::kLeftSupport);
+  const RepairConfig cfg;
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n, cfg);
+  SCOPED_TRACE(listing(r));
+  const Repair* tail = first(r, RepairKind::kTail);
+  ASSERT_NE(tail, nullptr);
+  const int end_of_dance = r.lead_frames + n;
+  EXPECT_NEAR(tail->start_s, end_of_dance / kRate_hz, 1e-9);
+  EXPECT_NEAR(tail->end_s, static_cast<double>(r.q.size()) / kRate_hz, 1e-9);
+  for (int i = end_of_dance; i < static_cast<int>(r.q.size()); ++i) {
+    EXPECT_EQ(r.contacts[i], ContactLabel::kDoubleSupport) << i;
+  }
+  constexpr int kUpper = 7 + 2 * model::kLegJoints;
+  EXPECT_LT((r.q.back().tail<model::kNq - kUpper>() - standing().q.tail<model::kNq - kUpper>()).cwiseAbs().maxCoeff(),
+            1e-12);
+}
+
+// A deep plié: the standing pose moved 15 cm down (the repair puts the soles back on the
+// floor, the pelvis stays at 0.63 m). The legs cannot take it within their
+// limits (knee and ankle pitch at their ends): the best leg solution at the asked height misses
+// the floor by ~6 mm. Lowering the pelvis further only takes the feet further off, so the
+// repair must not return anything worse than that first attempt.
+// (The repair used to keep the last of its 21 lowering attempts, not the best: pelvis at
+// 0.43 m, soles 5.9 cm above the floor.)
+TEST(mocap_feasibility_repair, UnreachablePelvisHeightDoesNotGetWorse) {
+  const int n = 50;
+  const double drop = 0.15;
+  std::vector<ConfigVector> q(n, standing().q);
+  for (ConfigVector& f : q) f[2] -= drop;
+  const std::vector<ContactLabel> labels(n, ContactLabel::kDoubleSupport);
+  // The best the legs do at the asked height (both soles on the floor where they stand).
+  ConfigVector best = standing().q;
+  best[2] -= drop;
+  std::array<Vec3, kCorners> targets;
+  for (int c = 0; c < kCorners; ++c) targets[c] = standing().feet[c / 4].centre + standing().corner_offset[c];
+  const double reachable = leg_ik_lm(robot(), scratch(), targets, best);
+  ASSERT_GT(reachable, 2e-3) << "the precondition: the plié is out of the legs' reach";
+  RepairedMotion r;
+  std::string error;
+  ASSERT_TRUE(repair_motion(robot(), q, labels, kRate_hz, {}, {}, r, error)) << error;
+  // The repair's IK starts from the previous frame's legs (the lead-in blends down from
+  // standing), so at the joint limits it may settle in another corner of the limit box than
+  // the fresh solve above: measured 9.3 mm (corner-error norm) against 6.3 mm (largest
+  // coordinate). Twice the fresh miss still tells the best attempt from the last one (60 mm).
+  EXPECT_LE(r.max_leg_ik_error_m, 2.0 * reachable);
+  const ConfigVector& mid = r.q[r.lead_frames + n / 2];
+  EXPECT_GE(mid[2], q[0][2] - 1e-9) << "the pelvis lowered below the asked height, away from the floor";
+  for (const Vec3& c : corners_of(mid)) EXPECT_LE(std::abs(c.z()), 2.0 * reachable);
+}
+
+// ---- overrides applied ----
+
+TEST(mocap_feasibility_repair, ForbiddenFlightStaysInTheSchedule) {
+  const int n = 150, a = 50, b = 70;
+  const Motion m = hop_motion(n, a, b);
+  std::vector<RepairOverride> o;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0.45 0.75 forbid flight\n", o, error)) << error;
+  const RepairedMotion r = repair(m, o);
+  expect_dancable(r, n, {}, /*allow_flight=*/true);
+  SCOPED_TRACE(listing(r));
+  EXPECT_FALSE(has(r, RepairKind::kFlight));
+  for (int d = 0; d < n; ++d) {
+    EXPECT_EQ(r.contacts[r.lead_frames + d], (d >= a && d < b) ? ContactLabel::kFlight : ContactLabel::kDoubleSupport)
+        << d;
+  }
+  // Another kind forbidden over the range leaves the flight repair alone.
+  o.clear();
+  ASSERT_TRUE(parse_repair_overrides("0.45 0.75 forbid stride\n", o, error)) << error;
+  EXPECT_TRUE(has(repair(m, o), RepairKind::kFlight));
+}
+
+TEST(mocap_feasibility_repair, ForcedDoubleSupportHoldsBothFeetDown) {
+  const int n = 200, a = 60, b = 110;
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.20);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < a ? l0 : (i >= b ? l1 : swing(l0, l1, i, a, b, 0.05));
+    k.left_down = i < a || i >= b;
+    return k;
+  });
+  std::vector<RepairOverride> o;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0.5 1.2 force double\n", o, error)) << error;
+  const RepairedMotion r = repair(m, o);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* forced = first(r, RepairKind::kForcedDouble);
+  ASSERT_NE(forced, nullptr);
+  EXPECT_NEAR(forced->start_s, (r.lead_frames + 50) / kRate_hz, 1e-9);
+  EXPECT_NEAR(forced->end_s, (r.lead_frames + 120) / kRate_hz, 1e-9);
+  for (int d = 50; d < 120; ++d) EXPECT_EQ(r.contacts[r.lead_frames + d], ContactLabel::kDoubleSupport) << d;
+  EXPECT_EQ(r.human_steps, 1);
+  EXPECT_EQ(r.robot_steps, 0);
+}
+
+}  // namespace
+}  // namespace kuavo::mocap
