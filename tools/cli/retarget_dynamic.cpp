@@ -119,6 +119,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["foothold_miss_m_max"] = s.foothold_miss_max_m;
   d["foothold_miss_frames"] = s.foothold_miss_frames;
   d["qp_restarts"] = s.qp_failures;
+  d["rejected_steps"] = s.rejected_steps;
   d["lead_in_frames"] = result.repaired.lead_frames;
   ordered_json geo = check_json(geo_check, robot);
   ordered_json dyn = check_json(dyn_check, robot);

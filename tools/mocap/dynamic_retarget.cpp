@@ -46,6 +46,9 @@ constexpr double kTorqueExcessCap_Nm = 20.0;
 constexpr double kMinStep = 1.0 / 64.0;
 // Cold restarts of one window after a failed QP before the retargeting gives up.
 constexpr int kMaxRestarts = 3;
+// Step rejection: violation after a step above growth × before + slack (see the loop).
+constexpr double kViolationGrowth = 1.5;
+constexpr double kViolationSlack = 0.02;
 
 // OCS2's relaxed log barrier (as controllers/mpc): B'(h), B''(h).
 void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
@@ -205,6 +208,8 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
   const Eigen::Matrix<double, kNumMpcJoints, 1> soft_start = cfg.torque_soft_start * lim.torque_Nm.head<kNumMpcJoints>();
   Eigen::Matrix<double, kNumMpcJoints, 1> vel_limit = lim.velocity_rad_s.head<kNumMpcJoints>();
   std::vector<Eigen::Matrix<double, kNumMpcJoints, 1>> lag(T + 1);
+  std::vector<StateVector> x_accepted(T + 1), dx_accepted(T + 1);
+  std::vector<InputVector> u_accepted(T + 1), du_accepted(T + 1);
   StageTorque st_torque;
   long iterations_total = 0;
   DynamicStats& stats = out.stats;
@@ -222,6 +227,8 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
     bool converged = false;
     double alpha = 1.0, previous_step = std::numeric_limits<double>::infinity();
     int progress = 0, restarts = 0;
+    bool have_accepted = false;
+    double accepted_violation = 0.0;
     while (it < cfg.max_sqp_iterations) {
       // The builds rewrite what they own; the terms below touch R's force block across
       // corners and S, which they do not: cleared here.
@@ -250,6 +257,30 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
       if (status != mpc::MpcStatus::kOk) {
         error = std::string("dynamic retargeting: window at ") + std::to_string(s0 * dt) + " s: " + mpc::to_string(status);
         return false;
+      }
+      // Globalization by the constraint violation (the dynamics defects and equality rows at
+      // this iterate): a step that made it grow past kViolationGrowth × the accepted point's
+      // (plus kViolationSlack) is taken back and retried at half the length along the same
+      // direction, so a window that cannot converge stalls near a consistent trajectory
+      // instead of walking off (perfume at 19.6 s: steps of 15, violation 1.5).
+      if (have_accepted && alpha > kMinStep &&
+          ws->constraint_violation > kViolationGrowth * accepted_violation + kViolationSlack) {
+        alpha = std::max(kMinStep, 0.5 * alpha);
+        progress = 0;
+        ++stats.rejected_steps;
+        for (int k = 0; k <= T; ++k) {
+          ws->x[k] = x_accepted[k] + alpha * dx_accepted[k];
+          ws->u[k] = u_accepted[k] + alpha * du_accepted[k];
+        }
+        ws->u[T] = ws->u[T - 1];
+        if (++it >= cfg.max_sqp_iterations) break;
+        continue;
+      }
+      have_accepted = true;
+      accepted_violation = ws->constraint_violation;
+      for (int k = 0; k <= T; ++k) {
+        x_accepted[k] = ws->x[k];
+        u_accepted[k] = ws->u[k];
       }
       // The dynamic part of the torques (M q̈ + C q̇) of the current iterate, held fixed.
       // The last stage's acceleration would involve x_T, which only u_{T−1} sets: a lag there
@@ -316,6 +347,7 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
         ++stats.qp_failures;
         ++restarts;
         mpc::mpc_reset(*ws);
+        have_accepted = false;
         alpha = 1.0;
         previous_step = std::numeric_limits<double>::infinity();
         progress = 0;
@@ -326,6 +358,10 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
         error = "dynamic retargeting: the QP of the window at " + std::to_string(s0 * dt) + " s failed (" +
                 qp::to_string(ws->qp_status) + ", iteration " + std::to_string(it) + ")";
         return false;
+      }
+      for (int k = 0; k <= T; ++k) {
+        dx_accepted[k] = ws->solution.x[k];
+        du_accepted[k] = k < T ? InputVector(ws->solution.u[k]) : InputVector::Zero();
       }
       double step = 0.0;
       for (int k = 0; k <= T; ++k) {
@@ -387,7 +423,7 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
             fk_done = true;
           }
           const Vec3 landed = dynamics::frame_position(robot, *data, c);
-          anchor[c] = Vec3(landed.x(), landed.y(), window->knots[j].point_position_m[3 * c + 2]);
+          anchor[c] = landed;
           anchored[c] = true;
         }
       }
@@ -463,10 +499,23 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
     double miss = leg_ik_lm(robot, *data, targets, out.q[i]);
     // A leg at full stretch cannot reach a foothold the TO crept past: the base lowers by
     // up to kMaxBaseDrop_m (counted in the stats), as the repair's IK does.
-    for (double drop = 1e-3; !(miss <= kFootholdTolerance_m) && drop <= kMaxBaseDrop_m + 1e-12; drop += 1e-3) {
-      out.q[i][2] -= 1e-3;
-      miss = leg_ik_lm(robot, *data, targets, out.q[i]);
-      stats.base_drop_max_m = std::max(stats.base_drop_max_m, drop);
+    // The best attempt is kept (lowering hurts a leg held by a joint limit).
+    if (!(miss <= kFootholdTolerance_m)) {
+      const ConfigVector start = out.q[i];
+      ConfigVector best = out.q[i];
+      double best_drop = 0.0;
+      for (double drop = 1e-3; !(miss <= kFootholdTolerance_m) && drop <= kMaxBaseDrop_m + 1e-12; drop += 1e-3) {
+        ConfigVector q = start;
+        q[2] -= drop;
+        const double m = leg_ik_lm(robot, *data, targets, q);
+        if (m < miss) {
+          miss = m;
+          best = q;
+          best_drop = drop;
+        }
+      }
+      out.q[i] = best;
+      stats.base_drop_max_m = std::max(stats.base_drop_max_m, best_drop);
     }
     // Out of reach even then: the nearest pose is kept and the miss reported (the report's
     // foothold_miss_m_max; the simulator is the judge of whether the dance survives it).

@@ -58,6 +58,7 @@ struct DynamicStats {
   int sqp_iterations_max = 0;
   int windows_not_converged = 0;  // at the iteration cap (their last iterate is used)
   int qp_failures = 0;
+  int rejected_steps = 0;  // steps taken back because the constraint violation grew
   double solve_s = 0.0;
   double foothold_correction_max_m = 0.0;
   double base_drop_max_m = 0.0;  // lowered so a stretched leg reaches its foothold
@@ -80,8 +81,8 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
 
 // The barrier and torque terms added to one stage of the MPC's QP (exposed for the tests):
 // quasi-static joint torques g(q) − J_cᵀf of stage state x and input u (contact corners
-// flagged), and their derivatives with respect to x (leg joints and base orientation by
-// central differences) and to u (exact).
+// flagged), and their derivatives with respect to x (the 3 base Euler angles and the 26
+// joints by forward differences, step 1e-6) and to u (exact).
 struct StageTorque {
   Eigen::Matrix<double, mpc::kNumMpcJoints, 1> tau_Nm;
   Eigen::Matrix<double, mpc::kNumMpcJoints, mpc::kNx> d_dx;
