@@ -97,6 +97,37 @@ std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   return buf;
 }
 
+// Limits joint j's second differences to a_max: frames where |q̈| exceeds it (and 3 frames
+// around) are smoothed by [¼ ½ ¼] passes until none does (at most 200 passes; a
+// straight-line fill is what remains of a jump). Marks the frames it changed; false if none.
+template <class V>
+bool limit_acceleration(std::vector<V>& x, int j, double a_max, double rate_hz, std::vector<bool>& changed) {
+  const int n = static_cast<int>(x.size());
+  const double limit = a_max / (rate_hz * rate_hz);
+  bool any = false;
+  std::vector<double> y(n);
+  std::vector<bool> mark(n);
+  for (int pass = 0; pass < 200; ++pass) {
+    std::fill(mark.begin(), mark.end(), false);
+    bool over = false;
+    for (int i = 1; i + 1 < n; ++i) {
+      if (std::abs(x[i + 1][j] - 2.0 * x[i][j] + x[i - 1][j]) > limit * (1.0 + 1e-9)) {
+        over = true;
+        for (int k = std::max(1, i - 3); k <= std::min(n - 2, i + 3); ++k) mark[k] = true;
+      }
+    }
+    if (!over) break;
+    any = true;
+    for (int i = 0; i < n; ++i) y[i] = x[i][j];
+    for (int i = 1; i + 1 < n; ++i) {
+      if (!mark[i]) continue;
+      x[i][j] = 0.25 * y[i - 1] + 0.5 * y[i] + 0.25 * y[i + 1];
+      changed[i] = true;
+    }
+  }
+  return any;
+}
+
 }  // namespace
 
 const char* to_string(RepairKind k) {
@@ -110,6 +141,7 @@ const char* to_string(RepairKind k) {
     case RepairKind::kTilt: return "tilt";
     case RepairKind::kTail: return "tail";
     case RepairKind::kForcedDouble: return "forced_double_support";
+    case RepairKind::kUpperBodySpeed: return "upper_body_speed";
   }
   return "unknown";
 }
@@ -143,13 +175,14 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
       else if (what == "retime") o.forbid = RepairKind::kRetime;
       else if (what == "stride") o.forbid = RepairKind::kStride;
       else if (what == "turn") o.forbid = RepairKind::kTurn;
+      else if (what == "upper") o.forbid = RepairKind::kUpperBodySpeed;
       else ok = false;
     } else {
       ok = false;
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|all' or 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|all' or 'START_S END_S force double' "
               "(0 <= START_S < END_S)";
       return false;
     }
@@ -533,16 +566,54 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   out.dance_frames = n_dance;
   out.q.resize(n);
   out.contacts.resize(n);
-  ConfigVector q = q_stand;
+  // 5. Arms and head: standing in the lead-in and tail, blended, the dance in between; then
+  // their accelerations limited to what the joints' torques can give (see limit_upper_body).
+  constexpr int kUpper = 7 + 2 * model::kLegJoints;
+  constexpr int kUpperJoints = model::kNq - kUpper;
+  std::vector<Eigen::Matrix<double, kUpperJoints, 1>> upper(n);
   for (int i = 0; i < n; ++i) {
     const int d = dance_frame(i);
-    // Arms and head: standing in the lead-in and tail, blended, the dance in between.
     double w = 1.0;
     if (i < lead) w = i < blend_start ? 0.0 : smooth_step(double(i - blend_start) / (lead - blend_start));
     if (i >= lead + n_dance) w = 1.0 - smooth_step(double(i - lead - n_dance + 1) / std::max(1, tail));
-    constexpr int kUpper = 7 + 2 * model::kLegJoints;
-    q.tail<model::kNq - kUpper>() =
-        q_stand.tail<model::kNq - kUpper>() + w * (geometric[d].tail<model::kNq - kUpper>() - q_stand.tail<model::kNq - kUpper>());
+    upper[i] = q_stand.tail<kUpperJoints>() + w * (geometric[d].tail<kUpperJoints>() - q_stand.tail<kUpperJoints>());
+  }
+  if (cfg.upper_torque_share > 0.0) {
+    dynamics::forward_kinematics(robot, *data, q_stand);
+    dynamics::crba(robot, *data);
+    for (int j = 0; j < kUpperJoints; ++j) {
+      const int joint = kUpper - 7 + j;
+      const double inertia = data->mass_matrix(6 + joint, 6 + joint);
+      const double a_max = cfg.upper_torque_share * robot.limits.torque_Nm[joint] / inertia;
+      std::vector<bool> changed(n, false);
+      std::vector<double> original(n);
+      for (int i = 0; i < n; ++i) original[i] = upper[i][j];
+      if (!limit_acceleration(upper, j, a_max, rate_hz, changed)) continue;
+      for (int i = 0; i < n; ++i) {
+        if (changed[i] && forbidden(RepairKind::kUpperBodySpeed, i)) {  // the override keeps the human's
+          upper[i][j] = original[i];
+          changed[i] = false;
+        }
+      }
+      for (int a = 0; a < n;) {
+        if (!changed[a]) {
+          ++a;
+          continue;
+        }
+        int b = a;
+        while (b < n && changed[b]) ++b;
+        char why[160];
+        std::snprintf(why, sizeof why,
+                      "an arm or head joint accelerates beyond %.0f %% of its torque limit over its inertia: smoothed",
+                      100.0 * cfg.upper_torque_share);
+        log.add(RepairKind::kUpperBodySpeed, a, b, why);
+        a = b;
+      }
+    }
+  }
+  ConfigVector q = q_stand;
+  for (int i = 0; i < n; ++i) {
+    q.tail<kUpperJoints>() = upper[i];
     const Eigen::Quaterniond qb(base_rot[i]);
     q[3] = qb.x(), q[4] = qb.y(), q[5] = qb.z(), q[6] = qb.w();
     std::array<Vec3, model::kNumContactPoints> targets;

@@ -16,6 +16,7 @@
 //    cannot) and turns faster than the hip yaw allows → the foot keeps its touchdown heading,
 //    the relative heading of the next touchdown is limited to the hip-yaw range, so the turn
 //    is carried out by the following steps (stepping turns);
+//  - arm and head accelerations beyond what their joints' torques give → smoothed;
 //  - a motion that does not start standing → a lead-in: the robot stands in double support
 //    on the dance's first footholds, then blends into the dance's first pose; a tail that
 //    ends in double support.
@@ -26,7 +27,7 @@
 // leg gestures stay). Every repair is listed with its time range, kind and reason.
 //
 // Overrides (a text file, like the contact overrides): lines
-//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, or all)
+//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
@@ -62,13 +63,21 @@ struct RepairConfig {
   double max_step_backward_m = 0.30;
   double min_step_width_m = 0.15;
   double max_step_width_m = 0.45;
-  // Relative heading of the two feet (hip yaw leg_l2/r2 range −0.87…0.79 rad, kept 0.2 rad
-  // inside it so the pelvis can sit between them).
-  double max_relative_yaw_rad = 0.55;
+  // Relative heading of the two feet (hip yaw leg_l2/r2 range −0.87…0.79 rad, FACTS.md). The
+  // built-in dance turns with 45° between the feet and dances that in simulation; 0.55 rad
+  // (32°) made the repair lag its turn by up to 139° there (hands 1.3 m off the human's, and
+  // a fall at 25 s while it caught up).
+  double max_relative_yaw_rad = 0.80;
   // A human stance foot turning more than this counts as a pivot [rad].
   double pivot_yaw_rad = 0.35;
   // Base orientation kept within this of the level pose (bending back in ballet) [rad].
   double max_base_tilt_rad = 0.45;
+  // Arm and head joints: the acceleration a joint's torque limit gives its own inertia at the
+  // standing pose, times this share (the rest is left for gravity and the body's motion), is
+  // the most the reference asks of it; 0 turns the limit off. A human arm's snap (the built-
+  // in dance's punches, ~300 rad/s², which the RNEA prices at 146 N·m on a 60 N·m shoulder)
+  // is smoothed over the frames around it.
+  double upper_torque_share = 0.5;
 };
 
 enum class RepairKind : int {
@@ -81,6 +90,7 @@ enum class RepairKind : int {
   kTilt = 6,         // base tilt limited
   kTail = 7,         // both feet brought down at the end
   kForcedDouble = 8, // override: both feet down
+  kUpperBodySpeed = 9,  // arm/head accelerations beyond their torques: smoothed
 };
 const char* to_string(RepairKind k);
 
