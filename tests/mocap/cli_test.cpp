@@ -68,7 +68,7 @@ TEST(mocap_cli, DefaultDanceReportAndMotionFile) {
 // fraction of the weight on average, and every window converged.
 TEST(mocap_cli, DynamicStageReportAndCsv) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
-  ASSERT_EQ(run("--stage dynamic -o " + kOut + "_dyn.motion --report " + kOut + "_dyn.json --dynamic-csv " + kOut +
+  ASSERT_EQ(run("--stage dynamic --figures none -o " + kOut + "_dyn.motion --report " + kOut + "_dyn.json --dynamic-csv " + kOut +
                     "_dyn.csv",
                 "_dyn"),
             0)

@@ -3,14 +3,15 @@
 //   kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]
 //                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
-//                  [--torque-weight W]
+//                  [--torque-weight W] [--figures DIR|none]
 //
 // Geometric retargeting and the contact schedule by default. --stage dynamic adds the
 // feasibility repair and the dynamic retargeting (retarget_dynamic.h). The dynamic stage is
 // not the default yet: its motions do not yet dance better than the geometric ones in the
 // simulator (issue 18's note has the figures); it becomes the default when they do.
 // --torque-weight W turns on the TO's joint-torque hinge (off by default, see
-// dynamic_retarget.h).
+// dynamic_retarget.h). The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
+// into the report's directory, or into --figures DIR (none: no figures).
 // --contacts FILE: lines "start_s end_s flight|left|right|double" replace the automatic labels
 // over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double"
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
@@ -20,6 +21,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -40,7 +42,7 @@ constexpr const char* kUsage =
     "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
     "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
-    "                      [--torque-weight W]\n";
+    "                      [--torque-weight W] [--figures DIR|none]\n";
 
 bool read_text(const std::string& path, std::string& out) {
   std::ifstream in(path, std::ios::binary);
@@ -59,7 +61,7 @@ bool write_text(const std::string& path, const std::string& text) {
 
 int run(int argc, char** argv) {
   std::string input, output, report_path, contacts = "auto", map_path, csv_path, dance_path;
-  std::string stage = "geometric", horizon_text, repairs_path, torque_text;
+  std::string stage = "geometric", horizon_text, repairs_path, torque_text, figures_dir;
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   for (int i = 1; i < argc; ++i) {
@@ -110,6 +112,8 @@ int run(int argc, char** argv) {
       ok = value(repairs_path);
     else if (!std::strcmp(a, "--dynamic-csv"))
       ok = value(dyn_options.csv_path);
+    else if (!std::strcmp(a, "--figures"))
+      ok = value(figures_dir);
     else if (!std::strcmp(a, "--variant")) {
       std::string v;
       ok = value(v);
@@ -132,8 +136,20 @@ int run(int argc, char** argv) {
     }
   }
   if (stage == "geometric" && (!horizon_text.empty() || !repairs_path.empty() || !dyn_options.csv_path.empty() ||
-                               !torque_text.empty())) {
-    std::fprintf(stderr, "kuavo retarget: --horizon, --repairs, --dynamic-csv and --torque-weight apply to --stage dynamic only\n");
+                               !torque_text.empty() || !figures_dir.empty())) {
+    std::fprintf(stderr,
+                 "kuavo retarget: --horizon, --repairs, --dynamic-csv, --torque-weight and --figures apply to --stage "
+                 "dynamic only\n");
+    return 2;
+  }
+  // Figures next to the report unless told otherwise (none without a report).
+  if (figures_dir.empty() && !report_path.empty()) {
+    figures_dir = std::filesystem::path(report_path).parent_path().string();
+    if (figures_dir.empty()) figures_dir = ".";
+  }
+  if (figures_dir != "none") dyn_options.plots_dir = figures_dir;
+  if (stage == "dynamic" && !dyn_options.plots_dir.empty() && !std::filesystem::is_directory(dyn_options.plots_dir)) {
+    std::fprintf(stderr, "kuavo retarget: --figures %s: not a directory\n", dyn_options.plots_dir.c_str());
     return 2;
   }
   if (!repairs_path.empty()) {
@@ -307,6 +323,11 @@ int run(int argc, char** argv) {
         d["dynamic"]["torque_violations"].get<int>(), d["geometric"]["torque_violations"].get<int>(),
         d["dynamic"]["friction_violations"].get<int>(), d["dynamic"]["zmp_outside_m_max"].get<double>(),
         d["geometric"]["zmp_outside_m_max"].get<double>());
+    if (d.contains("figures")) {
+      std::printf("kuavo retarget: figures in %s:", dyn_options.plots_dir.c_str());
+      for (const auto& f : d["figures"]) std::printf(" %s", f.get<std::string>().c_str());
+      std::printf("\n");
+    }
   }
   return 0;
 }

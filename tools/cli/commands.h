@@ -8,6 +8,7 @@ int run_model(int argc, char** argv);  // kuavo model [--variant s45|s42] [--mas
 int run_demo(int argc, char** argv);   // kuavo demo: the main job
 int run_simulate(int argc, char** argv);  // kuavo simulate --stand SECONDS ...
 int run_retarget(int argc, char** argv);  // kuavo retarget [IN.bvh] -o OUT.motion ... --report R.json
+int run_retarget_sweep(int argc, char** argv);  // kuavo retarget-sweep [IN.bvh] --out DIR [--horizons S,...]
 int run_campaign(int argc, char** argv);  // kuavo campaign SPEC.json [--out DIR] [--seeds N] | --example
 
 }  // namespace kuavo::cli

@@ -18,6 +18,8 @@ constexpr Command kCommands[] = {
      "simulate --stand SECONDS [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N] --log CSV --summary JSON"},
     {"demo", kuavo::cli::run_demo, "demo [--out DIR]                                 the main job"},
     {"retarget", kuavo::cli::run_retarget, "retarget [IN.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|FILE] --report R.json"},
+    {"retarget-sweep", kuavo::cli::run_retarget_sweep,
+     "retarget-sweep [IN.bvh] --out DIR [--horizons 0.2,0.4,...,1.4]   dynamic stage per TO horizon (Fig. 6)"},
     {"campaign", kuavo::cli::run_campaign,
      "campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] | --example   runs over seeds"},
 };

@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 
+#include "tools/cli/retarget_figures.h"
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/motion_metrics.h"
 #include "tools/mocap/motion_plan_io.h"
@@ -138,6 +139,18 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   }
   d["repairs"] = repairs;
   d["steps"] = {{"human", result.repaired.human_steps}, {"robot", result.repaired.robot_steps}};
+  if (!options.plots_dir.empty()) {
+    RetargetFigures figures;
+    if (!write_retarget_figures(robot, {geometric.q, geometric.contacts, geo_check},
+                                {result.q, result.contacts, dyn_check}, result.repaired.lead_frames, rate,
+                                options.plots_dir, figures, error)) {
+      return 1;
+    }
+    d["figures"] = figures.files;
+    ordered_json numbers;
+    for (const FigureNumber& n : figures.numbers) numbers[n.name] = {{"geometric", n.geometric}, {"dynamic", n.dynamic}};
+    d["figure_numbers"] = numbers;
+  }
   report["dynamic"] = d;
 
   if (!options.csv_path.empty() &&

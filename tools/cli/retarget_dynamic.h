@@ -21,7 +21,7 @@ struct DynamicStageOptions {
   std::vector<mocap::RepairOverride> overrides;
   mocap::DynamicRetargetConfig dynamic;
   std::string csv_path;   // the dynamic trajectory, "" = none
-  std::string plots_dir;  // Fig. 4 / 5 SVGs, "" = none
+  std::string plots_dir;  // Fig. 4 / 5 SVGs (retarget_figures.h), "" = none; the directory must exist
 };
 
 struct DynamicStageResult {
