@@ -21,8 +21,8 @@ const char* dance_motion_start_standing(const model::Model& robot, dynamics::Dat
   return nullptr;
 }
 
-bool load_dance_motion(const std::string& path, const model::Model& robot, planner::MotionPlan& plan,
-                       planner::BalanceFilterReport& report, std::string& error) {
+bool load_dance_motion(const std::string& path, const model::Model& robot, bool balance_filter,
+                       planner::MotionPlan& plan, planner::BalanceFilterReport& report, std::string& error) {
   // mocap's loader checks magic, version, both checksums, variant, layout, labels, length.
   if (!mocap::load_motion_plan(path, robot, plan, error)) return false;
   auto data = std::make_unique<dynamics::Data>();
@@ -30,6 +30,8 @@ bool load_dance_motion(const std::string& path, const model::Model& robot, plann
     error = path + ": " + why;
     return false;
   }
+  report = planner::BalanceFilterReport{};
+  if (!balance_filter) return true;
   auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
   if (const char* why = planner::balance_filter(robot, planner::BalanceFilterConfig{}, plan, *ws, report)) {
     error = path + ": " + why;  // the filter's messages name it

@@ -37,6 +37,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
+    "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the leg drives' CiA 402 mode (firmware/README.md, leg binding). csp\n"
     "                       (default): the drives close the leg PD in their own loop (gains written\n"
@@ -54,6 +55,8 @@ constexpr const char* kUsage =
     "                       sensors simulated from the motion through emulated buses; prints\n"
     "                       p50/p99/p99.99/max per stage and deadline misses. Run before every show\n"
     "  --evict-cache        with --timing: write 64 MB before each control tick (cold caches)\n"
+    "  --balance-filter on|off  cart-table ZMP filter of the dance at load (default off: `kuavo\n"
+    "                       retarget`'s dynamic stage makes feasible motions; on for --stage geometric)\n"
     "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file,\n"
     "            3 --timing: a deadline was missed, 4 --timing: the dance did not run to its end\n"
     "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
@@ -138,6 +141,7 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
 
 int main(int argc, char** argv) {
   std::string config_path, dance_path;
+  bool balance_filter = false;
   bool timing = false, evict_cache = false;
   bool check = false, require_rt = false, stand = false, csp_legs = true;
   for (int i = 1; i < argc; ++i) {
@@ -159,6 +163,14 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(a, "--require-rt")) require_rt = true;
     else if (!std::strcmp(a, "--stand")) stand = true;
     else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
+    else if (!std::strcmp(a, "--balance-filter") && i + 1 < argc) {
+      const char* v = argv[++i];
+      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) {
+        std::fprintf(stderr, "kuavo_fw: --balance-filter must be on or off, got '%s'\n%s", v, kUsage);
+        return 2;
+      }
+      balance_filter = !std::strcmp(v, "on");
+    }
     else if (!std::strcmp(a, "--timing") && i + 1 < argc) dance_path = argv[++i], timing = true;
     else if (!std::strcmp(a, "--evict-cache")) evict_cache = true;
     else {
@@ -205,7 +217,7 @@ int main(int argc, char** argv) {
   static fw::DancePlanner planner;  // the MPC workspace, ~15 MB
   if (!dance_path.empty()) {
     kuavo::planner::BalanceFilterReport report;
-    if (!fw::load_dance_motion(dance_path, model, motion, report, msg)) {
+    if (!fw::load_dance_motion(dance_path, model, balance_filter, motion, report, msg)) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", msg.c_str());
       return 2;
     }
@@ -215,9 +227,10 @@ int main(int argc, char** argv) {
       return 2;
     }
     fw::dance_set_ankle_motors(dance, drivers);  // the WBC plans what the ankle motors can deliver
-    std::printf("dance: %s, %d frames at %.0f Hz (%.2f s); balance filter moved the CoM by up to %.3f m\n",
-                dance_path.c_str(), motion.frame_count, motion.rate_hz, kuavo::planner::motion_plan_duration_s(motion),
-                report.max_correction_m);
+    std::printf("dance: %s, %d frames at %.0f Hz (%.2f s)", dance_path.c_str(), motion.frame_count, motion.rate_hz,
+                kuavo::planner::motion_plan_duration_s(motion));
+    if (balance_filter) std::printf("; balance filter moved the CoM by up to %.3f m", report.max_correction_m);
+    std::printf("\n");
   }
   if (check) {
     print_plan(drivers, loads);

@@ -29,13 +29,14 @@ namespace {
 constexpr const char* kUsage =
     "usage: kuavo_fw_sim [--dance MOTION_FILE | --stand SECONDS] [--config FILE] [--legs csp|cst]\n"
     "                    [--ground floor|carpet] [--seed N] [--push T:FX,FY,FZ:DURATION]\n"
-    "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json]\n"
+    "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
     "                       finish, damping\n"
     "  --stand SECONDS      no motion: stand up and stand this long (default 5)\n"
     "  --config FILE        drivers configuration (kuavo_fw's JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the leg drives' CiA 402 mode (default csp; firmware/README.md)\n"
+    "  --balance-filter on|off  as kuavo_fw (default off)\n"
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
     "  --plan-latency-ms MS the planning task's plan applied this long after its state (default 4)\n"
@@ -71,6 +72,7 @@ int main(int argc, char** argv) {
   cfg.loop.legs = sitl::LegBinding::kCsp;
   cfg.loop.seed = 1;
   std::string dance_path, config_path, summary_path;
+  bool balance_filter = false;
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -87,6 +89,9 @@ int main(int argc, char** argv) {
       config_path = v;
     } else if (!std::strcmp(a, "--legs")) {
       if (!sitl::parse_leg_binding(v, cfg.loop.legs)) return bad("--legs must be csp or cst, got", v);
+    } else if (!std::strcmp(a, "--balance-filter")) {
+      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got", v);
+      balance_filter = !std::strcmp(v, "on");
     } else if (!std::strcmp(a, "--ground")) {
       if (!kuavo::sim::parse_ground(v, cfg.loop.ground)) return bad("--ground must be floor or carpet, got", v);
     } else if (!std::strcmp(a, "--seed")) {
@@ -130,13 +135,14 @@ int main(int argc, char** argv) {
   if (!dance_path.empty()) {
     kuavo::planner::BalanceFilterReport report;
     std::string msg;
-    if (!fw::load_dance_motion(dance_path, model, *motion, report, msg)) {
+    if (!fw::load_dance_motion(dance_path, model, balance_filter, *motion, report, msg)) {
       std::fprintf(stderr, "kuavo_fw_sim: --dance: %s\n", msg.c_str());
       return 2;
     }
-    std::fprintf(stderr, "dance: %s, %d frames at %.0f Hz (%.2f s); balance filter moved the CoM by up to %.3f m\n",
-                 dance_path.c_str(), motion->frame_count, motion->rate_hz,
-                 kuavo::planner::motion_plan_duration_s(*motion), report.max_correction_m);
+    std::fprintf(stderr, "dance: %s, %d frames at %.0f Hz (%.2f s)", dance_path.c_str(), motion->frame_count,
+                 motion->rate_hz, kuavo::planner::motion_plan_duration_s(*motion));
+    if (balance_filter) std::fprintf(stderr, "; balance filter moved the CoM by up to %.3f m", report.max_correction_m);
+    std::fprintf(stderr, "\n");
   }
   cfg.count_allocations = &kuavo::test::thread_allocation_count;
 

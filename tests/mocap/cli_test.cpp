@@ -34,7 +34,7 @@ int run(const std::string& args, const std::string& tag) {
 
 TEST(mocap_cli, DefaultDanceReportAndMotionFile) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
-  ASSERT_EQ(run("-o " + kOut + ".motion --variant s42 --report " + kOut + ".json", "_dance"), 0)
+  ASSERT_EQ(run("--stage geometric -o " + kOut + ".motion --variant s42 --report " + kOut + ".json", "_dance"), 0)
       << slurp(kOut + "_dance.stderr");
   const auto report = nlohmann::json::parse(slurp(kOut + ".json"));
   for (const char* key : {"frames", "duration_s", "keypoint_pos_err_m", "foot_slide_m_per_s_max", "penetration_m_max",
@@ -61,14 +61,14 @@ TEST(mocap_cli, DefaultDanceReportAndMotionFile) {
   EXPECT_FALSE(load_motion_file(kOut + ".motion", s45, h, q, labels, error));  // made for s42
 }
 
-// --stage dynamic on the built-in dance: the report's "dynamic" object with the keys,
+// The default (dynamic) stage on the built-in dance: the report's "dynamic" object with the keys,
 // the geometric and dynamic results side by side, the repairs with their ranges, and the
 // dynamic CSV. The invariants asserted are the TO's constraints as the independent oracle
 // (dynamics_check, RNEA) sees them: the base wrench the TO's forces leave unexplained is a
 // fraction of the weight on average, and every window converged.
 TEST(mocap_cli, DynamicStageReportAndCsv) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
-  ASSERT_EQ(run("--stage dynamic --figures none -o " + kOut + "_dyn.motion --report " + kOut + "_dyn.json --dynamic-csv " + kOut +
+  ASSERT_EQ(run("--figures none -o " + kOut + "_dyn.motion --report " + kOut + "_dyn.json --dynamic-csv " + kOut +
                     "_dyn.csv",
                 "_dyn"),
             0)
@@ -113,7 +113,8 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, d["frames"].get<int>());
   // The dynamic-only options are refused with the geometric stage.
-  EXPECT_EQ(run("-o " + kOut + "_x.motion --report " + kOut + "_x.json --horizon 0.8", "_geo_horizon"), 2);
+  EXPECT_EQ(run("--stage geometric -o " + kOut + "_x.motion --report " + kOut + "_x.json --horizon 0.8", "_geo_horizon"),
+            2);
   EXPECT_NE(slurp(kOut + "_geo_horizon.stderr").find("--stage dynamic only"), std::string::npos);
   EXPECT_EQ(run("--stage dynamic -o " + kOut + "_x.motion --report " + kOut + "_x.json --horizon 2", "_bad_horizon"), 2);
   EXPECT_NE(slurp(kOut + "_bad_horizon.stderr").find("[0.2, 1.4]"), std::string::npos);

@@ -1,8 +1,10 @@
 // kuavo demo [--out DIR] [--planner mpc|kinematic]: the main job. The built-in dance
 // through the whole pipeline into the simulator, with a report folder:
 //   1. the built-in human dance (BVH, generated) -> geometric retargeting -> contact
-//      schedule -> dance.motion (+ CSV, retarget_report.json);
-//   2. the balance filter, then the online stack (estimator, centroidal RTI-MPC at 50 Hz,
+//      schedule -> feasibility repair -> dynamic retargeting -> dance.motion (+ CSV,
+//      retarget_report.json, fig4_knee.svg, fig5_dynamics.svg); with --planner kinematic the
+//      geometric stage only, then the balance filter;
+//   2. the online stack (estimator, centroidal RTI-MPC at 50 Hz,
 //      WBC at 500 Hz) dancing it on the Simbody plant: floor, and carpet with the MPC
 //      horizon at 1.2 s and at 0.6 s — the paper's horizon experiment, with the knee
 //      trajectories and foot placements of both (dance_*.csv/json/svg, horizon_*.svg);
@@ -101,19 +103,19 @@ int run_demo(int argc, char** argv) {
   }
   ::mkdir(out.c_str(), 0755);
   std::printf("== 1/5 retargeting the built-in dance\n");
-  if (const int rc = call(run_retarget, {"retarget", "-o", out + "/dance.motion", "--csv", out + "/dance.csv",
-                                         "--dance-bvh", out + "/dance.bvh", "--report", out + "/retarget_report.json"});
-      rc != 0) {
-    return rc;
-  }
+  const bool kinematic = planner_kind == stack::PlannerKind::kKinematic;
+  std::vector<std::string> retarget_args = {"retarget", "-o", out + "/dance.motion", "--csv", out + "/dance.csv",
+                                            "--dance-bvh", out + "/dance.bvh", "--report", out + "/retarget_report.json"};
+  if (kinematic) retarget_args.insert(retarget_args.end(), {"--stage", "geometric"});
+  if (const int rc = call(run_retarget, retarget_args); rc != 0) return rc;
   auto robot = std::make_unique<model::Model>();
   if (model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, *robot) != model::ModelError::kOk) return 1;
   auto dance = std::make_unique<planner::MotionPlan>();
   auto steps = std::make_unique<planner::MotionPlan>();
   std::string error;
   planner::BalanceFilterReport filter;
-  if (!mocap::load_motion_plan(out + "/dance.motion", *robot, *dance, error) || !filter_motion_plan(*robot, *dance, filter, error) ||
-      !make_step_plan(*robot, 20, *steps, error)) {
+  if (!mocap::load_motion_plan(out + "/dance.motion", *robot, *dance, error) ||
+      (kinematic && !filter_motion_plan(*robot, *dance, filter, error)) || !make_step_plan(*robot, 20, *steps, error)) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 1;
   }
@@ -159,7 +161,8 @@ int run_demo(int argc, char** argv) {
   std::printf("== 5/5 report\n");
   std::ofstream md(out + "/REPORT.md");
   md << "# Kuavo 4Pro demo report\n\n"
-     << "Pipeline: built-in human dance (BVH) → geometric retargeting → contact schedule → balance filter "
+     << "Pipeline: built-in human dance (BVH) → geometric retargeting → contact schedule → "
+     << (kinematic ? "balance filter " : "feasibility repair → dynamic retargeting (trajectory optimization) ")
      << "→ online stack in the Simbody simulator (state estimator, " << stack::to_string(planner_kind)
      << " planner at 50 Hz, whole-body control at 500 Hz, drive PD + feed-forward torque).\n\n"
      << "## Closed-loop runs\n\n"
@@ -211,11 +214,17 @@ int run_demo(int argc, char** argv) {
      << "Horizon 1.2 s: " << outcome(long_h) << "; horizon 0.6 s: " << outcome(short_h)
      << ". Knee trajectories: `horizon_knee.svg`; foot placements: `horizon_feet.svg`.\n\n"
      << "![knee](horizon_knee.svg)\n\n![feet](horizon_feet.svg)\n\n";
-  md << "## Balance filter on the dance\n\n"
-     << "CoM corrected by up to " << filter.max_correction_m << " m; cart-table ZMP outside the support up to "
-     << filter.zmp_outside_before_m << " m before, " << filter.zmp_outside_after_m << " m after; "
-     << filter.frames_in_flight << " frames in flight.\n\n"
-     << "## Retargeting the built-in dance (`dance.motion`, `dance.csv`, `dance.bvh`)\n\n```json\n"
+  if (kinematic) {
+    md << "## Balance filter on the dance\n\n"
+       << "CoM corrected by up to " << filter.max_correction_m << " m; cart-table ZMP outside the support up to "
+       << filter.zmp_outside_before_m << " m before, " << filter.zmp_outside_after_m << " m after; "
+       << filter.frames_in_flight << " frames in flight.\n\n";
+  } else {
+    md << "## Dynamic retargeting (the paper's Figs. 4 and 5, geometric vs dynamic)\n\n"
+       << "The numbers are in `retarget_report.json` → `dynamic` (RNEA oracle, repairs, expressiveness).\n\n"
+       << "![Fig. 4](fig4_knee.svg)\n\n![Fig. 5](fig5_dynamics.svg)\n\n";
+  }
+  md << "## Retargeting the built-in dance (`dance.motion`, `dance.csv`, `dance.bvh`)\n\n```json\n"
      << slurp(out + "/retarget_report.json") << "\n```\n\n"
      << "## Standing, 10 N·s forward push at t = 5 s\n\n";
   for (const char* ground : {"floor", "carpet"}) {

@@ -7,6 +7,9 @@
 //                --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
+// Defaults: the MPC planner, no balance filter (the motions of `kuavo retarget`'s dynamic
+// stage are dynamically feasible; the filter, a cart-table ZMP preview, is kept for
+// geometric-stage motions and the kinematic planner: --balance-filter on).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -59,11 +62,12 @@ int usage() {
 
 int run_simulate(int argc, char** argv) {
   sim::MotionRunConfig motion_cfg;
+  motion_cfg.stack.planner = stack::PlannerKind::kMpc;
   sim::RunConfig& cfg = motion_cfg.run;
   std::string motion_path;
   int steps = -1;
   bool duration_given = false;
-  bool balance_filter = true;
+  bool balance_filter = false;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path;
