@@ -377,6 +377,89 @@ TEST(mocap_dynamic_retarget, SlowWeightShiftComesBackNearlyUnchanged) {
   EXPECT_EQ(out.stats.qp_failures, 0);
 }
 
+// One window's converged solution against the OCP's first-order conditions, with the MPC's
+// own QP builder and solver as the oracle: a 1 s weight shift retargeted as a single window
+// (commit_stages = T) to a tight step tolerance; the QP built afresh at the committed stage
+// trajectory must (1) find the nonlinear constraints satisfied there (dynamics defects b and
+// the stance rows' residuals e, which the build evaluates from the model), (2) be solved to
+// its KKT conditions (stationarity and primal, checked here from the stage matrices), and
+// (3) ask for no step: the point is a fixed point of the SQP, so the QP's multipliers make the
+// NLP's Lagrangian stationary. The TO adds joint-velocity barriers the MPC build does not
+// have: their gradient at these speeds (≤ 0.2 rad/s against ≥ 10 rad/s limits, μ = 0.01)
+// moves the step by ~1e-4 at most, hence the 1e-3 bound on (3).
+TEST(mocap_dynamic_retarget, ConvergedWindowSatisfiesTheKktConditions) {
+  const int n = 101;  // 1.0 s: one 1.0 s window of 50 stages
+  const Motion shift = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.base_shift.y() = 0.03 * 0.5 * (1.0 - std::cos(2.0 * M_PI * i / (n - 1)));
+    return k;
+  });
+  const auto plan = plan_of(shift.q, shift.labels);
+  DynamicRetargetConfig cfg;
+  const int T = static_cast<int>(std::lround(cfg.ocp.horizon_s / cfg.ocp.dt_s));
+  cfg.commit_stages = T;
+  cfg.step_tolerance = 1e-7;
+  DynamicResult out;
+  std::string error;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, cfg, out, error)) << error;
+  ASSERT_EQ(out.stats.windows, 1);
+  ASSERT_EQ(out.stats.windows_not_converged, 0);
+  ASSERT_EQ(static_cast<int>(out.stage_x.size()), T + 1);
+
+  auto ws = std::make_unique<mpc::MpcWorkspace>();
+  mpc::mpc_init(robot(), cfg.ocp, *ws);
+  auto window = std::make_unique<planner::PlanWindow>();
+  planner::motion_plan_window_rt(robot(), scratch(), *plan, plan->start_ns, cfg.ocp.dt_s, T + 1, *window);
+  ws->warm = true;  // linearize at the committed trajectory, unshifted
+  ws->last_stamp_ns = window->knots[0].stamp_ns;
+  for (int k = 0; k <= T; ++k) {
+    ws->x[k] = out.stage_x[k];
+    ws->u[k] = out.stage_u[k];
+  }
+  ASSERT_EQ(mpc::mpc_build_qp_from_state_rt(robot(), cfg.ocp, *ws, out.stage_x[0], *window), mpc::MpcStatus::kOk);
+  double defect = 0.0, residual = 0.0;
+  for (int k = 0; k < T; ++k) {
+    const auto& st = ws->qp.stages[k];
+    defect = std::max(defect, st.b.cwiseAbs().maxCoeff());
+    if (st.num_eq > 0) residual = std::max(residual, st.e.head(st.num_eq).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(defect, 1e-6) << "dynamics defects at the converged point";
+  EXPECT_LT(residual, 1e-6) << "stance rows at the converged point";
+  ASSERT_EQ(mpc::mpc_solve_qp_rt(*ws), mpc::MpcStatus::kOk);
+  const auto& qp = ws->qp;
+  const auto& sol = ws->solution;
+  double stat = (sol.x[0] - qp.x_initial).cwiseAbs().maxCoeff(), primal = stat, step = 0.0;
+  for (int k = 0; k <= T; ++k) {
+    const auto& st = qp.stages[k];
+    Eigen::Matrix<double, kNx, 1> gx = st.Q * sol.x[k] + st.q - sol.costate[k];
+    step = std::max(step, sol.x[k].cwiseAbs().maxCoeff());
+    if (k < T) {
+      const int ne = st.num_eq;
+      gx += st.S.transpose() * sol.u[k] + st.A.transpose() * sol.costate[k + 1];
+      Eigen::Matrix<double, kNu, 1> gu = st.R * sol.u[k] + st.S * sol.x[k] + st.r + st.B.transpose() * sol.costate[k + 1];
+      if (ne > 0) {
+        gx += st.C.topRows(ne).transpose() * sol.nu[k].head(ne);
+        gu += st.D.topRows(ne).transpose() * sol.nu[k].head(ne);
+        primal = std::max(primal, (st.C.topRows(ne) * sol.x[k] + st.D.topRows(ne) * sol.u[k] - st.e.head(ne)).cwiseAbs().maxCoeff());
+      }
+      primal = std::max(primal, (st.A * sol.x[k] + st.B * sol.u[k] + st.b - sol.x[k + 1]).cwiseAbs().maxCoeff());
+      stat = std::max(stat, gu.cwiseAbs().maxCoeff());
+      step = std::max(step, sol.u[k].tail<mpc::kNumMpcJoints>().cwiseAbs().maxCoeff());
+      step = std::max(step, sol.u[k].head<3 * kCorners>().cwiseAbs().maxCoeff() / weight_N());
+    }
+    if (k > 0) stat = std::max(stat, gx.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(stat, 1e-8);
+  EXPECT_LT(primal, 1e-9);
+  EXPECT_LT(step, 1e-3) << "the committed trajectory is not a fixed point of the OCP's SQP";
+  RecordProperty("defect", number(defect));
+  RecordProperty("stance_residual", number(residual));
+  RecordProperty("qp_stationarity", number(stat));
+  RecordProperty("step", number(step));
+  std::printf("KKT at the converged window: defects %.2e, stance rows %.2e, QP stationarity %.2e, primal %.2e, step %.2e\n",
+              defect, residual, stat, primal, step);
+}
+
 // A brisk plié bounce (pelvis 4 cm down and up, 1.5 Hz, three times, feet planted): the floor
 // pushes m(g + z̈) with z̈ up to 0.02·(3π)² ≈ 1.8 m/s² (±98 N). The optimization's forces,
 // interpolated to the frames, must be the ones the motion's own accelerations need — the

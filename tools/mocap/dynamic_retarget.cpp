@@ -433,6 +433,9 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
   }
   xs[S] = x0;
   us[S] = us[S - 1];
+  out.stage_x = xs;
+  out.stage_u = us;
+  out.stage_head = heads;
   stats.sqp_iterations_mean = stats.windows > 0 ? static_cast<double>(iterations_total) / stats.windows : 0.0;
 
   // Stages → frames: Catmull-Rom through the stage poses (smooth accelerations for the

@@ -70,6 +70,11 @@ struct DynamicResult {
   std::vector<dynamics::ConfigVector> q;                     // frames at the plan's rate
   std::vector<ContactLabel> contacts;
   std::vector<Eigen::Matrix<double, 3 * model::kNumContactPoints, 1>> forces_N;  // per frame, world
+  // The committed stage trajectory itself (S + 1 states, S inputs + a copy, dt = ocp.dt_s),
+  // before the interpolation to frames and the foothold IK.
+  std::vector<mpc::StateVector> stage_x;
+  std::vector<mpc::InputVector> stage_u;
+  std::vector<mpc::HeadVector> stage_head;
   DynamicStats stats;
 };
 
