@@ -184,8 +184,14 @@ TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
   std::printf("%s", r.output.c_str());
   EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.output;
   EXPECT_NE(r.output.find("dance ran to its end"), std::string::npos) << r.output;
-  for (const char* stage : {"drivers", "estimator", "wbc", "output", "cycle"}) EXPECT_EQ(stage_samples(r.output, stage), 1750) << stage;
-  EXPECT_NEAR(stage_samples(r.output, "mpc"), 175, 2);
+  // 2 s at 500 Hz is 1750 ticks with the stack; on a loaded machine an overrun of the control
+  // task skips ticks (measured in a parallel CI run: 1 overrun, 1748 ticks), which is a timing
+  // figure, not an error here: every stage counts the same ticks, within 2 % of 1750.
+  const int ticks = stage_samples(r.output, "cycle");
+  EXPECT_LE(ticks, 1750);
+  EXPECT_GE(ticks, 1715);
+  for (const char* stage : {"drivers", "estimator", "wbc", "output"}) EXPECT_EQ(stage_samples(r.output, stage), ticks) << stage;
+  EXPECT_NEAR(stage_samples(r.output, "mpc"), 175, 5);
   EXPECT_EQ(r.exit_code == 3, r.output.find("deadline misses") != std::string::npos) << r.output;
   r = run_fw("--timing /nonexistent/dance.motion");
   EXPECT_EQ(r.exit_code, 2) << r.output;
