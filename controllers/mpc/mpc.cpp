@@ -24,18 +24,6 @@ StateVector state_error(const StateVector& x, const StateVector& x_ref) {
   return d;
 }
 
-// OCS2's relaxed log barrier B(h) = −μ ln h for h > δ, else the quadratic that matches value,
-// slope and curvature at δ. Returns B'(h) and B''(h).
-void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
-  if (h > delta) {
-    d1 = -mu / h;
-    d2 = mu / (h * h);
-  } else {
-    d1 = mu * (h - 2.0 * delta) / (delta * delta);
-    d2 = mu / (delta * delta);
-  }
-}
-
 // The knot values the reference state and inputs are made of (reference_forces and
 // state_from_configuration): equal values, equal results.
 bool same_reference_knot(const planner::PlanKnot& a, const planner::PlanKnot& b) {
@@ -661,6 +649,16 @@ MpcStatus mpc_step_rt(const model::Model& model, const MpcConfig& config, MpcWor
   if (status == MpcStatus::kOk) status = mpc_solve_qp_rt(ws);
   mpc_write_plan_rt(model, config, ws, reference, status, out);
   return status;
+}
+
+void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
+  if (h > delta) {
+    d1 = -mu / h;
+    d2 = mu / (h * h);
+  } else {
+    d1 = mu * (h - 2.0 * delta) / (delta * delta);
+    d2 = mu / (delta * delta);
+  }
 }
 
 }  // namespace kuavo::mpc

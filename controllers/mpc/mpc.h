@@ -235,6 +235,11 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
                                      const StateVector& x_initial, const planner::PlanWindow& reference);
 // (2) solve ws.qp into ws.solution and apply the step to ws.x, ws.u;
 MpcStatus mpc_solve_qp_rt(MpcWorkspace& ws);
+
+// OCS2's relaxed log barrier B(h) = −μ ln h for h > δ, else the quadratic that matches value,
+// slope and curvature at δ: B'(h) into d1, B''(h) into d2 (the MPC's joint-limit and friction
+// terms; the offline TO's joint-velocity terms).
+void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2);
 // (3) fill the plan from the updated trajectory (count 0 unless status is kOk).
 void mpc_write_plan_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
                        const planner::PlanWindow& reference, MpcStatus status, MpcPlan& out);

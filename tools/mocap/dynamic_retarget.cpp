@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/leg_ik_lm.h"
 
 namespace kuavo::mocap {
@@ -49,31 +50,6 @@ constexpr int kMaxRestarts = 3;
 // Step rejection: violation after a step above growth × before + slack (see the loop).
 constexpr double kViolationGrowth = 1.5;
 constexpr double kViolationSlack = 0.02;
-
-// OCS2's relaxed log barrier (as controllers/mpc): B'(h), B''(h).
-void relaxed_barrier(double h, double mu, double delta, double& d1, double& d2) {
-  if (h > delta) {
-    d1 = -mu / h;
-    d2 = mu / (h * h);
-  } else {
-    d1 = mu * (h - 2.0 * delta) / (delta * delta);
-    d2 = mu / (delta * delta);
-  }
-}
-
-// Generalized velocity taking qa to qb in dt (conventions.h: base twist in qa's base axes).
-VelocityVector config_rate(const ConfigVector& qa, const ConfigVector& qb, double dt) {
-  VelocityVector v;
-  const Eigen::Quaterniond ra(qa[6], qa[3], qa[4], qa[5]), rb(qb[6], qb[3], qb[4], qb[5]);
-  const Mat3 r = ra.toRotationMatrix();
-  v.head<3>() = r.transpose() * (qb.head<3>() - qa.head<3>()) / dt;
-  Eigen::Quaterniond dq = ra.conjugate() * rb;
-  if (dq.w() < 0.0) dq.coeffs() *= -1.0;  // the short way round (q and −q are one rotation)
-  const Eigen::AngleAxisd d(dq);
-  v.segment<3>(3) = d.angle() * d.axis() / dt;
-  v.tail<model::kNumJoints>() = (qb.tail<model::kNumJoints>() - qa.tail<model::kNumJoints>()) / dt;
-  return v;
-}
 
 // Uniform Catmull-Rom between p1 (s = 0) and p2 (s = 1).
 template <class V>
@@ -289,8 +265,8 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
         const ConfigVector qk = mpc::configuration_from_state(ws->x[k], ws->head_rad[k]);
         const ConfigVector qn = mpc::configuration_from_state(ws->x[k + 1], ws->head_rad[k + 1]);
         const ConfigVector qp = k > 0 ? mpc::configuration_from_state(ws->x[k - 1], ws->head_rad[k - 1]) : qk;
-        const VelocityVector v_out = config_rate(qk, qn, dt);
-        const VelocityVector v_in = k > 0 ? config_rate(qp, qk, dt) : v_out;
+        const VelocityVector v_out = mocap::config_rate(qk, qn, dt);
+        const VelocityVector v_in = k > 0 ? mocap::config_rate(qp, qk, dt) : v_out;
         const VelocityVector v = 0.5 * (v_in + v_out);
         const VelocityVector a = k > 0 ? VelocityVector((v_out - v_in) / dt) : VelocityVector::Zero();
         dynamics::forward_kinematics(robot, *data, qk);
@@ -333,8 +309,8 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
           const int col = mpc::kUJointVelocity + j;
           const double w = ws->u[k][col];
           double d1a, d2a, d1b, d2b;
-          relaxed_barrier(vel_limit[j] - w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1a, d2a);
-          relaxed_barrier(vel_limit[j] + w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1b, d2b);
+          mpc::relaxed_barrier(vel_limit[j] - w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1a, d2a);
+          mpc::relaxed_barrier(vel_limit[j] + w, cfg.velocity_barrier_mu, cfg.velocity_barrier_delta_rad_s, d1b, d2b);
           stage.R(col, col) += dt * (d2a + d2b);
           stage.r[col] += dt * (d1b - d1a);
         }

@@ -21,7 +21,9 @@ constexpr int kPoints = model::kNumContactPoints;
 // Tikhonov term of the least-norm force distribution [relative to J Jᵀ's O(1) entries].
 constexpr double kDistributionRegularization = 1e-9;
 
-VelocityVector rate(const ConfigVector& qa, const ConfigVector& qb, double dt) {
+}  // namespace
+
+VelocityVector config_rate(const ConfigVector& qa, const ConfigVector& qb, double dt) {
   VelocityVector v;
   const Eigen::Quaterniond ra(qa[6], qa[3], qa[4], qa[5]), rb(qb[6], qb[3], qb[4], qb[5]);
   v.head<3>() = ra.toRotationMatrix().transpose() * (qb.head<3>() - qa.head<3>()) / dt;
@@ -33,7 +35,6 @@ VelocityVector rate(const ConfigVector& qa, const ConfigVector& qb, double dt) {
   return v;
 }
 
-}  // namespace
 
 void frame_rates(const std::vector<ConfigVector>& q, double rate_hz, std::vector<VelocityVector>& v,
                  std::vector<VelocityVector>& a) {
@@ -42,7 +43,7 @@ void frame_rates(const std::vector<ConfigVector>& q, double rate_hz, std::vector
   v.assign(n, VelocityVector::Zero());
   a.assign(n, VelocityVector::Zero());
   for (int i = 1; i + 1 < n; ++i) {
-    const VelocityVector in = rate(q[i - 1], q[i], dt), out = rate(q[i], q[i + 1], dt);
+    const VelocityVector in = config_rate(q[i - 1], q[i], dt), out = config_rate(q[i], q[i + 1], dt);
     v[i] = 0.5 * (in + out);
     a[i] = (out - in) / dt;
   }

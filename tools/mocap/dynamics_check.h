@@ -47,6 +47,10 @@ void check_dynamics(const model::Model& robot, const std::vector<dynamics::Confi
                     const std::vector<ContactLabel>& contacts, double rate_hz, const std::vector<ForceVector>* forces,
                     double friction_coefficient, DynamicsCheck& out);
 
+// The generalized velocity taking qa to qb in dt (conventions.h: base twist in qa's base axes;
+// the rotation the short way round).
+dynamics::VelocityVector config_rate(const dynamics::ConfigVector& qa, const dynamics::ConfigVector& qb, double dt);
+
 // Generalized velocities and accelerations of frames by finite differences (as above).
 void frame_rates(const std::vector<dynamics::ConfigVector>& q, double rate_hz,
                  std::vector<dynamics::VelocityVector>& v, std::vector<dynamics::VelocityVector>& a);
