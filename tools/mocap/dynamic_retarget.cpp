@@ -261,7 +261,9 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
       // The dynamic part of the torques (M q̈ + C q̇) of the current iterate, held fixed.
       // The last stage's acceleration would involve x_T, which only u_{T−1} sets: a lag there
       // feeds back on itself (the iteration then walks off along x_T); it takes stage T−2's.
-      for (int k = 0; k + 1 < T; ++k) {
+      // Only with the torque term on (it cost a third of each iteration for nothing).
+      const bool torque_term = cfg.torque_penalty_weight > 0.0;
+      for (int k = 0; torque_term && k + 1 < T; ++k) {
         const ConfigVector qk = mpc::configuration_from_state(ws->x[k], ws->head_rad[k]);
         const ConfigVector qn = mpc::configuration_from_state(ws->x[k + 1], ws->head_rad[k + 1]);
         const ConfigVector qp = k > 0 ? mpc::configuration_from_state(ws->x[k - 1], ws->head_rad[k - 1]) : qk;
@@ -281,11 +283,14 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
       for (int k = 0; k < T; ++k) {
         auto& stage = ws->qp.stages[k];
         const planner::ContactFlags& contact = window->knots[k].in_contact;
-        stage_torque(robot, *data, ws->x[k], ws->u[k], ws->head_rad[k], contact, false, st_torque);
-        const Eigen::Matrix<double, kNumMpcJoints, 1> tau = st_torque.tau_Nm + lag[k];
+        Eigen::Matrix<double, kNumMpcJoints, 1> tau = Eigen::Matrix<double, kNumMpcJoints, 1>::Zero();
+        if (torque_term && k + cfg.commit_stages < T) {
+          stage_torque(robot, *data, ws->x[k], ws->u[k], ws->head_rad[k], contact, false, st_torque);
+          tau = st_torque.tau_Nm + lag[k];
+        }
         const bool legs_near_limit =
             (tau.head<kLegs>().cwiseAbs().array() > soft_start.head<kLegs>().array()).any();
-        if (cfg.torque_penalty_weight > 0.0 && k + cfg.commit_stages < T && legs_near_limit) {
+        if (torque_term && k + cfg.commit_stages < T && legs_near_limit) {
           stage_torque(robot, *data, ws->x[k], ws->u[k], ws->head_rad[k], contact, true, st_torque);
           for (int j = 0; j < kLegs; ++j) {
             const double excess = std::min(std::abs(tau[j]) - soft_start[j], kTorqueExcessCap_Nm);

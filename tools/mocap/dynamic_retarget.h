@@ -34,7 +34,7 @@ namespace kuavo::mocap {
 
 struct DynamicRetargetConfig {
   mpc::MpcConfig ocp = default_ocp();
-  int commit_stages = 5;           // 0.1 s per window at dt 0.02
+  int commit_stages = 10;          // 0.2 s per window at dt 0.02
   int max_sqp_iterations = 200;    // per window (the paper's cap)
   double step_tolerance = 1e-3;    // max |δx|, |δu| (forces per m·g) of a converged window
   // Torque limits as a quadratic hinge ½ w (|τ| − s·L)² above s·L (L: the model's limit):
