@@ -98,7 +98,7 @@ int run(int argc, char** argv) {
         std::fprintf(stderr, "kuavo retarget: --horizon needs seconds in [0.2, 1.4], got '%s'\n", horizon_text.c_str());
         return 2;
       }
-      if (ok) dyn_options.dynamic.ocp.horizon_s = h;
+      if (ok) dyn_options.dynamic.set_horizon(h);
     } else if (!std::strcmp(a, "--torque-weight")) {
       ok = value(torque_text);
       char* end = nullptr;

@@ -177,7 +177,7 @@ int run(int argc, char** argv) {
   for (std::size_t k = 0; k < horizons.size(); ++k) {
     const double h = horizons[k];
     DynamicStageOptions options;
-    options.dynamic.ocp.horizon_s = h;
+    options.dynamic.set_horizon(h);
     DynamicStageResult result;
     ordered_json report;
     std::string why;

@@ -92,6 +92,12 @@ mpc::MpcConfig DynamicRetargetConfig::default_ocp() {
   return c;
 }
 
+void DynamicRetargetConfig::set_horizon(double horizon_s) {
+  ocp.horizon_s = horizon_s;
+  const int stages = static_cast<int>(std::lround(horizon_s / ocp.dt_s));
+  commit_stages = std::clamp(stages / 4, 1, 10);
+}
+
 void stage_torque(const model::Model& robot, dynamics::Data& data, const StateVector& x, const InputVector& u,
                   const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, bool with_derivatives,
                   StageTorque& out) {
