@@ -101,6 +101,19 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   }
   // The built-in dance's steps survive (the repair may merge, not drop, most of them).
   EXPECT_GE(d["steps"]["robot"].get<int>(), 0.8 * d["steps"]["human"].get<int>());
+  // The motion written loads: the loader refuses joints outside the limits, and the dynamic
+  // stage reports what it put back within them (the built-in dance: ~0.0075 rad, an arm).
+  {
+    model::Model s45;
+    model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, s45);
+    MotionHeader h;
+    std::vector<dynamics::ConfigVector> q;
+    std::vector<ContactLabel> labels;
+    std::string error;
+    EXPECT_TRUE(load_motion_file(kOut + "_dyn.motion", s45, h, q, labels, error)) << error;
+    ASSERT_TRUE(d.contains("clamped_to_joint_limits"));
+    EXPECT_LT(d["clamped_to_joint_limits"]["max_rad"].get<double>(), 0.05);
+  }
   // The oracle's base residual: mean below a fifth of the weight (m g ≈ 540 N).
   EXPECT_LT(d["dynamic"]["base_residual"]["force_N_mean"].get<double>(), 108.0);
   // CSV: one row per frame, q + momentum + 24 forces + 28 torques + contact.

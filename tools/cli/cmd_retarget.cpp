@@ -323,6 +323,11 @@ int run(int argc, char** argv) {
         d["dynamic"]["torque_violations"].get<int>(), d["geometric"]["torque_violations"].get<int>(),
         d["dynamic"]["friction_violations"].get<int>(), d["dynamic"]["zmp_outside_m_max"].get<double>(),
         d["geometric"]["zmp_outside_m_max"].get<double>());
+    const auto& c = d["clamped_to_joint_limits"];
+    if (c["samples"].get<int>() > 0) {
+      std::printf("kuavo retarget: dynamic: %d joint samples put back within the position limits, up to %.4f rad (%s)\n",
+                  c["samples"].get<int>(), c["max_rad"].get<double>(), c["worst_joint"].get<std::string>().c_str());
+    }
     if (d.contains("figures")) {
       std::printf("kuavo retarget: figures in %s:", dyn_options.plots_dir.c_str());
       for (const auto& f : d["figures"]) std::printf(" %s", f.get<std::string>().c_str());
