@@ -12,7 +12,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <memory>
+#include <new>
 #include <string>
 
 #include "controllers/model/model.h"
@@ -137,9 +139,7 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
   return report.danced_to_end ? 0 : 4;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   std::string config_path, dance_path;
   bool balance_filter = false;
   bool timing = false, evict_cache = false;
@@ -340,4 +340,19 @@ int main(int argc, char** argv) {
                 c.max_torque_demand_x);
   }
   return 0;
+}
+
+}  // namespace
+
+// Start-up may throw (the standard library allocates while loading); no exception leaves the
+// image: it becomes one line and exit 1, never an abort. The cycle itself does not throw.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "kuavo_fw: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "kuavo_fw: internal error: %s\n", e.what());
+  }
+  return 1;
 }

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <string>
 
 #include "sim/closed_loop.h"
 #include "sim/motion_loop.h"
@@ -26,6 +27,11 @@
 
 namespace kuavo::cli {
 namespace {
+
+// Longest simulated run: the longest motion the controller holds is 120 s
+// (planner::kMaxMotionFrames at 100 Hz) plus settling; 600 s bounds the run's per-tick
+// statistics (~300 k WBC ticks, a few MB) and its log, decided before anything runs.
+constexpr double kMaxRunDuration_s = 600.0;
 
 bool parse_double(const char* text, double& out) {
   char* end = nullptr;
@@ -83,13 +89,15 @@ int run_simulate(int argc, char** argv) {
       return 2;
     };
     if (!std::strcmp(a, "--stand") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--stand needs seconds > 0, got");
+      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
+        return bad(("--stand needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
       stand = true;
     } else if (!std::strcmp(a, "--step-in-place") && v) {
       steps = std::atoi(v);
       if (steps < 1 || steps > 200) return bad("--step-in-place needs 1..200 steps, got");
     } else if (!std::strcmp(a, "--duration") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--duration needs seconds > 0, got");
+      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
+        return bad(("--duration needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
       duration_given = true;
     } else if (!std::strcmp(a, "--balance-filter") && v) {
       if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got");
