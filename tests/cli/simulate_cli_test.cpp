@@ -69,6 +69,31 @@ TEST(SimulateCli, RunLengthIsBoundedUpFront) {
   EXPECT_NE(r.err.find("--stand needs seconds in (0, 600]"), std::string::npos) << r.err;
 }
 
+// Whole-token numbers in range, no wrapping, options that do not apply refused, a missing
+// value named, unwritable outputs reported before the run (each case ran, or wrapped, before).
+TEST(SimulateCli, ArgumentsAreStrict) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string motion = standing_motion();
+  const std::pair<std::string, std::string> cases[] = {
+      {motion + " --duration 0.1 --latency-ticks 5abc", "--latency-ticks must be 0..50, got '5abc'"},
+      {"--step-in-place 5x --duration 0.1", "--step-in-place needs 1..200 steps, got '5x'"},
+      {"--stand 0.1 --seed -1", "--seed needs an integer in 0..2^64-1, got '-1'"},
+      {"--stand 0.1 --seed 99999999999999999999999", "--seed needs an integer in 0..2^64-1"},
+      {motion + " --duration 0.1 --rtol nan", "--rtol needs a positive number, got 'nan'"},
+      {"--stand 0.1 --horizon -1", "--horizon applies to MOTION and --step-in-place runs, not --stand"},
+      {"--stand 0.1 --seed", "option '--seed' needs a value"},
+      {"--stand 0.1 --summary " + kOut + "_missing_dir/run.json", "_missing_dir/run.json: cannot write"},
+      {"--stand 0.1 --log " + std::string(KUAVO_BINARY_DIR), ": is a directory"},
+  };
+  for (const auto& [args, message] : cases) {
+    const CliRun r = simulate(args, "_args");
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+  }
+  // The largest seed is still one.
+  EXPECT_EQ(simulate("--stand 0.05 --seed 18446744073709551615", "_seed_max").exit_code, 0);
+}
+
 // Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
 // limits around the point where start-up stops fitting (32..64 MB).
 TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {

@@ -133,6 +133,24 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   EXPECT_NE(slurp(kOut + "_bad_horizon.stderr").find("[0.2, 1.4]"), std::string::npos);
 }
 
+// Side inputs must be regular files (a directory read as empty text and was accepted), and the
+// outputs are checked writable before the run.
+TEST(mocap_cli, DirectoriesAndUnwritableOutputsAreRefusedUpFront) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string dir = KUAVO_BINARY_DIR;
+  std::filesystem::remove(kOut + "_d.motion");
+  EXPECT_EQ(run("--stage geometric --map " + dir + " -o " + kOut + "_d.motion", "_map_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_map_dir.stderr").find("--map " + dir + ": not a regular file"), std::string::npos)
+      << slurp(kOut + "_map_dir.stderr");
+  EXPECT_EQ(run("--stage geometric --contacts " + dir + " -o " + kOut + "_d.motion", "_contacts_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_contacts_dir.stderr").find("--contacts " + dir + ": not a regular file"), std::string::npos)
+      << slurp(kOut + "_contacts_dir.stderr");
+  EXPECT_EQ(run("--stage geometric -o " + kOut + "_d.motion --report " + kOut + "_no_dir/r.json", "_report_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_report_dir.stderr").find("_no_dir/r.json: cannot write"), std::string::npos)
+      << slurp(kOut + "_report_dir.stderr");
+  EXPECT_FALSE(std::filesystem::exists(kOut + "_d.motion"));  // refused before anything was written
+}
+
 TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string bvh = kOut + "_broken.bvh";

@@ -28,6 +28,7 @@
 #include <sstream>
 #include <string>
 
+#include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/mocap/contacts.h"
@@ -44,9 +45,15 @@ constexpr const char* kUsage =
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
     "                      [--torque-weight W] [--figures DIR|none]\n";
 
-bool read_text(const std::string& path, std::string& out) {
+// A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
+// and was accepted), or false with "PATH: why" in error.
+bool read_text(const std::string& path, std::string& out, std::string& error) {
+  if (!check_input_file(path, error)) return false;
   std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
+  if (!in) {
+    error = path + ": cannot open";
+    return false;
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   out = ss.str();
@@ -154,8 +161,8 @@ int run(int argc, char** argv) {
   }
   if (!repairs_path.empty()) {
     std::string text, why;
-    if (!read_text(repairs_path, text)) {
-      std::fprintf(stderr, "kuavo retarget: %s: cannot open repairs file\n", repairs_path.c_str());
+    if (!read_text(repairs_path, text, why)) {
+      std::fprintf(stderr, "kuavo retarget: --repairs %s\n", why.c_str());
       return 2;
     }
     if (!mocap::parse_repair_overrides(text, dyn_options.overrides, why)) {
@@ -168,6 +175,24 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  // Every file named is checked before the (long) run: side inputs regular, outputs writable.
+  {
+    std::string why;
+    const std::pair<const char*, const std::string*> inputs[] = {
+        {"--map", &map_path}, {"--contacts", &contacts}, {"--repairs", &repairs_path}};
+    for (const auto& [option, in] : inputs) {
+      if (!in->empty() && *in != "auto" && *in != "none" && !check_input_file(*in, why)) {
+        std::fprintf(stderr, "kuavo retarget: %s %s\n", option, why.c_str());
+        return 2;
+      }
+    }
+    for (const std::string* out : {&output, &report_path, &csv_path, &dance_path, &dyn_options.csv_path}) {
+      if (!out->empty() && !check_output_file(*out, why)) {
+        std::fprintf(stderr, "kuavo retarget: %s\n", why.c_str());
+        return 2;
+      }
+    }
+  }
   auto robot = std::make_unique<model::Model>();
   if (const auto e = model::build_model(variant, model::kDefaultTotalMass_kg, *robot); e != model::ModelError::kOk) {
     std::fprintf(stderr, "kuavo retarget: %s\n", model::to_string(e));
@@ -193,8 +218,8 @@ int run(int argc, char** argv) {
   mocap::SkeletonMap map;
   if (!map_path.empty()) {
     std::string text;
-    if (!read_text(map_path, text)) {
-      std::fprintf(stderr, "kuavo retarget: %s: cannot open mapping file\n", map_path.c_str());
+    if (!read_text(map_path, text, error)) {
+      std::fprintf(stderr, "kuavo retarget: --map %s\n", error.c_str());
       return 2;
     }
     if (!mocap::map_skeleton_with_file(bvh, text, map, error)) {
@@ -221,8 +246,8 @@ int run(int argc, char** argv) {
     labels = mocap::detect_contacts(targets, *robot);
     if (contacts != "auto") {
       std::string text;
-      if (!read_text(contacts, text)) {
-        std::fprintf(stderr, "kuavo retarget: %s: cannot open contacts file\n", contacts.c_str());
+      if (!read_text(contacts, text, error)) {
+        std::fprintf(stderr, "kuavo retarget: --contacts %s\n", error.c_str());
         return 2;
       }
       if (!mocap::apply_contact_overrides(text, targets.rate_hz, labels, error)) {
