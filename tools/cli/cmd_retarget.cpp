@@ -17,7 +17,9 @@
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
 // joint" lines for skeletons the built-in tables miss. --dance-bvh writes the built-in dance as
 // BVH (to inspect it in a viewer).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -214,6 +216,22 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  // The controller holds at most planner::kMaxMotionFrames frames; a longer motion (a legal
+  // but absurd Frame Time such as 10 s) is refused before it is resampled, not written as a
+  // file every other command refuses.
+  {
+    const double duration_s = std::max(bvh.frame_count - 1, 0) * bvh.frame_time_s;
+    const double frames = duration_s * mocap::ImportOptions{}.rate_hz + 1.0;
+    if (!(frames <= planner::kMaxMotionFrames)) {
+      std::fprintf(stderr,
+                   "kuavo retarget: %s: the motion lasts %.6g s (%d frames of %.6g s): %.0f frames at %.0f Hz, more "
+                   "than the %d a robot motion holds\n",
+                   input.c_str(), duration_s, bvh.frame_count, bvh.frame_time_s, frames,
+                   mocap::ImportOptions{}.rate_hz, planner::kMaxMotionFrames);
+      return 2;
+    }
+  }
+
   // 2. Correspondence and robot-proportioned targets.
   mocap::SkeletonMap map;
   if (!map_path.empty()) {
@@ -233,6 +251,12 @@ int run(int argc, char** argv) {
   mocap::HumanTargets targets;
   if (!mocap::make_targets(bvh, map, *robot, {}, targets, error)) {
     std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
+    return 2;
+  }
+  // The skeleton's scale to the robot (robot leg / human leg): a positive finite number, or
+  // every target would be NaN or at the origin.
+  if (!(std::isfinite(targets.root_scale) && targets.root_scale > 0.0)) {
+    std::fprintf(stderr, "kuavo retarget: root scale %g is not a positive finite number\n", targets.root_scale);
     return 2;
   }
 
@@ -279,7 +303,22 @@ int run(int argc, char** argv) {
     out_contacts = &dynamic.contacts;
   }
 
-  // 6. Outputs.
+  // 6. Outputs: never a file the loaders refuse. Every frame meets the loader's rules
+  // (mocap::check_motion_frame: finite, plausible base, joints within limits), else exit 2.
+  if (out_q->size() < 2 || out_q->size() > static_cast<std::size_t>(planner::kMaxMotionFrames)) {
+    std::fprintf(stderr, "kuavo retarget: the retargeted motion has %zu frames, outside 2..%d\n", out_q->size(),
+                 planner::kMaxMotionFrames);
+    return 2;
+  }
+  for (std::size_t f = 0; f < out_q->size(); ++f) {
+    int joint = -1;
+    if (const mocap::MotionError e = mocap::check_motion_frame(*robot, (*out_q)[f], joint); e != mocap::MotionError::kOk) {
+      std::fprintf(stderr, "kuavo retarget: %s: the retargeted motion is not one the robot can load: frame %zu: %s%s%s\n",
+                   input.empty() ? "default dance" : input.c_str(), f, mocap::to_string(e), joint >= 0 ? ": " : "",
+                   joint >= 0 ? model::joint_name(*robot, joint) : "");
+      return 2;
+    }
+  }
   if (!mocap::write_motion_file(output, mocap::encode_motion(*robot, targets.rate_hz, *out_q, *out_contacts),
                                 error)) {
     std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
