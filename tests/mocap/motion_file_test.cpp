@@ -10,6 +10,12 @@
 namespace kuavo::mocap {
 namespace {
 
+// Recomputes the header checksum after an edit of the header.
+void put_header_crc(std::vector<std::uint8_t>& b) {
+  const std::uint32_t crc = motion_header_crc(b.data());
+  for (int i = 0; i < 4; ++i) b[kMotionHeaderCrcOffset + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+}
+
 struct Fixture {
   model::Model s45, s42;
   std::vector<dynamics::ConfigVector> q;
@@ -60,6 +66,13 @@ TEST(mocap_motion_file, RoundTripIsExact) {
   // The wrong variant is named in the message.
   EXPECT_FALSE(load_motion_file(path, fx.s42, h, q, labels, error));
   EXPECT_NE(error.find("other robot variant (file: s45, expected: s42)"), std::string::npos) << error;
+  // An unknown variant byte is named as such (it said "file: s45, expected: s45").
+  auto unknown = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
+  unknown[16] = 7;
+  put_header_crc(unknown);
+  ASSERT_TRUE(write_motion_file(path, unknown, error)) << error;
+  EXPECT_FALSE(load_motion_file(path, fx.s45, h, q, labels, error));
+  EXPECT_NE(error.find("unknown robot variant byte 7 at offset 16 (expected 0 = s45)"), std::string::npos) << error;
   std::remove(path.c_str());
 }
 

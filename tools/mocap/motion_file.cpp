@@ -102,8 +102,14 @@ bool load_motion_file(const std::string& path, const model::Model& robot, Motion
   }
   MotionError e = read_motion_header(bytes.data(), bytes.size(), robot, header);
   if (e == MotionError::kWrongVariant) {
-    error = path + ": " + to_string(e) + " (file: " + model::to_string(static_cast<model::Variant>(bytes[16])) +
-            ", expected: " + model::to_string(robot.variant) + ")";
+    const bool known = bytes[16] == static_cast<std::uint8_t>(model::Variant::kS45) ||
+                       bytes[16] == static_cast<std::uint8_t>(model::Variant::kS42);
+    const auto file_variant = static_cast<model::Variant>(bytes[16]);
+    error = path + ": " +
+            (known ? to_string(e) + std::string(" (file: ") + model::to_string(file_variant) + ", expected: " +
+                         model::to_string(robot.variant) + ")"
+                   : "unknown robot variant byte " + std::to_string(bytes[16]) + " at offset 16 (expected " +
+                         std::to_string(static_cast<int>(robot.variant)) + " = " + model::to_string(robot.variant) + ")");
     return false;
   }
   if (e == MotionError::kTrailingBytes) {
