@@ -94,6 +94,27 @@ TEST(SimulateCli, ArgumentsAreStrict) {
   EXPECT_EQ(simulate("--stand 0.05 --seed 18446744073709551615", "_seed_max").exit_code, 0);
 }
 
+// kuavo campaign's counts are whole numbers (atoi took "5abc" as 5, and --jobs "4x" went to
+// GNU parallel as given).
+TEST(CampaignCli, CountsAreWholeNumbers) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::pair<std::string, std::string> cases[] = {
+      {"--seeds 5abc", "--seeds must be 1..100000, got '5abc'"},
+      {"--seeds 99999999999999999999", "--seeds must be 1..100000"},
+      {"--jobs 4x", "--jobs must be 1..4096, got '4x'"},
+      {"--jobs 0", "--jobs must be 1..4096, got '0'"},
+  };
+  for (const auto& [args, message] : cases) {
+    const std::string err = kOut + "_campaign.stderr";
+    const int status = std::system((kBin + " campaign /nonexistent/spec.json " + args + " >/dev/null 2>" + err).c_str());
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2) << args;
+    std::ifstream in(err);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    EXPECT_NE(ss.str().find(message), std::string::npos) << args << "\n" << ss.str();
+  }
+}
+
 // Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
 // limits around the point where start-up stops fitting (32..64 MB).
 TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {
