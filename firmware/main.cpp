@@ -150,6 +150,12 @@ int run(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     }
+    const bool takes_value = !std::strcmp(a, "--config") || !std::strcmp(a, "--legs") || !std::strcmp(a, "--dance") ||
+                             !std::strcmp(a, "--balance-filter") || !std::strcmp(a, "--timing");
+    if (takes_value && i + 1 >= argc) {
+      std::fprintf(stderr, "kuavo_fw: option '%s' needs a value\n%s", a, kUsage);
+      return 2;
+    }
     if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
     else if (!std::strcmp(a, "--check")) check = true;
     else if (!std::strcmp(a, "--legs") && i + 1 < argc) {

@@ -1,5 +1,6 @@
 #include "drivers/config/drivers_config_json.h"
 
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
@@ -205,10 +206,22 @@ DriverError apply_drivers_json(const std::string& text, DriversConfig& config, s
 
 DriverError load_drivers_config(const std::string& path, const model::Model& model, DriversConfig& out,
                                 BusLoadReport& report, std::string& message) {
+  // A missing file or a directory is a configuration problem, said as such (a directory read
+  // as empty text, "not valid JSON"; a missing file was a "device node missing").
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    message = path + ": cannot read the drivers configuration: no such file";
+    return DriverError::kConfigUnreadable;
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    message = path + ": cannot read the drivers configuration: not a regular file";
+    return DriverError::kConfigUnreadable;
+  }
   std::ifstream in(path);
   if (!in) {
     message = path + ": cannot read the drivers configuration";
-    return DriverError::kDeviceMissing;
+    return DriverError::kConfigUnreadable;
   }
   std::stringstream text;
   text << in.rdbuf();

@@ -140,8 +140,14 @@ TEST_F(DriversConfigTest, JsonPlanReplacesBusesAndResyncsDrives) {
 }
 
 TEST_F(DriversConfigTest, LoadFromFile) {
-  EXPECT_EQ(load_drivers_config("/nonexistent/drivers.json", model, config, report, msg), DriverError::kDeviceMissing);
-  EXPECT_NE(msg.find("/nonexistent/drivers.json"), std::string::npos);
+  // A missing file and a directory are configuration problems, named as such.
+  EXPECT_EQ(load_drivers_config("/nonexistent/drivers.json", model, config, report, msg),
+            DriverError::kConfigUnreadable);
+  EXPECT_NE(msg.find("/nonexistent/drivers.json: cannot read the drivers configuration: no such file"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(load_drivers_config(KUAVO_BINARY_DIR, model, config, report, msg), DriverError::kConfigUnreadable);
+  EXPECT_NE(msg.find("not a regular file"), std::string::npos) << msg;
   const std::string path = std::string(KUAVO_BINARY_DIR) + "/drivers_config_test.json";
   {
     std::ofstream out(path);

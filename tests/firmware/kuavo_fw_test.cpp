@@ -109,6 +109,7 @@ TEST(KuavoFw, DanceMotionIsCheckedAtStartUp) {
   EXPECT_NE(r.output.find("/nonexistent/dance.motion"), std::string::npos) << r.output;
   r = run_fw("--dance");  // the file is missing
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("option '--dance' needs a value"), std::string::npos) << r.output;
 }
 
 // Hostile motion files with valid checksums (issue 22): `--check` must refuse what the robot
@@ -147,6 +148,17 @@ TEST(KuavoFw, CheckRefusesImplausibleMotions) {
     EXPECT_NE(r.output.find("after the last frame"), std::string::npos) << r.output;
   }
   const FwRun r = run_fw("--check --dance " + testing::TempDir());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
+}
+
+// The drivers configuration file: missing or a directory is a configuration error that says so.
+TEST(KuavoFw, ConfigurationFileMissingOrDirectoryIsNamed) {
+  FwRun r = run_fw("--check --config /nonexistent/drivers.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot read the drivers configuration: no such file"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("device node"), std::string::npos) << r.output;
+  r = run_fw("--check --config " + testing::TempDir());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
 }
