@@ -82,7 +82,11 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
     const char* expected;
   };
   const Case cases[] = {
-      {"{ not json", "not valid JSON"},
+      {"{ not json", "not valid JSON at line 1, column "},
+      {"{\n  \"imu\": {\"device\": \"/dev/x\",}\n}", "not valid JSON at line 2, column 30"},  // the } where a key belongs
+      // A key given twice: refused, not the last one silently taken.
+      {R"({"imu": {"device": "/dev/a", "device": "/dev/b"}})", "duplicate key 'device' given twice in 'imu'"},
+      {R"({"imu": {}, "imu": {}})", "duplicate key 'imu' given twice in 'drivers configuration'"},
       {R"({"ruiwo_motor": []})", "unknown key 'ruiwo_motor'"},
       {R"({"ruiwo_motors": [{"id": 99, "sign": 1}]})", "no Ruiwo motor with ID 99"},
       {R"({"ruiwo_motors": [{"id": 5, "sign": "minus"}]})", "ruiwo_motors[0].sign: expected an integer"},
