@@ -103,6 +103,29 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
   EXPECT_EQ(config.plan.devices.size(), before.plan.devices.size());
 }
 
+// Numbers no real robot has (issue 22): each parses, and validation refuses it.
+TEST_F(DriversConfigTest, ValidationRefusesPhysicallyAbsurdNumbers) {
+  const char* cases[] = {
+      R"({"knee_ratio_motor_per_joint": -1e308})",
+      R"({"knee_ratio_motor_per_joint": 1e-320})",
+      R"({"ankle_motor_offset_rad": [1e308, 0]})",
+      R"({"ankle_motor_offset_rad": [0, 100]})",
+      R"({"drives": [{"slot": 3, "torque_limit_Nm": 1e308}]})",
+      R"({"drives": [{"slot": 3, "counts_per_rev": 0.5}]})",
+      R"({"imu": {"device": "/dev/ttyUSB0\u0000/etc/passwd"}})",
+      R"({"imu": {"device": "ttyUSB0"}})",
+  };
+  for (const char* text : cases) {
+    DriversConfig c = config;
+    ASSERT_EQ(apply_drivers_json(text, c, msg), DriverError::kOk) << text << " -> " << msg;
+    EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << text;
+  }
+  // The defaults and the documented knee ratio still pass.
+  DriversConfig c = config;
+  ASSERT_EQ(apply_drivers_json(R"({"knee_ratio_motor_per_joint": -1.0})", c, msg), DriverError::kOk) << msg;
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kOk) << msg;
+}
+
 TEST_F(DriversConfigTest, ValidationRefusesInconsistentRobots) {
   DriversConfig c = config;
   ASSERT_EQ(apply_drivers_json(R"({"ruiwo_motors": [{"id": 3, "sign": 0}]})", c, msg), DriverError::kOk);
