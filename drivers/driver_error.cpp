@@ -37,6 +37,7 @@ const char* to_string(DriverError e) {
     case DriverError::kNoSuchInterface: return "no such network interface";
     case DriverError::kDeviceMissing: return "device node missing";
     case DriverError::kSetupFailed: return "device setup failed";
+    case DriverError::kConfigUnreadable: return "configuration file unreadable";
     case DriverError::kMtiBadChecksum: return "MTi packet checksum mismatch";
     case DriverError::kMtiTooLong: return "MTi packet longer than supported";
     case DriverError::kMtiBadItem: return "malformed MTData2 item";

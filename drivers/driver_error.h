@@ -54,6 +54,7 @@ enum class DriverError : std::uint16_t {
   kNoSuchInterface = 84,   // interface name unknown to the kernel
   kDeviceMissing = 85,     // serial device node absent
   kSetupFailed = 86,       // setsockopt/bind/termios failed
+  kConfigUnreadable = 87,  // the configuration file is missing, not a regular file or unreadable
 
   // Xsens MTi (100..119)
   kMtiBadChecksum = 100,

@@ -12,7 +12,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <memory>
+#include <new>
 #include <string>
 
 #include "controllers/model/model.h"
@@ -137,9 +139,7 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
   return report.danced_to_end ? 0 : 4;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   std::string config_path, dance_path;
   bool balance_filter = false;
   bool timing = false, evict_cache = false;
@@ -149,6 +149,12 @@ int main(int argc, char** argv) {
     if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
       std::fputs(kUsage, stdout);
       return 0;
+    }
+    const bool takes_value = !std::strcmp(a, "--config") || !std::strcmp(a, "--legs") || !std::strcmp(a, "--dance") ||
+                             !std::strcmp(a, "--balance-filter") || !std::strcmp(a, "--timing");
+    if (takes_value && i + 1 >= argc) {
+      std::fprintf(stderr, "kuavo_fw: option '%s' needs a value\n%s", a, kUsage);
+      return 2;
     }
     if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
     else if (!std::strcmp(a, "--check")) check = true;
@@ -340,4 +346,19 @@ int main(int argc, char** argv) {
                 c.max_torque_demand_x);
   }
   return 0;
+}
+
+}  // namespace
+
+// Start-up may throw (the standard library allocates while loading); no exception leaves the
+// image: it becomes one line and exit 1, never an abort. The cycle itself does not throw.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "kuavo_fw: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "kuavo_fw: internal error: %s\n", e.what());
+  }
+  return 1;
 }

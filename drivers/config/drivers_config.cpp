@@ -45,21 +45,41 @@ void sync_drives_with_plan(DriversConfig& config) {
 
 namespace {
 
-bool finite_nonzero(double x) { return std::isfinite(x) && x != 0.0; }
+
+// Physical ranges of configuration numbers (values outside are typing errors or corruption):
+// - a transmission ratio (motor rad per joint rad): the robot's gearboxes and linkages lie
+//   between 1:1 and ~1:100 in magnitude; 0.01..1000 leaves two decades of margin each way;
+constexpr double kMinRatioMagnitude = 0.01, kMaxRatioMagnitude = 1000.0;
+// - a motor offset (motor position at joint zero) more than one joint turn of motor travel
+//   (2π·|ratio| rad) away from the motor's zero is not an offset;
+// - encoder counts per output turn: 1024 (10 bits) is the coarsest encoder a servo drive
+//   takes; above 2^31 one turn overflows the i32 position object 0x607A;
+constexpr double kMinCountsPerRev = 1024.0, kMaxCountsPerRev = 2147483648.0;
+// - drive torques: 1000 N·m is 7× the model's largest peak joint torque (knee, 135 N·m).
+constexpr double kMaxDriveTorque_Nm = 1000.0;
+
+bool ratio_in_range(double r) {
+  return std::isfinite(r) && std::abs(r) >= kMinRatioMagnitude && std::abs(r) <= kMaxRatioMagnitude;
+}
+bool offset_in_range(double offset_rad, double ratio) {
+  return std::isfinite(offset_rad) && std::abs(offset_rad) <= 2.0 * M_PI * std::abs(ratio);
+}
 
 DriverError check_transmissions(const DriversConfig& c, std::string& message) {
   for (int side = 0; side < 2; ++side) {
     const LegTransmission& t = c.legs[side];
     const char* name = side == 0 ? "left leg" : "right leg";
     for (const LinearTransmission& s : t.serial) {
-      if (!finite_nonzero(s.ratio_motor_per_joint) || !std::isfinite(s.motor_offset_rad)) {
-        message = std::string(name) + ": transmission ratio must be finite and non-zero, offset finite";
+      if (!ratio_in_range(s.ratio_motor_per_joint) || !offset_in_range(s.motor_offset_rad, s.ratio_motor_per_joint)) {
+        message = std::string(name) + ": transmission ratio must be 0.01..1000 in magnitude and the offset within "
+                                      "one joint turn (2π·|ratio| rad)";
         return DriverError::kBadConfig;
       }
     }
     for (const LinearTransmission& s : t.ankle_motor) {
-      if (!finite_nonzero(s.ratio_motor_per_joint) || !std::isfinite(s.motor_offset_rad)) {
-        message = std::string(name) + ": ankle motor ratio must be finite and non-zero, offset finite";
+      if (!ratio_in_range(s.ratio_motor_per_joint) || !offset_in_range(s.motor_offset_rad, s.ratio_motor_per_joint)) {
+        message = std::string(name) + ": ankle motor ratio must be 0.01..1000 in magnitude and the offset within "
+                                      "one joint turn (2π·|ratio| rad)";
         return DriverError::kBadConfig;
       }
     }
@@ -110,10 +130,11 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
         return DriverError::kBadConfig;
       }
       const canopen::DriveConfig& k = e->config;
-      if (!(k.counts_per_rev > 0) || !(k.rated_torque_Nm > 0) || !(k.torque_limit_Nm > 0) ||
-          !std::isfinite(k.counts_per_rev + k.rated_torque_Nm + k.torque_limit_Nm) ||
+      if (!(k.counts_per_rev >= kMinCountsPerRev && k.counts_per_rev <= kMaxCountsPerRev) ||
+          !(k.rated_torque_Nm > 0 && k.rated_torque_Nm <= kMaxDriveTorque_Nm) ||
+          !(k.torque_limit_Nm > 0 && k.torque_limit_Nm <= kMaxDriveTorque_Nm) ||
           k.torque_limit_Nm / k.rated_torque_Nm * 1000.0 > 32767.0) {
-        message = where + ": counts per turn and torques must be positive and finite, and the torque "
+        message = where + ": counts per turn must be 1024..2^31, torques in (0, 1000] N·m, and the torque "
                           "limit within the int16 per-mille range";
         return DriverError::kBadConfig;
       }
@@ -135,8 +156,9 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
     return DriverError::kBadConfig;
   }
   if (const DriverError e = check_transmissions(c, message); e != DriverError::kOk) return e;
-  if (c.imu_device.empty()) {
-    message = "IMU device path empty";
+  // A device path is an absolute path without NUL (the kernel would open only up to the NUL).
+  if (c.imu_device.empty() || c.imu_device[0] != '/' || c.imu_device.find('\0') != std::string::npos) {
+    message = "IMU device path must be an absolute path without NUL bytes";
     return DriverError::kBadConfig;
   }
   message.clear();

@@ -1,9 +1,13 @@
 #include "drivers/config/drivers_config_json.h"
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace kuavo::drivers {
 
@@ -156,10 +160,57 @@ bool read_drives(Reader& r, const json& arr, DriversConfig& config) {
 
 }  // namespace
 
+namespace {
+
+// Line and column (1-based) of byte `offset` (0-based) in text.
+std::string line_and_column(const std::string& text, std::size_t offset) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+}  // namespace
+
 DriverError apply_drivers_json(const std::string& text, DriversConfig& config, std::string& message) {
-  const json root = json::parse(text, nullptr, /*allow_exceptions=*/false, /*ignore_comments=*/true);
-  if (root.is_discarded()) {
-    message = "drivers configuration: not valid JSON";
+  // Parsed at start-up (exceptions allowed here, never in the cycle). A syntax error is given
+  // with its line and column; a key given twice in one object is refused (JSON leaves it
+  // undefined and nlohmann keeps the last one silently).
+  struct Object {
+    std::vector<std::string> keys;
+    std::string name;
+  };
+  std::vector<Object> objects;
+  std::string last_key = "drivers configuration", duplicate;
+  const json::parser_callback_t track = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) {
+      objects.push_back({{}, last_key});
+    } else if (event == json::parse_event_t::object_end && !objects.empty()) {
+      objects.pop_back();
+    } else if (event == json::parse_event_t::key && !objects.empty()) {
+      last_key = parsed.get<std::string>();
+      std::vector<std::string>& keys = objects.back().keys;
+      if (duplicate.empty() && std::find(keys.begin(), keys.end(), last_key) != keys.end())
+        duplicate = "'" + last_key + "' given twice in '" + objects.back().name + "'";
+      keys.push_back(last_key);
+    }
+    return true;
+  };
+  json root;
+  try {
+    root = json::parse(text, track, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    message = "drivers configuration: not valid JSON at " + line_and_column(text, e.byte > 0 ? e.byte - 1 : 0);
+    return DriverError::kBadConfig;
+  }
+  if (!duplicate.empty()) {
+    message = "drivers configuration: duplicate key " + duplicate;
     return DriverError::kBadConfig;
   }
   Reader r;
@@ -205,10 +256,22 @@ DriverError apply_drivers_json(const std::string& text, DriversConfig& config, s
 
 DriverError load_drivers_config(const std::string& path, const model::Model& model, DriversConfig& out,
                                 BusLoadReport& report, std::string& message) {
+  // A missing file or a directory is a configuration problem, said as such (a directory read
+  // as empty text, "not valid JSON"; a missing file was a "device node missing").
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    message = path + ": cannot read the drivers configuration: no such file";
+    return DriverError::kConfigUnreadable;
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    message = path + ": cannot read the drivers configuration: not a regular file";
+    return DriverError::kConfigUnreadable;
+  }
   std::ifstream in(path);
   if (!in) {
     message = path + ": cannot read the drivers configuration";
-    return DriverError::kDeviceMissing;
+    return DriverError::kConfigUnreadable;
   }
   std::stringstream text;
   text << in.rdbuf();

@@ -11,8 +11,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <memory>
+#include <new>
 #include <string>
 
 #include "drivers/config/drivers_config_json.h"
@@ -65,9 +67,7 @@ int bad(const char* what, const char* value) {
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   sitl::SitlConfig cfg;
   cfg.loop.legs = sitl::LegBinding::kCsp;
   cfg.loop.seed = 1;
@@ -163,4 +163,18 @@ int main(int argc, char** argv) {
   }
   const bool good = s.faults.empty() && !s.motion.run.fell && (dance_path.empty() || s.danced_to_end);
   return good ? 0 : 1;
+}
+
+}  // namespace
+
+// No exception leaves the program: one line and exit 1, never an abort.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "kuavo_fw_sim: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "kuavo_fw_sim: internal error: %s\n", e.what());
+  }
+  return 1;
 }

@@ -82,7 +82,11 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
     const char* expected;
   };
   const Case cases[] = {
-      {"{ not json", "not valid JSON"},
+      {"{ not json", "not valid JSON at line 1, column "},
+      {"{\n  \"imu\": {\"device\": \"/dev/x\",}\n}", "not valid JSON at line 2, column 30"},  // the } where a key belongs
+      // A key given twice: refused, not the last one silently taken.
+      {R"({"imu": {"device": "/dev/a", "device": "/dev/b"}})", "duplicate key 'device' given twice in 'imu'"},
+      {R"({"imu": {}, "imu": {}})", "duplicate key 'imu' given twice in 'drivers configuration'"},
       {R"({"ruiwo_motor": []})", "unknown key 'ruiwo_motor'"},
       {R"({"ruiwo_motors": [{"id": 99, "sign": 1}]})", "no Ruiwo motor with ID 99"},
       {R"({"ruiwo_motors": [{"id": 5, "sign": "minus"}]})", "ruiwo_motors[0].sign: expected an integer"},
@@ -97,6 +101,29 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
   }
   EXPECT_EQ(config.ruiwo_motors[4].sign, before.ruiwo_motors[4].sign);
   EXPECT_EQ(config.plan.devices.size(), before.plan.devices.size());
+}
+
+// Numbers no real robot has (issue 22): each parses, and validation refuses it.
+TEST_F(DriversConfigTest, ValidationRefusesPhysicallyAbsurdNumbers) {
+  const char* cases[] = {
+      R"({"knee_ratio_motor_per_joint": -1e308})",
+      R"({"knee_ratio_motor_per_joint": 1e-320})",
+      R"({"ankle_motor_offset_rad": [1e308, 0]})",
+      R"({"ankle_motor_offset_rad": [0, 100]})",
+      R"({"drives": [{"slot": 3, "torque_limit_Nm": 1e308}]})",
+      R"({"drives": [{"slot": 3, "counts_per_rev": 0.5}]})",
+      R"({"imu": {"device": "/dev/ttyUSB0\u0000/etc/passwd"}})",
+      R"({"imu": {"device": "ttyUSB0"}})",
+  };
+  for (const char* text : cases) {
+    DriversConfig c = config;
+    ASSERT_EQ(apply_drivers_json(text, c, msg), DriverError::kOk) << text << " -> " << msg;
+    EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << text;
+  }
+  // The defaults and the documented knee ratio still pass.
+  DriversConfig c = config;
+  ASSERT_EQ(apply_drivers_json(R"({"knee_ratio_motor_per_joint": -1.0})", c, msg), DriverError::kOk) << msg;
+  EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kOk) << msg;
 }
 
 TEST_F(DriversConfigTest, ValidationRefusesInconsistentRobots) {
@@ -140,8 +167,14 @@ TEST_F(DriversConfigTest, JsonPlanReplacesBusesAndResyncsDrives) {
 }
 
 TEST_F(DriversConfigTest, LoadFromFile) {
-  EXPECT_EQ(load_drivers_config("/nonexistent/drivers.json", model, config, report, msg), DriverError::kDeviceMissing);
-  EXPECT_NE(msg.find("/nonexistent/drivers.json"), std::string::npos);
+  // A missing file and a directory are configuration problems, named as such.
+  EXPECT_EQ(load_drivers_config("/nonexistent/drivers.json", model, config, report, msg),
+            DriverError::kConfigUnreadable);
+  EXPECT_NE(msg.find("/nonexistent/drivers.json: cannot read the drivers configuration: no such file"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(load_drivers_config(KUAVO_BINARY_DIR, model, config, report, msg), DriverError::kConfigUnreadable);
+  EXPECT_NE(msg.find("not a regular file"), std::string::npos) << msg;
   const std::string path = std::string(KUAVO_BINARY_DIR) + "/drivers_config_test.json";
   {
     std::ofstream out(path);

@@ -109,6 +109,58 @@ TEST(KuavoFw, DanceMotionIsCheckedAtStartUp) {
   EXPECT_NE(r.output.find("/nonexistent/dance.motion"), std::string::npos) << r.output;
   r = run_fw("--dance");  // the file is missing
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("option '--dance' needs a value"), std::string::npos) << r.output;
+}
+
+// Hostile motion files with valid checksums (issue 22): `--check` must refuse what the robot
+// cannot do, with exit 2 and a message naming the file, frame and joint; a directory must not
+// abort the image.
+TEST(KuavoFw, CheckRefusesImplausibleMotions) {
+  using namespace kuavo;
+  model::Model robot;
+  ASSERT_EQ(model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, robot), model::ModelError::kOk);
+  const std::vector<mocap::ContactLabel> labels(201, mocap::ContactLabel::kDoubleSupport);
+  const auto write = [&](const char* name, const std::vector<std::uint8_t>& bytes) {
+    const std::string path = testing::TempDir() + name;
+    std::string error;
+    EXPECT_TRUE(mocap::write_motion_file(path, bytes, error)) << error;
+    return path;
+  };
+  for (const double bad_rad : {1e308, 100.0}) {
+    std::vector<dynamics::ConfigVector> q(201, test::standing_configuration());
+    q[50][7 + 3] = bad_rad;  // leg_l4_joint (knee)
+    const std::string path = write("fw_hostile_joint.motion", mocap::encode_motion(robot, 100.0, q, labels));
+    const FwRun r = run_fw("--check --dance " + path);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_EQ(r.output.find("configuration ok"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(path + ": frame 50"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("leg_l4_joint"), std::string::npos) << r.output;
+  }
+  const std::vector<dynamics::ConfigVector> q(201, test::standing_configuration());
+  const auto good = mocap::encode_motion(robot, 100.0, q, labels);
+  auto twice = good;
+  twice.insert(twice.end(), good.begin(), good.end());
+  auto garbage = good;
+  for (const char c : std::string("garbage")) garbage.push_back(static_cast<std::uint8_t>(c));
+  for (const auto& bytes : {twice, garbage}) {
+    const FwRun r = run_fw("--check --dance " + write("fw_hostile_tail.motion", bytes));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("after the last frame"), std::string::npos) << r.output;
+  }
+  const FwRun r = run_fw("--check --dance " + testing::TempDir());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
+}
+
+// The drivers configuration file: missing or a directory is a configuration error that says so.
+TEST(KuavoFw, ConfigurationFileMissingOrDirectoryIsNamed) {
+  FwRun r = run_fw("--check --config /nonexistent/drivers.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot read the drivers configuration: no such file"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("device node"), std::string::npos) << r.output;
+  r = run_fw("--check --config " + testing::TempDir());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
 }
 
 TEST(KuavoFw, RunWithoutCanFailsCleanly) {

@@ -101,6 +101,19 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   }
   // The built-in dance's steps survive (the repair may merge, not drop, most of them).
   EXPECT_GE(d["steps"]["robot"].get<int>(), 0.8 * d["steps"]["human"].get<int>());
+  // The motion written loads: the loader refuses joints outside the limits, and the dynamic
+  // stage reports what it put back within them (the built-in dance: ~0.0075 rad, an arm).
+  {
+    model::Model s45;
+    model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, s45);
+    MotionHeader h;
+    std::vector<dynamics::ConfigVector> q;
+    std::vector<ContactLabel> labels;
+    std::string error;
+    EXPECT_TRUE(load_motion_file(kOut + "_dyn.motion", s45, h, q, labels, error)) << error;
+    ASSERT_TRUE(d.contains("clamped_to_joint_limits"));
+    EXPECT_LT(d["clamped_to_joint_limits"]["max_rad"].get<double>(), 0.05);
+  }
   // The oracle's base residual: mean below a fifth of the weight (m g ≈ 540 N).
   EXPECT_LT(d["dynamic"]["base_residual"]["force_N_mean"].get<double>(), 108.0);
   // CSV: one row per frame, q + momentum + 24 forces + 28 torques + contact.
@@ -120,6 +133,24 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   EXPECT_NE(slurp(kOut + "_bad_horizon.stderr").find("[0.2, 1.4]"), std::string::npos);
 }
 
+// Side inputs must be regular files (a directory read as empty text and was accepted), and the
+// outputs are checked writable before the run.
+TEST(mocap_cli, DirectoriesAndUnwritableOutputsAreRefusedUpFront) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string dir = KUAVO_BINARY_DIR;
+  std::filesystem::remove(kOut + "_d.motion");
+  EXPECT_EQ(run("--stage geometric --map " + dir + " -o " + kOut + "_d.motion", "_map_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_map_dir.stderr").find("--map " + dir + ": not a regular file"), std::string::npos)
+      << slurp(kOut + "_map_dir.stderr");
+  EXPECT_EQ(run("--stage geometric --contacts " + dir + " -o " + kOut + "_d.motion", "_contacts_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_contacts_dir.stderr").find("--contacts " + dir + ": not a regular file"), std::string::npos)
+      << slurp(kOut + "_contacts_dir.stderr");
+  EXPECT_EQ(run("--stage geometric -o " + kOut + "_d.motion --report " + kOut + "_no_dir/r.json", "_report_dir"), 2);
+  EXPECT_NE(slurp(kOut + "_report_dir.stderr").find("_no_dir/r.json: cannot write"), std::string::npos)
+      << slurp(kOut + "_report_dir.stderr");
+  EXPECT_FALSE(std::filesystem::exists(kOut + "_d.motion"));  // refused before anything was written
+}
+
 TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string bvh = kOut + "_broken.bvh";
@@ -135,6 +166,53 @@ TEST(mocap_cli, BrokenInputExitsTwoWithLineAndProblem) {
 
 // Issue 22: values no human motion reaches exit 2 with the line and the rule, before any output
 // is written (Frame Time 10 s made a 374 MB file; a root channel of 1e300 an all-NaN motion).
+// Legal BVH values whose retargeted motion no loader accepts: refused with exit 2 and nothing
+// written (before: exit 0 and a file every other command refused). From the shared clip
+// cmu_05_20_mb: 600 rows at the slowest legal Frame Time (150 s > the 120 s a motion holds),
+// and the hips lifted 200 units from row 500 on (the base above 2 m).
+TEST(mocap_cli, MotionsTheLoadersRefuseAreNotWritten) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  std::ifstream in(std::string(KUAVO_SHARED_DIR) + "/mocap/cmu_05_20_mb.bvh");
+  std::string line, hierarchy;
+  std::vector<std::string> rows;
+  bool motion = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "MOTION") motion = true;
+    if (!motion) hierarchy += line + "\n";
+    else if (line.rfind("Frame", 0) != 0 && line != "MOTION" && !line.empty()) rows.push_back(line);
+  }
+  ASSERT_GE(rows.size(), 600u);
+  struct Case {
+    const char* tag;
+    std::string motion;
+    const char* expect;
+  };
+  std::string slow = "MOTION\nFrames: 600\nFrame Time: 0.25\n", lifted = "MOTION\nFrames: 600\nFrame Time: 0.0083333\n";
+  for (std::size_t k = 0; k < 600; ++k) {
+    slow += rows[k] + "\n";
+    std::istringstream values(rows[k]);
+    double x, y;
+    values >> x >> y;
+    std::string rest;
+    std::getline(values, rest);
+    lifted += std::to_string(x) + " " + std::to_string(k >= 500 ? y + 200.0 : y) + rest + "\n";
+  }
+  const Case cases[] = {
+      {"_long", slow, "14976 frames at 100 Hz, more than the 12000 a robot motion holds"},
+      {"_lifted", lifted, "not one the robot can load: frame"},
+  };
+  for (const Case& c : cases) {
+    const std::string bvh = kOut + c.tag + ".bvh", out = kOut + c.tag + ".motion";
+    std::ofstream(bvh, std::ios::binary) << hierarchy + c.motion;
+    std::filesystem::remove(out);
+    EXPECT_EQ(run("--stage geometric " + bvh + " -o " + out, c.tag), 2) << c.tag;
+    const std::string message = slurp(kOut + c.tag + ".stderr");
+    EXPECT_NE(message.find(c.expect), std::string::npos) << message;
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.tag;
+  }
+}
+
 TEST(mocap_cli, AbsurdValuesExitTwoWithLineAndRule) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string head =

@@ -3,10 +3,18 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 namespace kuavo::mocap {
 namespace {
+
+// Recomputes the header checksum after an edit of the header.
+void put_header_crc(std::vector<std::uint8_t>& b) {
+  const std::uint32_t crc = motion_header_crc(b.data());
+  for (int i = 0; i < 4; ++i) b[kMotionHeaderCrcOffset + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+}
 
 struct Fixture {
   model::Model s45, s42;
@@ -16,8 +24,16 @@ struct Fixture {
     model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, s45);
     model::build_model(model::Variant::kS42, model::kDefaultTotalMass_kg, s42);
     for (int f = 0; f < 50; ++f) {
+      // A plausible frame (the loader checks plausibility): base 0.8 m high, unit quaternion,
+      // joints within the limits of both variants.
       dynamics::ConfigVector v = dynamics::ConfigVector::Constant(0.01 * f);
+      v[2] = 0.8;
       v[6] = 1.0;
+      v.segment<4>(3).normalize();
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        v[7 + j] = std::clamp(v[7 + j], std::max(s45.limits.position_min_rad[j], s42.limits.position_min_rad[j]),
+                              std::min(s45.limits.position_max_rad[j], s42.limits.position_max_rad[j]));
+      }
       q.push_back(v);
       labels.push_back(static_cast<ContactLabel>(f % 4));
     }
@@ -50,6 +66,13 @@ TEST(mocap_motion_file, RoundTripIsExact) {
   // The wrong variant is named in the message.
   EXPECT_FALSE(load_motion_file(path, fx.s42, h, q, labels, error));
   EXPECT_NE(error.find("other robot variant (file: s45, expected: s42)"), std::string::npos) << error;
+  // An unknown variant byte is named as such (it said "file: s45, expected: s45").
+  auto unknown = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
+  unknown[16] = 7;
+  put_header_crc(unknown);
+  ASSERT_TRUE(write_motion_file(path, unknown, error)) << error;
+  EXPECT_FALSE(load_motion_file(path, fx.s45, h, q, labels, error));
+  EXPECT_NE(error.find("unknown robot variant byte 7 at offset 16 (expected 0 = s45)"), std::string::npos) << error;
   std::remove(path.c_str());
 }
 
@@ -79,8 +102,67 @@ TEST(mocap_motion_file, CorruptionIsDetected) {
     bad[i] ^= 0x01;
     EXPECT_NE(read_motion_header(bad.data(), bad.size(), fx.s45, h), MotionError::kOk) << "byte " << i;
   }
-  for (MotionError e = MotionError::kOk; e <= MotionError::kIo; e = static_cast<MotionError>(static_cast<int>(e) + 1))
+  for (MotionError e = MotionError::kOk; e <= MotionError::kTooManyFrames; e = static_cast<MotionError>(static_cast<int>(e) + 1))
     EXPECT_STRNE(to_string(e), "unknown motion error");
+}
+
+// Hostile files with valid checksums: the loader refuses them with a message naming the file,
+// the frame and the joint (issue 22).
+TEST(mocap_motion_file, ImplausibleFramesAreRefusedAtLoad) {
+  Fixture fx;
+  const std::string path = std::string(KUAVO_BINARY_DIR) + "/motion_file_test_hostile.motion";
+  const auto load = [&](const std::vector<std::uint8_t>& bytes, std::string& error) {
+    EXPECT_TRUE(write_motion_file(path, bytes, error)) << error;
+    MotionHeader h;
+    std::vector<dynamics::ConfigVector> q;
+    std::vector<ContactLabel> labels;
+    return load_motion_file(path, fx.s45, h, q, labels, error);
+  };
+  std::string error;
+  ASSERT_TRUE(load(encode_motion(fx.s45, 100.0, fx.q, fx.labels), error)) << error;
+  const int knee = 3;  // leg_l4_joint, limits [0, 2.5307] rad
+  for (const double bad_rad : {1e308, 100.0, -0.01, 2.6}) {
+    auto q = fx.q;
+    q[7][7 + knee] = bad_rad;
+    EXPECT_FALSE(load(encode_motion(fx.s45, 100.0, q, fx.labels), error)) << bad_rad;
+    EXPECT_NE(error.find(path), std::string::npos) << error;
+    EXPECT_NE(error.find("frame 7"), std::string::npos) << error;
+    EXPECT_NE(error.find("leg_l4_joint"), std::string::npos) << error;
+    EXPECT_NE(error.find("position limits"), std::string::npos) << error;
+  }
+  // Within the stated tolerance of a limit still loads.
+  auto q = fx.q;
+  q[7][7 + knee] = fx.s45.limits.position_max_rad[knee] + 0.5 * kMotionJointLimitTolerance_rad;
+  EXPECT_TRUE(load(encode_motion(fx.s45, 100.0, q, fx.labels), error)) << error;
+  // Base: not unit quaternion, under the floor, far off the stage, NaN.
+  for (const auto& [index, value] : {std::pair{6, 2.0}, std::pair{2, 0.0}, std::pair{2, 5.0}, std::pair{0, 1e6},
+                                     std::pair{1, std::nan("")}}) {
+    q = fx.q;
+    q[9][index] = value;
+    EXPECT_FALSE(load(encode_motion(fx.s45, 100.0, q, fx.labels), error)) << index << " " << value;
+    EXPECT_NE(error.find("frame 9"), std::string::npos) << error;
+  }
+  // Trailing bytes: garbage after the payload, and the file concatenated with itself.
+  auto bytes = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
+  auto longer = bytes;
+  longer.push_back(0);
+  MotionHeader h;
+  EXPECT_EQ(read_motion_header(longer.data(), longer.size(), fx.s45, h), MotionError::kTrailingBytes);
+  EXPECT_FALSE(load(longer, error));
+  EXPECT_NE(error.find("after the last frame"), std::string::npos) << error;
+  longer = bytes;
+  longer.insert(longer.end(), bytes.begin(), bytes.end());
+  EXPECT_FALSE(load(longer, error));
+  EXPECT_NE(error.find("after the last frame"), std::string::npos) << error;
+  // A directory is refused, not thrown on.
+  EXPECT_FALSE([&] {
+    MotionHeader hd;
+    std::vector<dynamics::ConfigVector> qd;
+    std::vector<ContactLabel> ld;
+    return load_motion_file(KUAVO_BINARY_DIR, fx.s45, hd, qd, ld, error);
+  }());
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  std::remove(path.c_str());
 }
 
 TEST(mocap_motion_file, Crc32MatchesTheStandardCheckValue) {

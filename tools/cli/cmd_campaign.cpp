@@ -26,6 +26,7 @@
 #include "controllers/model/model.h"
 #include "controllers/planner/motion_plan.h"
 #include "sim/motion_loop.h"
+#include "tools/cli/args.h"
 #include "tools/cli/campaign_spec.h"
 #include "tools/cli/commands.h"
 #include "tools/mocap/motion_plan_io.h"
@@ -101,14 +102,17 @@ int run_campaign(int argc, char** argv) {
     } else if (!std::strcmp(a, "--out") && v) {
       out_dir = v;
     } else if (!std::strcmp(a, "--seeds") && v) {
-      seeds_override = std::atoi(v);
-      if (seeds_override < 1 || seeds_override > 100000) {
+      long long n = 0;
+      if (!parse_integer(v, 1, 100000, n)) {
         std::fprintf(stderr, "kuavo campaign: --seeds must be 1..100000, got '%s'\n", v);
         return 2;
       }
+      seeds_override = static_cast<int>(n);
     } else if (!std::strcmp(a, "--jobs") && v) {
-      if (std::atoi(v) < 1) {
-        std::fprintf(stderr, "kuavo campaign: --jobs must be >= 1, got '%s'\n", v);
+      // GNU parallel's -j: a whole number of jobs (its percentages are not offered here).
+      long long n = 0;
+      if (!parse_integer(v, 1, 4096, n)) {
+        std::fprintf(stderr, "kuavo campaign: --jobs must be 1..4096, got '%s'\n", v);
         return 2;
       }
       jobs = v;

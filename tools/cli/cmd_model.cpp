@@ -3,10 +3,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 
 namespace kuavo::cli {
@@ -22,9 +24,7 @@ int run_model(int argc, char** argv) {
         return 2;
       }
     } else if (!std::strcmp(argv[i], "--mass") && i + 1 < argc) {
-      char* end = nullptr;
-      mass_kg = std::strtod(argv[++i], &end);
-      if (end == argv[i] || *end != '\0' || !std::isfinite(mass_kg)) {
+      if (!parse_number(argv[++i], 0.0, std::numeric_limits<double>::max(), mass_kg)) {
         std::fprintf(stderr, "kuavo model: --mass needs a number in kg, got '%s'\n", argv[i]);
         return 2;
       }

@@ -17,7 +17,9 @@
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
 // joint" lines for skeletons the built-in tables miss. --dance-bvh writes the built-in dance as
 // BVH (to inspect it in a viewer).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -28,6 +30,7 @@
 #include <sstream>
 #include <string>
 
+#include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/mocap/contacts.h"
@@ -44,9 +47,15 @@ constexpr const char* kUsage =
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
     "                      [--torque-weight W] [--figures DIR|none]\n";
 
-bool read_text(const std::string& path, std::string& out) {
+// A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
+// and was accepted), or false with "PATH: why" in error.
+bool read_text(const std::string& path, std::string& out, std::string& error) {
+  if (!check_input_file(path, error)) return false;
   std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
+  if (!in) {
+    error = path + ": cannot open";
+    return false;
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   out = ss.str();
@@ -154,8 +163,8 @@ int run(int argc, char** argv) {
   }
   if (!repairs_path.empty()) {
     std::string text, why;
-    if (!read_text(repairs_path, text)) {
-      std::fprintf(stderr, "kuavo retarget: %s: cannot open repairs file\n", repairs_path.c_str());
+    if (!read_text(repairs_path, text, why)) {
+      std::fprintf(stderr, "kuavo retarget: --repairs %s\n", why.c_str());
       return 2;
     }
     if (!mocap::parse_repair_overrides(text, dyn_options.overrides, why)) {
@@ -168,6 +177,24 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  // Every file named is checked before the (long) run: side inputs regular, outputs writable.
+  {
+    std::string why;
+    const std::pair<const char*, const std::string*> inputs[] = {
+        {"--map", &map_path}, {"--contacts", &contacts}, {"--repairs", &repairs_path}};
+    for (const auto& [option, in] : inputs) {
+      if (!in->empty() && *in != "auto" && *in != "none" && !check_input_file(*in, why)) {
+        std::fprintf(stderr, "kuavo retarget: %s %s\n", option, why.c_str());
+        return 2;
+      }
+    }
+    for (const std::string* out : {&output, &report_path, &csv_path, &dance_path, &dyn_options.csv_path}) {
+      if (!out->empty() && !check_output_file(*out, why)) {
+        std::fprintf(stderr, "kuavo retarget: %s\n", why.c_str());
+        return 2;
+      }
+    }
+  }
   auto robot = std::make_unique<model::Model>();
   if (const auto e = model::build_model(variant, model::kDefaultTotalMass_kg, *robot); e != model::ModelError::kOk) {
     std::fprintf(stderr, "kuavo retarget: %s\n", model::to_string(e));
@@ -189,12 +216,28 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  // The controller holds at most planner::kMaxMotionFrames frames; a longer motion (a legal
+  // but absurd Frame Time such as 10 s) is refused before it is resampled, not written as a
+  // file every other command refuses.
+  {
+    const double duration_s = std::max(bvh.frame_count - 1, 0) * bvh.frame_time_s;
+    const double frames = duration_s * mocap::ImportOptions{}.rate_hz + 1.0;
+    if (!(frames <= planner::kMaxMotionFrames)) {
+      std::fprintf(stderr,
+                   "kuavo retarget: %s: the motion lasts %.6g s (%d frames of %.6g s): %.0f frames at %.0f Hz, more "
+                   "than the %d a robot motion holds\n",
+                   input.c_str(), duration_s, bvh.frame_count, bvh.frame_time_s, frames,
+                   mocap::ImportOptions{}.rate_hz, planner::kMaxMotionFrames);
+      return 2;
+    }
+  }
+
   // 2. Correspondence and robot-proportioned targets.
   mocap::SkeletonMap map;
   if (!map_path.empty()) {
     std::string text;
-    if (!read_text(map_path, text)) {
-      std::fprintf(stderr, "kuavo retarget: %s: cannot open mapping file\n", map_path.c_str());
+    if (!read_text(map_path, text, error)) {
+      std::fprintf(stderr, "kuavo retarget: --map %s\n", error.c_str());
       return 2;
     }
     if (!mocap::map_skeleton_with_file(bvh, text, map, error)) {
@@ -210,6 +253,12 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
     return 2;
   }
+  // The skeleton's scale to the robot (robot leg / human leg): a positive finite number, or
+  // every target would be NaN or at the origin.
+  if (!(std::isfinite(targets.root_scale) && targets.root_scale > 0.0)) {
+    std::fprintf(stderr, "kuavo retarget: root scale %g is not a positive finite number\n", targets.root_scale);
+    return 2;
+  }
 
   // 3. Contact schedule.
   mocap::RetargetOptions options;
@@ -221,8 +270,8 @@ int run(int argc, char** argv) {
     labels = mocap::detect_contacts(targets, *robot);
     if (contacts != "auto") {
       std::string text;
-      if (!read_text(contacts, text)) {
-        std::fprintf(stderr, "kuavo retarget: %s: cannot open contacts file\n", contacts.c_str());
+      if (!read_text(contacts, text, error)) {
+        std::fprintf(stderr, "kuavo retarget: --contacts %s\n", error.c_str());
         return 2;
       }
       if (!mocap::apply_contact_overrides(text, targets.rate_hz, labels, error)) {
@@ -254,7 +303,22 @@ int run(int argc, char** argv) {
     out_contacts = &dynamic.contacts;
   }
 
-  // 6. Outputs.
+  // 6. Outputs: never a file the loaders refuse. Every frame meets the loader's rules
+  // (mocap::check_motion_frame: finite, plausible base, joints within limits), else exit 2.
+  if (out_q->size() < 2 || out_q->size() > static_cast<std::size_t>(planner::kMaxMotionFrames)) {
+    std::fprintf(stderr, "kuavo retarget: the retargeted motion has %zu frames, outside 2..%d\n", out_q->size(),
+                 planner::kMaxMotionFrames);
+    return 2;
+  }
+  for (std::size_t f = 0; f < out_q->size(); ++f) {
+    int joint = -1;
+    if (const mocap::MotionError e = mocap::check_motion_frame(*robot, (*out_q)[f], joint); e != mocap::MotionError::kOk) {
+      std::fprintf(stderr, "kuavo retarget: %s: the retargeted motion is not one the robot can load: frame %zu: %s%s%s\n",
+                   input.empty() ? "default dance" : input.c_str(), f, mocap::to_string(e), joint >= 0 ? ": " : "",
+                   joint >= 0 ? model::joint_name(*robot, joint) : "");
+      return 2;
+    }
+  }
   if (!mocap::write_motion_file(output, mocap::encode_motion(*robot, targets.rate_hz, *out_q, *out_contacts),
                                 error)) {
     std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
@@ -323,6 +387,11 @@ int run(int argc, char** argv) {
         d["dynamic"]["torque_violations"].get<int>(), d["geometric"]["torque_violations"].get<int>(),
         d["dynamic"]["friction_violations"].get<int>(), d["dynamic"]["zmp_outside_m_max"].get<double>(),
         d["geometric"]["zmp_outside_m_max"].get<double>());
+    const auto& c = d["clamped_to_joint_limits"];
+    if (c["samples"].get<int>() > 0) {
+      std::printf("kuavo retarget: dynamic: %d joint samples put back within the position limits, up to %.4f rad (%s)\n",
+                  c["samples"].get<int>(), c["max_rad"].get<double>(), c["worst_joint"].get<std::string>().c_str());
+    }
     if (d.contains("figures")) {
       std::printf("kuavo retarget: figures in %s:", dyn_options.plots_dir.c_str());
       for (const auto& f : d["figures"]) std::printf(" %s", f.get<std::string>().c_str());

@@ -15,10 +15,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <memory>
+#include <string>
 
 #include "sim/closed_loop.h"
 #include "sim/motion_loop.h"
+#include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
 #include "tools/cli/perturb_option.h"
@@ -27,10 +30,28 @@
 namespace kuavo::cli {
 namespace {
 
+// Longest simulated run: the longest motion the controller holds is 120 s
+// (planner::kMaxMotionFrames at 100 Hz) plus settling; 600 s bounds the run's per-tick
+// statistics (~300 k WBC ticks, a few MB) and its log, decided before anything runs.
+constexpr double kMaxRunDuration_s = 600.0;
+
 bool parse_double(const char* text, double& out) {
-  char* end = nullptr;
-  out = std::strtod(text, &end);
-  return end != text && *end == '\0' && std::isfinite(out);
+  return parse_number(text, -std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), out);
+}
+
+// The options that take a value (a missing value is named, not a generic usage).
+constexpr const char* kValueOptions[] = {"--stand", "--step-in-place", "--duration", "--balance-filter", "--planner",
+                                         "--state", "--horizon", "--sensors", "--plan-latency-ms", "--ground",
+                                         "--push", "--seed", "--latency-ticks", "--integrator", "--rtol",
+                                         "--variant", "--mass", "--perturb", "--perturb-seed", "--log", "--summary"};
+// Those that only a MOTION or --step-in-place run reads (refused with --stand, not ignored).
+constexpr const char* kMotionOnlyOptions[] = {"--duration", "--balance-filter", "--planner", "--state", "--horizon",
+                                              "--sensors", "--plan-latency-ms", "--perturb", "--perturb-seed"};
+
+bool is_one_of(const char* a, const auto& names) {
+  for (const char* n : names)
+    if (!std::strcmp(a, n)) return true;
+  return false;
 }
 
 // "T:FX,FY,FZ:DURATION", e.g. 5:100,0,0:0.1 is a 10 N·s forward push at t = 5 s.
@@ -75,6 +96,7 @@ int run_simulate(int argc, char** argv) {
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
   bool perturb_seed_given = false;
+  const char* motion_only = nullptr;  // the first motion-only option given
   for (int i = 1; i < argc; ++i) {
     const char* a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -82,14 +104,22 @@ int run_simulate(int argc, char** argv) {
       std::fprintf(stderr, "kuavo simulate: %s '%s'\n", what, v ? v : "");
       return 2;
     };
+    if (is_one_of(a, kValueOptions) && v == nullptr) {
+      std::fprintf(stderr, "kuavo simulate: option '%s' needs a value\n", a);
+      return usage();
+    }
+    if (is_one_of(a, kMotionOnlyOptions) && motion_only == nullptr) motion_only = a;
     if (!std::strcmp(a, "--stand") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--stand needs seconds > 0, got");
+      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
+        return bad(("--stand needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
       stand = true;
     } else if (!std::strcmp(a, "--step-in-place") && v) {
-      steps = std::atoi(v);
-      if (steps < 1 || steps > 200) return bad("--step-in-place needs 1..200 steps, got");
+      long long n = 0;
+      if (!parse_integer(v, 1, 200, n)) return bad("--step-in-place needs 1..200 steps, got");
+      steps = static_cast<int>(n);
     } else if (!std::strcmp(a, "--duration") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0) return bad("--duration needs seconds > 0, got");
+      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
+        return bad(("--duration needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
       duration_given = true;
     } else if (!std::strcmp(a, "--balance-filter") && v) {
       if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got");
@@ -118,12 +148,11 @@ int run_simulate(int argc, char** argv) {
     } else if (!std::strcmp(a, "--push") && v) {
       if (!parse_push(v, cfg.push)) return bad("--push must be T:FX,FY,FZ:DURATION (s, N, s), got");
     } else if (!std::strcmp(a, "--seed") && v) {
-      char* end = nullptr;
-      cfg.seed = std::strtoull(v, &end, 10);
-      if (end == v || *end != '\0') return bad("--seed needs an unsigned integer, got");
+      if (!parse_uint64(v, cfg.seed)) return bad("--seed needs an integer in 0..2^64-1, got");
     } else if (!std::strcmp(a, "--latency-ticks") && v) {
-      cfg.command_latency_ticks = std::atoi(v);
-      if (cfg.command_latency_ticks < 0 || cfg.command_latency_ticks > 50) return bad("--latency-ticks must be 0..50, got");
+      long long n = 0;
+      if (!parse_integer(v, 0, 50, n)) return bad("--latency-ticks must be 0..50, got");
+      cfg.command_latency_ticks = static_cast<int>(n);
     } else if (!std::strcmp(a, "--integrator") && v) {
       if (!sim::parse_integrator(v, cfg.integrator)) return bad("--integrator must be euler, cvode or rkm, got");
     } else if (!std::strcmp(a, "--rtol") && v) {
@@ -136,10 +165,8 @@ int run_simulate(int argc, char** argv) {
       std::string error;
       if (!load_perturbation_set(v, perturb_set, error)) return bad(error.c_str());
     } else if (!std::strcmp(a, "--perturb-seed") && v) {
-      char* end = nullptr;
-      perturb_seed = std::strtoull(v, &end, 10);
+      if (!parse_uint64(v, perturb_seed)) return bad("--perturb-seed needs an integer in 0..2^64-1, got");
       perturb_seed_given = true;
-      if (end == v || *end != '\0') return bad("--perturb-seed needs an unsigned integer, got");
     } else if (!std::strcmp(a, "--log") && v) {
       cfg.log_path = v;
     } else if (!std::strcmp(a, "--summary") && v) {
@@ -156,6 +183,18 @@ int run_simulate(int argc, char** argv) {
   if (modes != 1) {
     std::fprintf(stderr, "kuavo simulate: give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS\n");
     return usage();
+  }
+  if (stand && motion_only != nullptr) {
+    std::fprintf(stderr, "kuavo simulate: %s applies to MOTION and --step-in-place runs, not --stand\n", motion_only);
+    return 2;
+  }
+  // Inputs and outputs checked before the run, not after it.
+  std::string path_error;
+  if ((!motion_path.empty() && !check_input_file(motion_path, path_error)) ||
+      (!cfg.log_path.empty() && !check_output_file(cfg.log_path, path_error)) ||
+      (!summary_path.empty() && !check_output_file(summary_path, path_error))) {
+    std::fprintf(stderr, "kuavo simulate: %s\n", path_error.c_str());
+    return 2;
   }
   if (!stand && !duration_given) cfg.duration_s = 0.0;  // the motion's length plus settling
   auto robot = std::make_unique<model::Model>();

@@ -1,6 +1,10 @@
 // kuavo: the project's command-line entry point.
+// Exit codes of every command: 0 ok, 1 runtime failure (including an exception or memory
+// exhaustion, reported in one line), 2 bad input or usage.
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <new>
 
 #include "tools/cli/commands.h"
 
@@ -35,7 +39,16 @@ int usage() {
 int main(int argc, char** argv) {
   if (argc < 2) return usage();
   for (const Command& c : kCommands) {
-    if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 1, argv + 1);
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    // No exception leaves a command: it becomes one line and exit 1, never an abort.
+    try {
+      return c.run(argc - 1, argv + 1);
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "kuavo %s: out of memory\n", c.name);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "kuavo %s: internal error: %s\n", c.name, e.what());
+    }
+    return 1;
   }
   std::fprintf(stderr, "kuavo: unknown command '%s'\n", argv[1]);
   return usage();

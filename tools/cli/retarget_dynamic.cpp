@@ -1,5 +1,7 @@
 #include "tools/cli/retarget_dynamic.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -97,6 +99,21 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   if (!mocap::dynamic_retarget(robot, *plan, options.dynamic, result.dynamic, error)) return 1;
   result.q = result.dynamic.q;
   result.contacts = result.dynamic.contacts;
+  // The loaders refuse a joint outside the model's limits (mocap::check_motion_frame); the
+  // dynamic stage does not bound the arm and head joints it smooths, so its output is put back
+  // within the limits here and the report says by how much.
+  int clamped_samples = 0, worst_joint = -1;
+  double worst_rad = 0.0;
+  for (dynamics::ConfigVector& q : result.q) {
+    for (int k = 0; k < model::kNumJoints; ++k) {
+      const double lo = robot.limits.position_min_rad[k], hi = robot.limits.position_max_rad[k];
+      const double clamped = std::clamp(q[7 + k], lo, hi);
+      if (clamped == q[7 + k]) continue;
+      ++clamped_samples;
+      if (std::abs(clamped - q[7 + k]) > worst_rad) worst_rad = std::abs(clamped - q[7 + k]), worst_joint = k;
+      q[7 + k] = clamped;
+    }
+  }
 
   const double mu = options.dynamic.ocp.friction_coefficient;
   mocap::DynamicsCheck geo_check, dyn_check;
@@ -122,6 +139,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["qp_restarts"] = s.qp_failures;
   d["rejected_steps"] = s.rejected_steps;
   d["lead_in_frames"] = result.repaired.lead_frames;
+  d["clamped_to_joint_limits"] = {{"samples", clamped_samples},
+                                  {"max_rad", worst_rad},
+                                  {"worst_joint", worst_joint < 0 ? "" : model::joint_name(robot, worst_joint)}};
   ordered_json geo = check_json(geo_check, robot);
   ordered_json dyn = check_json(dyn_check, robot);
   geo["expressiveness"] = metrics_json(geo_metrics);

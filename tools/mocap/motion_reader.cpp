@@ -59,6 +59,16 @@ const char* to_string(MotionError e) {
       return "contact label out of range";
     case MotionError::kIo:
       return "file could not be read or written";
+    case MotionError::kTrailingBytes:
+      return "bytes after the last frame (appended or concatenated data)";
+    case MotionError::kNonFinite:
+      return "non-finite value (NaN or infinity)";
+    case MotionError::kBaseImplausible:
+      return "implausible base pose";
+    case MotionError::kJointOutOfLimits:
+      return "joint angle outside the robot's position limits";
+    case MotionError::kTooManyFrames:
+      return "more frames than the controller can hold";
   }
   return "unknown motion error";
 }
@@ -92,8 +102,10 @@ MotionError read_motion_header(const std::uint8_t* data, std::size_t size, const
   const double rate = motion_get_f64(data + 24);
   if (!std::isfinite(rate) || !(rate > 0.0)) return MotionError::kBadRate;
   const std::uint32_t frames = motion_get_u32(data + 32);
+  if (frames > kMotionMaxFrames) return MotionError::kTooManyFrames;
   const std::size_t payload = static_cast<std::size_t>(frames) * kMotionRecordBytes;
   if (size - kMotionHeaderBytes < payload) return MotionError::kTruncated;
+  if (size - kMotionHeaderBytes > payload) return MotionError::kTrailingBytes;
   if (crc32(data + kMotionHeaderBytes, payload) != motion_get_u32(data + kMotionPayloadCrcOffset))
     return MotionError::kBadPayloadChecksum;
   header.variant = robot.variant;
@@ -112,4 +124,22 @@ MotionError read_motion_frame(const std::uint8_t* data, std::size_t size, std::u
   label = static_cast<ContactLabel>(p[280]);
   return MotionError::kOk;
 }
+MotionError check_motion_frame(const model::Model& robot, const dynamics::ConfigVector& q, int& joint) {
+  joint = -1;
+  if (!q.allFinite()) return MotionError::kNonFinite;
+  if (!(q[2] >= kMotionBaseHeightMin_m && q[2] <= kMotionBaseHeightMax_m) ||
+      !(std::abs(q[0]) <= kMotionBaseHorizontalMax_m && std::abs(q[1]) <= kMotionBaseHorizontalMax_m) ||
+      !(std::abs(q.segment<4>(3).norm() - 1.0) <= kMotionQuaternionNormTolerance))
+    return MotionError::kBaseImplausible;
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    const double qj = q[7 + j];
+    if (!(qj >= robot.limits.position_min_rad[j] - kMotionJointLimitTolerance_rad &&
+          qj <= robot.limits.position_max_rad[j] + kMotionJointLimitTolerance_rad)) {
+      joint = j;
+      return MotionError::kJointOutOfLimits;
+    }
+  }
+  return MotionError::kOk;
+}
+
 }  // namespace kuavo::mocap

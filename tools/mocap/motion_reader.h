@@ -33,6 +33,7 @@
 
 #include "controllers/dynamics/data.h"
 #include "controllers/model/model.h"
+#include "controllers/planner/motion_plan.h"
 #include "tools/mocap/contact_label.h"
 
 namespace kuavo::mocap {
@@ -58,6 +59,11 @@ enum class MotionError : std::uint8_t {
   kBadRate = 9,
   kBadLabel = 10,  // a contact label outside 0..3
   kIo = 11,        // the file could not be read or written
+  kTrailingBytes = 12,     // more bytes than the header and its frames (appended or concatenated data)
+  kNonFinite = 13,         // a NaN or infinite value in a frame
+  kBaseImplausible = 14,   // base position outside the stage or its quaternion not unit
+  kJointOutOfLimits = 15,  // a joint angle outside the model's position limits
+  kTooManyFrames = 16,     // more frames than the controller's plan can hold
 };
 const char* to_string(MotionError e);
 
@@ -77,11 +83,36 @@ double motion_get_f64(const std::uint8_t* p);
 inline constexpr std::size_t kMotionPayloadCrcOffset = 36;
 inline constexpr std::size_t kMotionHeaderCrcOffset = 40;
 
-// Validates the header and every checksum against the expected variant's joint names.
+// Physical plausibility of a frame, the bounds the loader enforces (rules that hold for every
+// motion `kuavo retarget` writes and that the controller relies on at run time).
+// The retargeter clamps joints to the model's limits (tools/mocap/retarget.cpp counts samples
+// more than 1e-9 rad outside); 1e-6 rad leaves room for an independent writer's rounding while
+// being far below anything an encoder resolves (~1e-4 rad).
+inline constexpr double kMotionJointLimitTolerance_rad = 1e-6;
+// The writer stores the quaternion normalised in double precision; motion_plan_finish refuses
+// a norm further than 1e-6 from 1, and the loader states the same rule.
+inline constexpr double kMotionQuaternionNormTolerance = 1e-6;
+// Base (pelvis) height in the world: the 1.66 m robot's pelvis stands at ~0.8 m. The deepest
+// crouch `kuavo retarget` makes from the shared clips puts it at 0.19 m (cmu_05_20_mb, dynamic
+// stage); below 0.1 m it would be on the floor. Above 2.0 m it would be more than a metre in the
+// air (the clips' highest is 1.21 m). Values outside are a corrupt or foreign file.
+inline constexpr double kMotionBaseHeightMin_m = 0.1;
+inline constexpr double kMotionBaseHeightMax_m = 2.0;
+// Horizontal base position: a 100 m square stage around the origin (the clips travel < 10 m).
+inline constexpr double kMotionBaseHorizontalMax_m = 50.0;
+// Most frames a motion file may hold: the controller's capacity, checked on the header so a
+// forged count cannot make a loader read or allocate more.
+inline constexpr std::uint32_t kMotionMaxFrames = planner::kMaxMotionFrames;
+
+// Validates the header and every checksum against the expected variant's joint names, and that
+// the buffer is exactly the header and its frames (no trailing bytes).
 MotionError read_motion_header(const std::uint8_t* data, std::size_t size, const model::Model& robot,
                                MotionHeader& header);
 // Frame i of a buffer that passed read_motion_header.
 MotionError read_motion_frame(const std::uint8_t* data, std::size_t size, std::uint32_t index,
                               dynamics::ConfigVector& q, ContactLabel& label);
+// The plausibility rules above for one frame. On kJointOutOfLimits joint is the joint's index
+// (controller order); on kNonFinite / kBaseImplausible it is -1.
+MotionError check_motion_frame(const model::Model& robot, const dynamics::ConfigVector& q, int& joint);
 
 }  // namespace kuavo::mocap

@@ -1,0 +1,134 @@
+// `kuavo simulate` against hostile input (issue 22): every case ends with exit 1 or 2 and one
+// clear line, never an abort (exit 134) or an unbounded run.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/support/test_robot.h"
+#include "tools/mocap/motion_file.h"
+
+namespace kuavo::cli {
+namespace {
+
+const std::string kBin = std::string(KUAVO_BINARY_DIR) + "/kuavo";
+const std::string kOut = std::string(KUAVO_BINARY_DIR) + "/simulate_cli_test";
+
+struct CliRun {
+  int exit_code = -1;
+  std::string err;
+};
+
+// `kuavo simulate ARGS` in a shell (`prefix` e.g. a ulimit), limited to 60 s of wall time so
+// an unbounded run fails the test instead of hanging it (timeout's exit 124).
+CliRun simulate(const std::string& args, const std::string& tag, const std::string& prefix = "") {
+  const std::string err = kOut + tag + ".stderr";
+  const std::string cmd = "sh -c '" + prefix + "timeout 60 " + kBin + " simulate " + args + " >/dev/null 2>" + err + "'";
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  r.err = ss.str();
+  return r;
+}
+
+// A 2 s standing motion (valid: loads and runs).
+std::string standing_motion() {
+  model::Model robot;
+  EXPECT_EQ(model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, robot), model::ModelError::kOk);
+  const std::vector<dynamics::ConfigVector> q(201, test::standing_configuration());
+  const std::vector<mocap::ContactLabel> labels(q.size(), mocap::ContactLabel::kDoubleSupport);
+  const std::string path = kOut + "_stand.motion";
+  std::string error;
+  EXPECT_TRUE(mocap::write_motion_file(path, mocap::encode_motion(robot, 100.0, q, labels), error)) << error;
+  return path;
+}
+
+TEST(SimulateCli, DirectoryAsMotionIsRefused) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const CliRun r = simulate(std::string(KUAVO_BINARY_DIR) + " --duration 1", "_dir");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a regular file"), std::string::npos) << r.err;
+}
+
+TEST(SimulateCli, RunLengthIsBoundedUpFront) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  // 1e7 s made the run reserve its per-tick statistics and die of std::bad_alloc (exit 134);
+  // --stand 1e9 ran without end.
+  CliRun r = simulate(standing_motion() + " --duration 1e7", "_duration");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--duration needs seconds in (0, 600]"), std::string::npos) << r.err;
+  r = simulate("--stand 1e9", "_stand");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--stand needs seconds in (0, 600]"), std::string::npos) << r.err;
+}
+
+// Whole-token numbers in range, no wrapping, options that do not apply refused, a missing
+// value named, unwritable outputs reported before the run (each case ran, or wrapped, before).
+TEST(SimulateCli, ArgumentsAreStrict) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string motion = standing_motion();
+  const std::pair<std::string, std::string> cases[] = {
+      {motion + " --duration 0.1 --latency-ticks 5abc", "--latency-ticks must be 0..50, got '5abc'"},
+      {"--step-in-place 5x --duration 0.1", "--step-in-place needs 1..200 steps, got '5x'"},
+      {"--stand 0.1 --seed -1", "--seed needs an integer in 0..2^64-1, got '-1'"},
+      {"--stand 0.1 --seed 99999999999999999999999", "--seed needs an integer in 0..2^64-1"},
+      {motion + " --duration 0.1 --rtol nan", "--rtol needs a positive number, got 'nan'"},
+      {"--stand 0.1 --horizon -1", "--horizon applies to MOTION and --step-in-place runs, not --stand"},
+      {"--stand 0.1 --seed", "option '--seed' needs a value"},
+      {"--stand 0.1 --summary " + kOut + "_missing_dir/run.json", "_missing_dir/run.json: cannot write"},
+      {"--stand 0.1 --log " + std::string(KUAVO_BINARY_DIR), ": is a directory"},
+  };
+  for (const auto& [args, message] : cases) {
+    const CliRun r = simulate(args, "_args");
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+  }
+  // The largest seed is still one.
+  EXPECT_EQ(simulate("--stand 0.05 --seed 18446744073709551615", "_seed_max").exit_code, 0);
+}
+
+// kuavo campaign's counts are whole numbers (atoi took "5abc" as 5, and --jobs "4x" went to
+// GNU parallel as given).
+TEST(CampaignCli, CountsAreWholeNumbers) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::pair<std::string, std::string> cases[] = {
+      {"--seeds 5abc", "--seeds must be 1..100000, got '5abc'"},
+      {"--seeds 99999999999999999999", "--seeds must be 1..100000"},
+      {"--jobs 4x", "--jobs must be 1..4096, got '4x'"},
+      {"--jobs 0", "--jobs must be 1..4096, got '0'"},
+  };
+  for (const auto& [args, message] : cases) {
+    const std::string err = kOut + "_campaign.stderr";
+    const int status = std::system((kBin + " campaign /nonexistent/spec.json " + args + " >/dev/null 2>" + err).c_str());
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2) << args;
+    std::ifstream in(err);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    EXPECT_NE(ss.str().find(message), std::string::npos) << args << "\n" << ss.str();
+  }
+}
+
+// Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
+// limits around the point where start-up stops fitting (32..64 MB).
+TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string motion = standing_motion();
+  int out_of_memory = 0;
+  for (int limit_kb = 32000; limit_kb <= 64000; limit_kb += 4000) {
+    const CliRun r = simulate(motion + " --duration 0.1", "_oom", "ulimit -v " + std::to_string(limit_kb) + "; ");
+    if (r.exit_code == 127) continue;  // the dynamic loader itself did not fit
+    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << limit_kb << " kB: exit " << r.exit_code << "\n" << r.err;
+    if (r.exit_code == 1 && r.err == "kuavo simulate: out of memory\n") ++out_of_memory;
+  }
+  if (out_of_memory == 0) GTEST_SKIP() << "no limit in 32..64 MB ran out of memory after start-up on this build";
+}
+
+}  // namespace
+}  // namespace kuavo::cli
