@@ -7,6 +7,7 @@
 // Exit codes: 0 the dance was danced to its end (or the stand held) without a fault or a
 // fall; 1 it was not (the summary says why: faults, fell, error); 2 bad usage,
 // configuration or motion file.
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -62,6 +63,8 @@ bool parse_push(const char* text, kuavo::sim::Push& push) {
   return true;
 }
 
+constexpr double kMaxStand_s = 600.0;
+
 int bad(const char* what, const char* value) {
   std::fprintf(stderr, "kuavo_fw_sim: %s '%s'\n%s", what, value ? value : "", kUsage);
   return 2;
@@ -84,7 +87,10 @@ int run(int argc, char** argv) {
     if (!std::strcmp(a, "--dance")) {
       dance_path = v;
     } else if (!std::strcmp(a, "--stand")) {
-      if (!parse_double(v, cfg.stand_s) || cfg.stand_s <= 0.0) return bad("--stand needs seconds > 0, got", v);
+      // Bounded like kuavo simulate's --stand (a run's log and time grow with it).
+      if (!parse_double(v, cfg.stand_s) || !(cfg.stand_s > 0.0 && cfg.stand_s <= kMaxStand_s)) {
+        return bad("--stand needs seconds in (0, 600], got", v);
+      }
     } else if (!std::strcmp(a, "--config")) {
       config_path = v;
     } else if (!std::strcmp(a, "--legs")) {
@@ -96,8 +102,12 @@ int run(int argc, char** argv) {
       if (!kuavo::sim::parse_ground(v, cfg.loop.ground)) return bad("--ground must be floor or carpet, got", v);
     } else if (!std::strcmp(a, "--seed")) {
       char* end = nullptr;
+      errno = 0;
       cfg.loop.seed = std::strtoull(v, &end, 10);
-      if (end == v || *end != '\0') return bad("--seed needs an unsigned integer, got", v);
+      // strtoull takes "-1" as 2^64 - 1 and saturates an overflow: both refused.
+      if (end == v || *end != '\0' || v[0] == '-' || v[0] == '+' || errno == ERANGE) {
+        return bad("--seed needs an unsigned 64-bit integer, got", v);
+      }
     } else if (!std::strcmp(a, "--push")) {
       if (!parse_push(v, cfg.loop.push)) return bad("--push must be T:FX,FY,FZ:DURATION (s, N, s), got", v);
     } else if (!std::strcmp(a, "--plan-latency-ms")) {

@@ -223,6 +223,30 @@ long stage_samples(const std::string& out, const std::string& stage) {
   return std::strtol(out.c_str() + at + 1 + stage.size(), nullptr, 10);
 }
 
+// kuavo_fw_sim's own arguments (it cannot use tools/cli's parser: the firmware links nothing
+// from tools/): strtoull took "-1" as 2^64 - 1 and saturated an overflow, and --stand 1e9 ran
+// unbounded. Refused before any work, exit 2.
+TEST(KuavoFwSim, RefusesWrappedSeedsAndAnUnboundedStand) {
+  const auto run_sim = [](const std::string& args) {
+    const std::string cmd = std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim " + args + " 2>&1";
+    FwRun r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (p == nullptr) return r;
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
+    const int status = pclose(p);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+  };
+  for (const char* args : {"--seed -1", "--seed 99999999999999999999999", "--seed +3", "--seed 5x", "--stand 1e9",
+                           "--stand 0", "--stand nan", "--stand 5abc"}) {
+    const FwRun r = run_sim(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(std::string(args).substr(std::string(args).find(' ') + 1)), std::string::npos)
+        << args << ": the message names the value\n" << r.output;
+  }
+}
+
 }  // namespace
 
 // --timing runs the whole motion through the task bodies in real time (a 2 s standing motion:
