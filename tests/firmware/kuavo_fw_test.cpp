@@ -21,8 +21,9 @@ struct FwRun {
   std::string output;
 };
 
-FwRun run_fw(const std::string& args) {
-  const std::string cmd = std::string(KUAVO_BINARY_DIR) + "/firmware/kuavo_fw " + args + " 2>&1";
+// Runs a built program (path under the build dir) with args; stdout and stderr together.
+FwRun run_binary(const std::string& program, const std::string& args) {
+  const std::string cmd = std::string(KUAVO_BINARY_DIR) + "/" + program + " " + args + " 2>&1";
   FwRun r;
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return r;
@@ -32,6 +33,8 @@ FwRun run_fw(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+FwRun run_fw(const std::string& args) { return run_binary("firmware/kuavo_fw", args); }
 
 std::string write_temp(const char* name, const char* text) {
   const std::string path = testing::TempDir() + name;
@@ -227,17 +230,7 @@ long stage_samples(const std::string& out, const std::string& stage) {
 // from tools/): strtoull took "-1" as 2^64 - 1 and saturated an overflow, and --stand 1e9 ran
 // unbounded. Refused before any work, exit 2.
 TEST(KuavoFwSim, RefusesWrappedSeedsAndAnUnboundedStand) {
-  const auto run_sim = [](const std::string& args) {
-    const std::string cmd = std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim " + args + " 2>&1";
-    FwRun r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (p == nullptr) return r;
-    char buf[512];
-    while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-    const int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-  };
+  const auto run_sim = [](const std::string& args) { return run_binary("firmware/sitl/kuavo_fw_sim", args); };
   for (const char* args : {"--seed -1", "--seed 99999999999999999999999", "--seed +3", "--seed 5x", "--stand 1e9",
                            "--stand 0", "--stand nan", "--stand 5abc"}) {
     const FwRun r = run_sim(args);

@@ -27,14 +27,14 @@ using mpc::kNx;
 using mpc::StateVector;
 
 constexpr int kForces = 3 * model::kNumContactPoints;
-// Forward-difference step of the torque derivatives in the leg joints and base angles [rad].
+// Forward-difference step of the torque derivatives in the joints and base angles [rad].
 constexpr double kTorqueFdStep_rad = 1e-6;
-// Step-norm scale of the forces: a force step is measured against the robot's weight.
-// Stance foot re-solve: corners the legs miss by more than this are an error [m].
+// Stance foot re-solve: a corner missed by more than this lowers the base (up to
+// kMaxBaseDrop_m); what remains is counted and reported [m].
 constexpr double kFootholdTolerance_m = 2e-3;
 constexpr double kMaxBaseDrop_m = 0.02;
 // Step control of the SQP iterations: a step larger than this fraction of the previous one
-// counts as no progress; the smallest step fraction.
+// counts as no progress (kMinStep: the smallest step fraction, below).
 constexpr double kContraction = 0.8;
 // The torque terms act on the 12 leg joints, whose torques the contact forces and the leg
 // configuration set within one stage. An arm's torque is its own gravity plus its
@@ -59,7 +59,7 @@ V catmull_rom(const V& p0, const V& p1, const V& p2, const V& p3, double s) {
                 (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * s3);
 }
 
-double quasi_static_torques(const model::Model& robot, dynamics::Data& data, const ConfigVector& q,
+void quasi_static_torques(const model::Model& robot, dynamics::Data& data, const ConfigVector& q,
                             const InputVector& u, const planner::ContactFlags& contact,
                             Eigen::Matrix<double, kNumMpcJoints, 1>& tau,
                             Eigen::Matrix<double, kNumMpcJoints, kForces>* d_df) {
@@ -76,7 +76,6 @@ double quasi_static_torques(const model::Model& robot, dynamics::Data& data, con
     tau.noalias() -= jl.transpose() * u.segment<3>(mpc::kUForces + 3 * c);
     if (d_df) d_df->middleCols<3>(3 * c) = -jl.transpose();
   }
-  return 0.0;
 }
 
 }  // namespace
