@@ -25,49 +25,6 @@ const Vec3 kHeadPoint_m(0.06, 0.0, 0.15);
 // The thumb: in front of the palm, where a human thumb points with the arm hanging.
 const Vec3 kThumbPoint_m(0.05, 0.0, -0.08);
 
-// Chain used to rebuild keypoints with robot proportions: parent of each keypoint.
-int chain_parent(int k) {
-  switch (k) {
-    case kKpLeftHip:
-    case kKpRightHip:
-    case kKpNeck:
-      return kKpPelvis;
-    case kKpLeftKnee:
-      return kKpLeftHip;
-    case kKpLeftAnkle:
-      return kKpLeftKnee;
-    case kKpLeftToe:
-    case kKpLeftHeel:
-      return kKpLeftAnkle;
-    case kKpRightKnee:
-      return kKpRightHip;
-    case kKpRightAnkle:
-      return kKpRightKnee;
-    case kKpRightToe:
-    case kKpRightHeel:
-      return kKpRightAnkle;
-    case kKpLeftShoulder:
-    case kKpRightShoulder:
-    case kKpHead:
-      return kKpNeck;
-    case kKpLeftElbow:
-      return kKpLeftShoulder;
-    case kKpLeftWrist:
-      return kKpLeftElbow;
-    case kKpLeftHand:
-    case kKpLeftThumb:
-      return kKpLeftWrist;
-    case kKpRightElbow:
-      return kKpRightShoulder;
-    case kKpRightWrist:
-      return kKpRightElbow;
-    case kKpRightHand:
-    case kKpRightThumb:
-      return kKpRightWrist;
-    default:
-      return -1;  // the pelvis is the root
-  }
-}
 // Order in which the chain is rebuilt (parents first).
 constexpr int kChainOrder[kNumKeypoints] = {kKpPelvis,     kKpLeftHip,   kKpLeftKnee,  kKpLeftAnkle,     kKpLeftToe,
                                             kKpLeftHeel,   kKpRightHip,  kKpRightKnee, kKpRightAnkle,    kKpRightToe,
@@ -298,7 +255,7 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
   std::array<double, kNumKeypoints> human_length{}, segment_scale{};
   std::vector<double> lengths(src.size());
   for (int k = 0; k < kNumKeypoints; ++k) {
-    const int p = chain_parent(k);
+    const int p = keypoint_parent(k);
     if (p < 0 || !out.present[k]) continue;
     for (std::size_t f = 0; f < src.size(); ++f) lengths[f] = (src[f][k] - src[f][p]).norm();
     const double median = percentile(lengths, 0.5);
@@ -391,7 +348,7 @@ bool make_targets(const Bvh& bvh, const SkeletonMap& map, const model::Model& ro
     t[kKpPelvis] = out.root_scale * (to_robot * h[kKpPelvis]);
     for (int k : kChainOrder) {
       if (k == kKpPelvis) continue;
-      const int p = chain_parent(k);
+      const int p = keypoint_parent(k);
       t[k] = out.present[k] ? t[p] + segment_scale[k] * (to_robot * (h[k] - h[p])) : t[p];
     }
   }

@@ -111,42 +111,6 @@ constexpr const char* kRobotNames[kNumMappedKeypoints] = {
     "legr6linkend", "zarml1link",    "zarml4link",    "zarml7link",   "zarml7linkend", "zarmr1link", "zarmr4link",
     "zarmr7link",   "zarmr7linkend", "zhead2linkend", "zarml7thumb",  "zarmr7thumb",   "legl6heel",  "legr6heel"};
 
-// Chain parent of a keypoint in the skeleton (the joint it must sit below), -1 for none.
-int chain_parent(int kp) {
-  switch (kp) {
-    case kKpLeftKnee:
-      return kKpLeftHip;
-    case kKpLeftAnkle:
-      return kKpLeftKnee;
-    case kKpLeftToe:
-    case kKpLeftHeel:
-      return kKpLeftAnkle;
-    case kKpRightKnee:
-      return kKpRightHip;
-    case kKpRightAnkle:
-      return kKpRightKnee;
-    case kKpRightToe:
-    case kKpRightHeel:
-      return kKpRightAnkle;
-    case kKpLeftElbow:
-      return kKpLeftShoulder;
-    case kKpLeftWrist:
-      return kKpLeftElbow;
-    case kKpLeftHand:
-    case kKpLeftThumb:
-      return kKpLeftWrist;
-    case kKpRightElbow:
-      return kKpRightShoulder;
-    case kKpRightWrist:
-      return kKpRightElbow;
-    case kKpRightHand:
-    case kKpRightThumb:
-      return kKpRightWrist;
-    default:
-      return -1;
-  }
-}
-
 std::string lower_alnum(std::string_view s) {
   std::string out;
   for (char c : s)
@@ -378,8 +342,8 @@ const char* detect_family(const Bvh& bvh, const Match& match) {
 // must be separate branches: a name that misled the matcher stops the import here, loudly.
 std::string check_chains(const Bvh& bvh, const SkeletonMap& map, const std::array<bool, kNumMappedKeypoints>& by_name) {
   for (int k = 0; k < kNumMappedKeypoints; ++k) {
-    const int p = chain_parent(k);
-    if (p < 0 || map.joint[k] < 0 || map.joint[p] < 0 || !by_name[k] || !by_name[p]) continue;
+    const int p = keypoint_parent(k);  // hips, shoulders, head: the pelvis or neck, not mapped
+    if (p < 0 || p >= kNumMappedKeypoints || map.joint[k] < 0 || map.joint[p] < 0 || !by_name[k] || !by_name[p]) continue;
     if (!below(bvh, map.joint[k], map.joint[p]))
       return std::string(kNames[k]) + " '" + bvh.joints[map.joint[k]].name + "' is not below " + kNames[p] + " '" +
              bvh.joints[map.joint[p]].name + "' in the hierarchy";
@@ -511,6 +475,49 @@ bool map_skeleton_with_file(const Bvh& bvh, const std::string& mapping_text, Ske
     out.joint[kp] = j;
   }
   return map_all(bvh, out, error);
+}
+
+int keypoint_parent(int k) {
+  switch (k) {
+    case kKpLeftHip:
+    case kKpRightHip:
+    case kKpNeck:
+      return kKpPelvis;
+    case kKpLeftKnee:
+      return kKpLeftHip;
+    case kKpLeftAnkle:
+      return kKpLeftKnee;
+    case kKpLeftToe:
+    case kKpLeftHeel:
+      return kKpLeftAnkle;
+    case kKpRightKnee:
+      return kKpRightHip;
+    case kKpRightAnkle:
+      return kKpRightKnee;
+    case kKpRightToe:
+    case kKpRightHeel:
+      return kKpRightAnkle;
+    case kKpLeftShoulder:
+    case kKpRightShoulder:
+    case kKpHead:
+      return kKpNeck;
+    case kKpLeftElbow:
+      return kKpLeftShoulder;
+    case kKpLeftWrist:
+      return kKpLeftElbow;
+    case kKpLeftHand:
+    case kKpLeftThumb:
+      return kKpLeftWrist;
+    case kKpRightElbow:
+      return kKpRightShoulder;
+    case kKpRightWrist:
+      return kKpRightElbow;
+    case kKpRightHand:
+    case kKpRightThumb:
+      return kKpRightWrist;
+    default:
+      return -1;  // the pelvis is the root
+  }
 }
 
 }  // namespace kuavo::mocap

@@ -56,6 +56,11 @@ enum Keypoint : int {
   kNumKeypoints
 };
 
+// The keypoint chain (pelvis at the root): the keypoint each one hangs from, -1 for the
+// pelvis. Rebuilding targets with robot proportions walks it; the import checks that mapped
+// joints sit below their parents in the BVH hierarchy.
+int keypoint_parent(int k);
+
 // Stable keypoint names, as used in mapping files: "left_hip", ..., "head", "left_thumb",
 // "right_thumb", "left_heel", "right_heel", "pelvis", "neck".
 const char* keypoint_name(int kp);
