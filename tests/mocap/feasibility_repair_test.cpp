@@ -617,6 +617,118 @@ TEST(mocap_feasibility_repair, UnreachablePelvisHeightDoesNotGetWorse) {
   for (const Vec3& c : corners_of(mid)) EXPECT_LE(std::abs(c.z()), 2.0 * reachable);
 }
 
+// A dancer on straight legs: the pelvis raised until the knees are nearly straight (the
+// human's stance, scaled), then held. The repair lowers the pelvis (listed as pelvis_height)
+// until every stance knee of the IK's output is bent at least min_stance_knee_rad, without a
+// step in the base height; `forbid pelvis` keeps the straight legs.
+TEST(mocap_feasibility_repair, StraightLegsGetTheirKneesBent) {
+  const int knee_l = 7 + 3, knee_r = 7 + model::kLegJoints + 3;
+  // The raise that leaves the knees at ~0.12 rad (bisection on the fixture's own IK).
+  double lo = 0.0, hi = 0.2;
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    Keyframe k = stand_key();
+    k.base_shift.z() = mid;
+    double e = 0.0;
+    const ConfigVector q = frame_of(k, standing().q, &e);
+    (e < 1e-6 && std::min(q[knee_l], q[knee_r]) > 0.12 ? lo : hi) = mid;
+  }
+  const int n = 200;
+  const Motion m = make_motion(n, [&](int) {
+    Keyframe k = stand_key();
+    k.base_shift.z() = lo;
+    return k;
+  });
+  const RepairConfig cfg;
+  ASSERT_LT(std::min(m.q[0][knee_l], m.q[0][knee_r]), cfg.min_stance_knee_rad - 0.2) << "precondition: straight legs";
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  ASSERT_TRUE(has(r, RepairKind::kPelvisHeight));
+  double least_knee = 10.0, largest_dz = 0.0;
+  for (int i = 0; i < static_cast<int>(r.q.size()); ++i) {
+    least_knee = std::min({least_knee, r.q[i][knee_l], r.q[i][knee_r]});
+    if (i > 0) largest_dz = std::max(largest_dz, std::abs(r.q[i][2] - r.q[i - 1][2]));
+  }
+  // The repair plans the lowering on the distance from the hip pitch to the ankle pitch joint
+  // with the standing pose's hip roll; the IK's knee is the oracle: measured 0.457 rad for
+  // 0.5 (the hip roll changes as the leg straightens).
+  EXPECT_GE(least_knee, cfg.min_stance_knee_rad - 0.05);
+  // No step: the lowering (~5 cm here) spread over ±0.25 s, the lead-in's blend included.
+  EXPECT_LT(largest_dz, 3e-3);
+  RecordProperty("least_knee_rad", number(least_knee));
+  RecordProperty("largest_base_step_m", number(largest_dz));
+
+  const RepairedMotion kept = repair(m, {{0.0, 100.0, false, false, RepairKind::kPelvisHeight}});
+  EXPECT_FALSE(has(kept, RepairKind::kPelvisHeight));
+  EXPECT_LT(std::min(kept.q[kept.lead_frames + n / 2][knee_l], kept.q[kept.lead_frames + n / 2][knee_r]), 0.2);
+}
+
+// Walking at 0.6 m/s: steps of 0.3 m, each foot 0.6 m per 1 s cycle (0.15 s double support,
+// 0.35 s swings), within the legs' reach step by step but faster than the robot travels. The
+// repair shortens the steps (listed as travel_speed): the dance travels no faster than
+// max_travel_speed_m_s (the lag is made up by later steps, each within the limit; this walk
+// ends 0.3 m short of the human's end); `forbid travel` keeps the pace.
+TEST(mocap_feasibility_repair, FastTravelIsSlowedToTheRobotsPace) {
+  const int ds = 15, sw = 35, steps = 6, a0 = 40;
+  const int n = a0 + steps * (ds + sw) + 150;
+  const Foot l0 = standing().feet[0], r0 = standing().feet[1];
+  const auto foot_x = [&](int foot, int k) {  // after k steps
+    int moves = foot == 0 ? (k + 1) / 2 : k / 2;
+    return moves == 0 ? 0.0 : 0.3 + 0.6 * (moves - 1) + (foot == 1 ? 0.3 : 0.0);
+  };
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    for (int foot = 0; foot < 2; ++foot) {
+      const Foot base = foot == 0 ? l0 : r0;
+      int taken = 0;
+      for (int s = 0; s < steps; ++s) {
+        const int a = a0 + s * (ds + sw) + ds, b = a + sw;  // swing frames of step s
+        const bool mine = (s % 2 == 0) == (foot == 0);
+        if (!mine) continue;
+        if (i >= b) taken = s + 1;
+        if (i >= a && i < b) {
+          const Foot from = moved(base, foot_x(foot, s));
+          const Foot to = moved(base, foot_x(foot, s + 1));
+          (foot == 0 ? k.left : k.right) = swing(from, to, i, a, b, 0.05);
+          (foot == 0 ? k.left_down : k.right_down) = false;
+          taken = -1;
+          break;
+        }
+      }
+      if (taken >= 0) (foot == 0 ? k.left : k.right) = moved(base, foot_x(foot, taken));
+    }
+    return k;
+  });
+  const RepairConfig cfg;
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  ASSERT_TRUE(has(r, RepairKind::kTravel));
+  // The feet midpoint over the walk (first lift-off to the human's last touchdown, plus one
+  // cycle to catch up): no faster than the limit on average, and at the end where the human is.
+  const int lead = r.lead_frames;
+  const int w0 = lead + a0 + ds, w1 = lead + a0 + steps * (ds + sw);
+  const auto mid_x = [&](int i) {
+    const auto f = feet_of(r.q[i]);
+    return 0.5 * (f[0].centre.x() + f[1].centre.x());
+  };
+  // The window's ends do not fall on the feet's cycles: 0.03 m/s of slack (measured 0.474).
+  const double speed = (mid_x(w1) - mid_x(w0)) / ((w1 - w0) / kRate_hz);
+  EXPECT_LE(speed, cfg.max_travel_speed_m_s + 0.03);
+  // Slowed, not stopped: it still walks at nearly the limit.
+  EXPECT_GE(speed, cfg.max_travel_speed_m_s - 0.1);
+  RecordProperty("walk_speed_m_s", number(speed));
+
+  const RepairedMotion kept = repair(m, {{0.0, 100.0, false, false, RepairKind::kTravel}});
+  EXPECT_FALSE(has(kept, RepairKind::kTravel));
+  const auto mid_kept = [&](int i) {
+    const auto f = feet_of(kept.q[i]);
+    return 0.5 * (f[0].centre.x() + f[1].centre.x());
+  };
+  EXPECT_GT((mid_kept(w1) - mid_kept(w0)) / ((w1 - w0) / kRate_hz), 0.5);
+}
+
 // A shoulder snap (0.5 rad in 50 ms, ~1200 rad/s² peaks): the RNEA oracle prices it beyond
 // the joint's torque limit; the repair smooths the frames around it (listed as
 // upper_body_speed) until the oracle's torque at that shoulder is within the limit, and

@@ -25,6 +25,10 @@ constexpr int kCorners = model::kNumContactPoints / kFeet;
 constexpr double kStanceIkTolerance_m = 2e-3;
 constexpr double kBaseLowerStep_m = 0.01;
 constexpr int kMaxBaseLowerSteps = 20;
+// The knee-bend lowering of the pelvis is spread over this either side [s], and reported
+// where it exceeds kPelvisReport_m.
+constexpr double kPelvisBlend_s = 0.25;
+constexpr double kPelvisReport_m = 0.005;
 // The pelvis stays within this of the feet midpoint's human offset [m] (a weight shift; a
 // pelvis that flew ahead in a leap is brought back over the feet).
 constexpr double kMaxPelvisOffset_m = 0.20;
@@ -91,9 +95,9 @@ class RepairLog {
   std::vector<Repair> list_;
 };
 
-std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
   char buf[200];
-  std::snprintf(buf, sizeof buf, f, a, b, c);
+  std::snprintf(buf, sizeof buf, f, a, b, c, d);
   return buf;
 }
 
@@ -142,6 +146,8 @@ const char* to_string(RepairKind k) {
     case RepairKind::kTail: return "tail";
     case RepairKind::kForcedDouble: return "forced_double_support";
     case RepairKind::kUpperBodySpeed: return "upper_body_speed";
+    case RepairKind::kPelvisHeight: return "pelvis_height";
+    case RepairKind::kTravel: return "travel_speed";
   }
   return "unknown";
 }
@@ -176,13 +182,15 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
       else if (what == "stride") o.forbid = RepairKind::kStride;
       else if (what == "turn") o.forbid = RepairKind::kTurn;
       else if (what == "upper") o.forbid = RepairKind::kUpperBodySpeed;
+      else if (what == "pelvis") o.forbid = RepairKind::kPelvisHeight;
+      else if (what == "travel") o.forbid = RepairKind::kTravel;
       else ok = false;
     } else {
       ok = false;
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|all' or 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|travel|all' or 'START_S END_S force double' "
               "(0 <= START_S < END_S)";
       return false;
     }
@@ -420,6 +428,20 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     Interval& iv = stance[td.foot][td.index];
     const Interval* other = stance_at(1 - td.foot, td.frame);
     if (other == nullptr) continue;  // an allowed flight: nothing to place against
+    // Travel speed: from this foot's previous foothold, no farther than the speed limit over
+    // the time since that touchdown (the stride check below may move it again).
+    if (cfg.max_travel_speed_m_s > 0.0 && td.index > 0 && !forbidden(RepairKind::kTravel, td.frame)) {
+      const Interval& prev = stance[td.foot][td.index - 1];
+      Vec3 step = iv.pose.centre - prev.pose.centre;
+      step.z() = 0.0;
+      const double most = cfg.max_travel_speed_m_s * (iv.a - prev.a) / rate_hz;
+      if (step.norm() > most + kReportMove_m) {
+        iv.pose.centre.head<2>() = prev.pose.centre.head<2>() + (most / step.norm()) * step.head<2>();
+        log.add(RepairKind::kTravel, td.frame, iv.b,
+                fmt("step of %.2f m in %.2f s shortened to %.2f m (travel at most %.2f m/s)", step.norm(),
+                    (iv.a - prev.a) / rate_hz, most, cfg.max_travel_speed_m_s));
+      }
+    }
     const double side = td.foot == 0 ? 1.0 : -1.0;
     const Mat3 r = rot_z(other->pose.yaw);
     Vec3 d = r.transpose() * (iv.pose.centre - other->pose.centre);
@@ -530,6 +552,61 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     base_pos[i] = pos;
     base_rot[i] = rot;
   }
+  // Knees bent in stance: the pelvis comes down where a stance leg (hip pitch to ankle pitch)
+  // would stretch beyond the length its least knee bend gives, the lowering spread over
+  // ±kPelvisBlend_s (a running maximum, then its moving average: never below what a frame
+  // needs, no step in the base height).
+  std::vector<double> knee_lower(n, 0.0);  // how far the knee bend lowered each frame's pelvis
+  if (cfg.min_stance_knee_rad > 0.0) {
+    dynamics::forward_kinematics(robot, *data, q_stand);
+    std::array<Vec3, kFeet> hip_in_base, ankle_from_sole;
+    double thigh = 0.0, shank = 0.0;
+    const Mat3 r0 = Eigen::Quaterniond(q_stand[6], q_stand[3], q_stand[4], q_stand[5]).normalized().toRotationMatrix();
+    for (int f = 0; f < kFeet; ++f) {
+      const int hip = 1 + f * model::kLegJoints + 2, knee = hip + 1, ankle = hip + 2;  // bodies of joints 3, 4, 5
+      hip_in_base[f] = r0.transpose() * (data->position_m[hip] - q_stand.head<3>());
+      ankle_from_sole[f] = rot_z(-stand_feet[f].yaw) * (data->position_m[ankle] - stand_feet[f].centre);
+      thigh = (data->position_m[knee] - data->position_m[hip]).norm();
+      shank = (data->position_m[ankle] - data->position_m[knee]).norm();
+    }
+    const double reach = std::sqrt(thigh * thigh + shank * shank + 2.0 * thigh * shank * std::cos(cfg.min_stance_knee_rad));
+    std::vector<double> need(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      if (!in_dance(i) || forbidden(RepairKind::kPelvisHeight, i)) continue;
+      for (int f = 0; f < kFeet; ++f) {
+        if (!on[i][f]) continue;
+        const Vec3 d = base_pos[i] + base_rot[i] * hip_in_base[f] - (feet[i][f].centre + rot_z(feet[i][f].yaw) * ankle_from_sole[f]);
+        const double h = d.head<2>().norm();
+        if (h >= reach) continue;  // a stride beyond reach: the stride repair's and the IK's business
+        need[i] = std::max(need[i], d.z() - std::sqrt(reach * reach - h * h));
+      }
+    }
+    const int w = std::max(1, frames_of(kPelvisBlend_s));
+    std::vector<double> peak(n, 0.0), lower(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j) peak[i] = std::max(peak[i], need[j]);
+    }
+    for (int i = 0; i < n; ++i) {
+      double sum = 0.0;
+      for (int j = i - w; j <= i + w; ++j) sum += peak[std::clamp(j, 0, n - 1)];
+      lower[i] = sum / (2 * w + 1);
+      base_pos[i].z() -= lower[i];
+      knee_lower[i] = lower[i];
+    }
+    for (int a = 0; a < n;) {
+      if (!(lower[a] > kPelvisReport_m)) {
+        ++a;
+        continue;
+      }
+      int b = a;
+      double most = 0.0;
+      while (b < n && lower[b] > kPelvisReport_m) most = std::max(most, lower[b++]);
+      log.add(RepairKind::kPelvisHeight, a, b,
+              fmt("pelvis lowered up to %.1f cm: the stance knees stay bent at least %.0f deg", 100.0 * most,
+                  cfg.min_stance_knee_rad * 180.0 / kPi));
+      a = b;
+    }
+  }
   // Lead-in and tail: standing on the footholds, blended into / out of the dance.
   const auto standing_base = [&](int i, Vec3& pos, Mat3& rot) {
     const double yaw = std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
@@ -626,8 +703,13 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     // best attempt is kept, not the last.
     ConfigVector best = q;
     double best_error = std::numeric_limits<double>::infinity();
-    for (int tries = 0; tries <= kMaxBaseLowerSteps; ++tries) {
-      q.head<3>() = base_pos[i] - Vec3(0.0, 0.0, tries * kBaseLowerStep_m);
+    // Past the lowering steps: back up towards the height before the knee bend lowered it (a
+    // long stride's rear ankle runs out of dorsiflexion in the deeper crouch).
+    const int raise_steps = static_cast<int>(std::ceil(knee_lower[i] / kBaseLowerStep_m - 1e-9));
+    for (int tries = 0; tries <= kMaxBaseLowerSteps + raise_steps; ++tries) {
+      const double dz = tries <= kMaxBaseLowerSteps ? -tries * kBaseLowerStep_m
+                                                    : std::min(knee_lower[i], (tries - kMaxBaseLowerSteps) * kBaseLowerStep_m);
+      q.head<3>() = base_pos[i] + Vec3(0.0, 0.0, dz);
       leg_ik_lm(robot, *data, targets, q);
       dynamics::forward_kinematics(robot, *data, q);
       stance_error = 0.0;

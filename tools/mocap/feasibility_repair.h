@@ -27,7 +27,7 @@
 // leg gestures stay). Every repair is listed with its time range, kind and reason.
 //
 // Overrides (a text file, like the contact overrides): lines
-//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, or all)
+//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, travel, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
@@ -78,6 +78,22 @@ struct RepairConfig {
   // in dance's punches, ~300 rad/s², which the RNEA prices at 146 N·m on a 60 N·m shoulder)
   // is smoothed over the frames around it.
   double upper_torque_share = 0.5;
+  // Least knee bend of a stance leg [rad]: a human dancer stands on nearly straight legs
+  // (perfume: stance knees at 0.11–0.18 rad, scaled pelvis height kept), where the leg's
+  // Jacobian loses the vertical direction and the controllers lose the base height; the
+  // robot then fell at 14.6 s with both ankles saturated. The built-in dance, which the
+  // online stack dances on floor and carpet, keeps its stance knees at a median of 0.56 rad
+  // (10th percentile 0.40). The pelvis is lowered (smoothly) where a stance leg would be
+  // straighter: 0.5 rad costs at most 2.5 cm of pelvis height. 0 turns it off.
+  double min_stance_knee_rad = 0.5;
+  // Fastest travel [m/s]: a foot's touchdown lies at most this × the time since its previous
+  // touchdown from its previous foothold. The built-in dance, danced on floor and carpet,
+  // travels at most 0.46 m/s (base, 0.5 s average); perfume and cmu_05_07 fell while
+  // travelling at 0.6–0.75 m/s with the stance knee and hip pitch at their torque limits
+  // (130 and 72 N·m) and the robot running ahead of its plan. The dance travels a shorter
+  // path; later steps make up the lag (each within the limit); a lag left at the end stays
+  // (the stride repair's relative placement carries it). 0 turns it off.
+  double max_travel_speed_m_s = 0.45;
 };
 
 enum class RepairKind : int {
@@ -91,6 +107,8 @@ enum class RepairKind : int {
   kTail = 7,         // both feet brought down at the end
   kForcedDouble = 8, // override: both feet down
   kUpperBodySpeed = 9,  // arm/head accelerations beyond their torques: smoothed
+  kPelvisHeight = 10,   // pelvis lowered so the stance knees stay bent
+  kTravel = 11,         // a step shortened so the dance travels no faster than the robot can
 };
 const char* to_string(RepairKind k);
 
