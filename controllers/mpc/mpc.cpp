@@ -260,7 +260,7 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   st.q = (scale * ws.weight_state).cwiseProduct(state_error(ws.x[k], ws.x_ref[k]));
   add_joint_limit_barrier(cfg, ws, ws.x[k], scale, st);  // same scale: same equilibrium as the stages
   if (terminal) return;
-  if (cfg.ankle_torque_share > 0.0) {
+  if (cfg.stance_leg_torque_share > 0.0) {
     st.R.template block<3 * kNumPoints, 3 * kNumPoints>(kUForces, kUForces).setZero();
   } else {
     for (int c = 0; c < kNumPoints; ++c) st.R.template block<3, 3>(kUForces + 3 * c, kUForces + 3 * c).setZero();
@@ -324,14 +324,14 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
   }
 }
 
-// Ankle pitch and roll torques of the stance feet (MpcConfig::ankle_torque_share): the moment
-// Σ (p_c − p_ankle) × f_c about the joint axis is g·f with g_c = axis × (p_c − p_ankle), world
-// axes; a relaxed barrier on both sides of the limit, Gauss-Newton on the forces only (the
-// geometry is fixed in the foot). Writes R's off-diagonal corner blocks: build_stage_cost
-// clears the whole force block when this is on.
-void add_ankle_torque_barrier(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
+// Leg joint torques of the stance feet (MpcConfig::stance_leg_torque_share): the moment
+// Σ (p_c − o_j) × f_c of the foot's corner forces about joint j's axis is g·f with
+// g_c = axis × (p_c − o_j), world axes; a relaxed barrier on both sides of the limit,
+// Gauss-Newton on the forces only (the leg geometry of the iterate). Writes R's off-diagonal
+// corner blocks: build_stage_cost clears the whole force block when this is on.
+void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
                               const planner::PlanKnot& knot, int k) {
-  if (cfg.ankle_torque_share <= 0.0) return;
+  if (cfg.stance_leg_torque_share <= 0.0) return;
   auto& st = ws.qp.stages[k];
   const CentroidalPoint& p = ws.point;
   constexpr int kFootForces = 3 * kPointsPerFoot;
@@ -340,7 +340,7 @@ void add_ankle_torque_barrier(const model::Model& model, const MpcConfig& cfg, M
     bool any = false;
     for (int c = first; c < first + kPointsPerFoot; ++c) any = any || knot.in_contact[c];
     if (!any) continue;
-    for (int joint = 4; joint < 6; ++joint) {  // ankle pitch, ankle roll
+    for (int joint = 0; joint < model::kLegJoints; ++joint) {  // hip roll … ankle roll
       const int j = foot * model::kLegJoints + joint;
       const int body = j + 1;
       const Vec3 axis = p.rotation * (p.data.rotation[body] * model.bodies[body].axis);
@@ -354,10 +354,10 @@ void add_ankle_torque_barrier(const model::Model& model, const MpcConfig& cfg, M
         g.segment<3>(3 * (c - first)) = gc;
         tau += gc.dot(ws.u[k].segment<3>(kUForces + 3 * c));
       }
-      const double limit = cfg.ankle_torque_share * model.limits.torque_Nm[j];
+      const double limit = cfg.stance_leg_torque_share * model.limits.torque_Nm[j];
       for (const double sign : {1.0, -1.0}) {
         double d1, d2;
-        relaxed_barrier(limit - sign * tau, cfg.ankle_torque_barrier_mu, cfg.ankle_torque_barrier_delta_Nm, d1, d2);
+        relaxed_barrier(limit - sign * tau, cfg.leg_torque_barrier_mu, cfg.leg_torque_barrier_delta_Nm, d1, d2);
         const int col = kUForces + 3 * first;
         st.R.template block<kFootForces, kFootForces>(col, col).noalias() += (cfg.dt_s * d2) * g * g.transpose();
         st.r.template segment<kFootForces>(col) -= (cfg.dt_s * d1 * sign) * g;
@@ -423,9 +423,9 @@ const char* mpc_validate_config(const MpcConfig& c) {
   if (!(c.swing_position_gain_1_s >= 0.0 && std::isfinite(c.swing_position_gain_1_s))) {
     return "swing_position_gain_1_s must be finite and >= 0";
   }
-  if (!(c.ankle_torque_share >= 0.0 && c.ankle_torque_share <= 1.0) || !(c.ankle_torque_barrier_mu > 0.0) ||
-      !(c.ankle_torque_barrier_delta_Nm > 0.0) || !std::isfinite(c.ankle_torque_barrier_mu + c.ankle_torque_barrier_delta_Nm)) {
-    return "ankle_torque_share must be in [0, 1], its barrier mu and delta finite and > 0";
+  if (!(c.stance_leg_torque_share >= 0.0 && c.stance_leg_torque_share <= 1.0) || !(c.leg_torque_barrier_mu > 0.0) ||
+      !(c.leg_torque_barrier_delta_Nm > 0.0) || !std::isfinite(c.leg_torque_barrier_mu + c.leg_torque_barrier_delta_Nm)) {
+    return "stance_leg_torque_share must be in [0, 1], its barrier mu and delta finite and > 0";
   }
   if (!(c.stance_position_gain_1_s >= 0.0 && c.stance_position_gain_1_s <= 100.0)) {
     return "stance_position_gain_1_s must be in [0, 100]";
@@ -599,7 +599,7 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     }
     build_stage_cost(cfg, ws, knot, k, false);
     add_swing_xy_cost(model, cfg, ws, knot, k);
-    add_ankle_torque_barrier(model, cfg, ws, knot, k);
+    add_stance_leg_torque_barrier(model, cfg, ws, knot, k);
     violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
   }
   build_stage_cost(cfg, ws, reference.knots[T], T, true);

@@ -114,19 +114,21 @@ struct MpcConfig {
   double joint_limit_barrier_mu = 0.01;
   double joint_limit_barrier_delta_rad = 0.02;
 
-  // Ankle torque of each stance foot: the moment of its corner forces about the ankle pitch
-  // and roll joints stays within this share of their torque limits (relaxed barrier, δ in
-  // N·m). The corners sit 0.1–0.15 m ahead of and behind the ankle, so the friction pyramids
-  // and the support polygon allow a centre of pressure the two 27 N·m ankle motors cannot
-  // hold: perfume's dynamic motion kept its CoM 0.09 m ahead, both ankles saturated and the
-  // robot tipped over at 14.8 s (20.7 s with the term offline only, 25.5 s with it online
-  // too). Linear in the forces with the foot geometry of the iterate (lagged: no state
-  // gradient), so convex. μ small enough that standing (≈ 8 N·m per ankle) feels no pull
-  // (the barrier's gradient at rest, 2μτ/L², moved the standing CoM 1.3 mm/s with μ = 0.1),
-  // δ small so that a violation costs as much as with μ = 0.1, δ = 1. 0 = off.
-  double ankle_torque_share = 0.9;
-  double ankle_torque_barrier_mu = 0.01;
-  double ankle_torque_barrier_delta_Nm = 0.2;
+  // Leg joint torques of each stance foot: the moment of its corner forces about each of the
+  // leg's six joint axes stays within this share of the joint's torque limit (relaxed
+  // barrier, δ in N·m). The corners sit 0.1–0.15 m ahead of and behind the ankle, so the
+  // friction pyramids and the support polygon allow a centre of pressure the two 27 N·m ankle
+  // motors cannot hold (perfume: CoM 0.09 m ahead, both ankles saturated, fell at 14.8 s),
+  // and a crouch or a turn on one foot loads the knee (130 N·m) and hip yaw (20 N·m) beyond
+  // theirs (perfume's spin at 23–26 s: 230 and 116 N·m in the TO's result). Linear in the
+  // forces with the leg geometry of the iterate (lagged: no state gradient), so convex; the
+  // legs' own weight and inertia are left out (a few N·m at the hip). μ small enough that
+  // standing (≈ 8 N·m per ankle) feels no pull (the barrier's gradient at rest, 2μτ/L², moved
+  // the standing CoM 1.3 mm/s with μ = 0.1), δ small so that a violation costs as much as
+  // with μ = 0.1, δ = 1. 0 = off.
+  double stance_leg_torque_share = 0.9;
+  double leg_torque_barrier_mu = 0.01;
+  double leg_torque_barrier_delta_Nm = 0.2;
 
   // Swing normal-velocity row gain: v_z = v_z,ref + k (z_ref − z). Leju positionErrorGain 20.
   double swing_position_gain_1_s = 20.0;

@@ -295,16 +295,16 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
     cost += c.dt_s * (barrier(qj - f.model.limits.position_min_rad[j], c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad) +
                       barrier(f.model.limits.position_max_rad[j] - qj, c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad));
   }
-  // Ankle pitch and roll torques of the stance feet from their corner forces (mpc.h: the
+  // Leg joint torques of the stance feet from their corner forces (mpc.h: the
   // foot geometry is the linearization point's, so the term has no state gradient), world
   // kinematics of the whole configuration (the MPC works in base axes).
-  if (c.ankle_torque_share > 0.0) {
+  if (c.stance_leg_torque_share > 0.0) {
     dynamics::forward_kinematics(f.model, data, mpc::configuration_from_state(f.ws.x[k], f.ws.head_rad[k]));
     for (int foot = 0; foot < 2; ++foot) {
       bool down = false;
       for (int p = 4 * foot; p < 4 * foot + 4; ++p) down = down || knot.in_contact[p];
       if (!down) continue;
-      for (const int joint : {4, 5}) {
+      for (int joint = 0; joint < 6; ++joint) {
         const int body = 1 + 6 * foot + joint;
         const dynamics::Vec3 axis = data.rotation[body] * f.model.bodies[body].axis;
         double tau = 0.0;
@@ -313,9 +313,9 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
           const dynamics::Vec3 r = dynamics::frame_position(f.model, data, p) - data.position_m[body];
           tau += axis.dot(r.cross(dynamics::Vec3(u.segment<3>(3 * p))));
         }
-        const double limit = c.ankle_torque_share * f.model.limits.torque_Nm[6 * foot + joint];
-        cost += c.dt_s * (barrier(limit - tau, c.ankle_torque_barrier_mu, c.ankle_torque_barrier_delta_Nm) +
-                          barrier(limit + tau, c.ankle_torque_barrier_mu, c.ankle_torque_barrier_delta_Nm));
+        const double limit = c.stance_leg_torque_share * f.model.limits.torque_Nm[6 * foot + joint];
+        cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
+                          barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
       }
     }
   }
