@@ -664,6 +664,38 @@ TEST(mocap_feasibility_repair, StraightLegsGetTheirKneesBent) {
   EXPECT_LT(std::min(kept.q[kept.lead_frames + n / 2][knee_l], kept.q[kept.lead_frames + n / 2][knee_r]), 0.2);
 }
 
+// A deep crouch: the pelvis lowered until the knees fold past max_stance_knee_rad (within the
+// legs' reach). The repair raises the pelvis (pelvis_height) until the IK's stance knees are
+// within the bound.
+TEST(mocap_feasibility_repair, DeepCrouchIsRaisedToTheKneeBound) {
+  const int knee_l = 7 + 3, knee_r = 7 + model::kLegJoints + 3;
+  const RepairConfig cfg;
+  double lo = 0.0, hi = 0.3;  // the drop that folds the knees to max + 0.3 rad
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    Keyframe k = stand_key();
+    k.base_shift.z() = -mid;
+    double e = 0.0;
+    const ConfigVector q = frame_of(k, standing().q, &e);
+    (e < 1e-6 && std::max(q[knee_l], q[knee_r]) < cfg.max_stance_knee_rad + 0.3 ? lo : hi) = mid;
+  }
+  const int n = 200;
+  const Motion m = make_motion(n, [&](int) {
+    Keyframe k = stand_key();
+    k.base_shift.z() = -lo;
+    return k;
+  });
+  ASSERT_GT(std::max(m.q[0][knee_l], m.q[0][knee_r]), cfg.max_stance_knee_rad + 0.2) << "precondition: a deep crouch";
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  ASSERT_TRUE(has(r, RepairKind::kPelvisHeight));
+  double deepest = 0.0;
+  for (const ConfigVector& q : r.q) deepest = std::max({deepest, q[knee_l], q[knee_r]});
+  EXPECT_LE(deepest, cfg.max_stance_knee_rad + 0.05);
+  RecordProperty("deepest_knee_rad", number(deepest));
+}
+
 // Walking at 0.6 m/s: steps of 0.3 m, each foot 0.6 m per 1 s cycle (0.15 s double support,
 // 0.35 s swings), within the legs' reach step by step but faster than the robot travels. The
 // repair shortens the steps (listed as travel_speed): the dance travels no faster than

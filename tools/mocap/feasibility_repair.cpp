@@ -292,10 +292,15 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       if (forbidden(RepairKind::kFlight, i)) {
         change({false, false});
       } else {
+        // A leap keeps its last foot down; its lifted foot comes down after the robot's
+        // shortest swing (a flight longer than that is no leap the robot can stand through on
+        // one leg: cmu_05_07's 1.7 s "flight" at 7.3 s, a fall on one leg at 8.0 s).
+        const bool land = !both && (state[0] || state[1]) && in_state >= min_swing;
         log.add(RepairKind::kFlight, i, i + 1,
                 both ? "both feet in the air (hop): kept in double support, the pelvis keeps its bounce"
-                     : "both feet in the air (leap): the last foot stays down until the other lands");
-        if (!state[0] && !state[1]) change({true, true});
+                : land ? "both feet in the air (long leap): the lifted foot comes down after the robot's shortest swing"
+                       : "both feet in the air (leap): the last foot stays down until the other lands");
+        if ((!state[0] && !state[1]) || land) change({true, true});
       }
     } else if (!state[0] && !state[1]) {
       change(w);  // an allowed flight ends wherever the human lands
@@ -552,12 +557,14 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     base_pos[i] = pos;
     base_rot[i] = rot;
   }
-  // Knees bent in stance: the pelvis comes down where a stance leg (hip pitch to ankle pitch)
-  // would stretch beyond the length its least knee bend gives, the lowering spread over
-  // ±kPelvisBlend_s (a running maximum, then its moving average: never below what a frame
-  // needs, no step in the base height).
+  // Stance knees within [min_stance_knee_rad, max_stance_knee_rad]: the pelvis comes down
+  // where a stance leg (hip pitch to ankle pitch) would stretch beyond the length its least
+  // knee bend gives, and up where it would fold below the length its deepest bend gives. Each
+  // spread over ±kPelvisBlend_s (a running maximum, then its moving average: never below what
+  // a frame needs, no step in the base height); a frame that needs both (a lunge) gets their
+  // sum.
   std::vector<double> knee_lower(n, 0.0);  // how far the knee bend lowered each frame's pelvis
-  if (cfg.min_stance_knee_rad > 0.0) {
+  if (cfg.min_stance_knee_rad > 0.0 || cfg.max_stance_knee_rad > 0.0) {
     dynamics::forward_kinematics(robot, *data, q_stand);
     std::array<Vec3, kFeet> hip_in_base, ankle_from_sole;
     double thigh = 0.0, shank = 0.0;
@@ -569,41 +576,57 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       thigh = (data->position_m[knee] - data->position_m[hip]).norm();
       shank = (data->position_m[ankle] - data->position_m[knee]).norm();
     }
-    const double reach = std::sqrt(thigh * thigh + shank * shank + 2.0 * thigh * shank * std::cos(cfg.min_stance_knee_rad));
-    std::vector<double> need(n, 0.0);
+    const auto leg_length = [&](double knee) {
+      return std::sqrt(thigh * thigh + shank * shank + 2.0 * thigh * shank * std::cos(knee));
+    };
+    const double longest = cfg.min_stance_knee_rad > 0.0 ? leg_length(cfg.min_stance_knee_rad) : thigh + shank;
+    const double shortest = cfg.max_stance_knee_rad > 0.0 ? leg_length(cfg.max_stance_knee_rad) : 0.0;
+    std::vector<double> need_down(n, 0.0), need_up(n, 0.0);
     for (int i = 0; i < n; ++i) {
-      if (!in_dance(i) || forbidden(RepairKind::kPelvisHeight, i)) continue;
+      // The lead-in and tail frames too: they blend from standing into the first (out of the
+      // last) dance pose, which must be the corrected one (or not, as that pose's override says).
+      if (forbidden(RepairKind::kPelvisHeight, std::clamp(i, lead, lead + n_dance - 1))) continue;
       for (int f = 0; f < kFeet; ++f) {
         if (!on[i][f]) continue;
         const Vec3 d = base_pos[i] + base_rot[i] * hip_in_base[f] - (feet[i][f].centre + rot_z(feet[i][f].yaw) * ankle_from_sole[f]);
         const double h = d.head<2>().norm();
-        if (h >= reach) continue;  // a stride beyond reach: the stride repair's and the IK's business
-        need[i] = std::max(need[i], d.z() - std::sqrt(reach * reach - h * h));
+        // A stride beyond reach is the stride repair's and the IK's business.
+        if (h < longest) need_down[i] = std::max(need_down[i], d.z() - std::sqrt(longest * longest - h * h));
+        if (h < shortest) need_up[i] = std::max(need_up[i], std::sqrt(shortest * shortest - h * h) - d.z());
       }
     }
     const int w = std::max(1, frames_of(kPelvisBlend_s));
-    std::vector<double> peak(n, 0.0), lower(n, 0.0);
+    const auto spread = [&](const std::vector<double>& need) {
+      std::vector<double> peak(n, 0.0), out(n, 0.0);
+      for (int i = 0; i < n; ++i) {
+        for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j) peak[i] = std::max(peak[i], need[j]);
+      }
+      for (int i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int j = i - w; j <= i + w; ++j) sum += peak[std::clamp(j, 0, n - 1)];
+        out[i] = sum / (2 * w + 1);
+      }
+      return out;
+    };
+    const std::vector<double> lower = spread(need_down), raise = spread(need_up);
     for (int i = 0; i < n; ++i) {
-      for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j) peak[i] = std::max(peak[i], need[j]);
-    }
-    for (int i = 0; i < n; ++i) {
-      double sum = 0.0;
-      for (int j = i - w; j <= i + w; ++j) sum += peak[std::clamp(j, 0, n - 1)];
-      lower[i] = sum / (2 * w + 1);
-      base_pos[i].z() -= lower[i];
-      knee_lower[i] = lower[i];
+      base_pos[i].z() += raise[i] - lower[i];
+      knee_lower[i] = std::max(0.0, lower[i] - raise[i]);
     }
     for (int a = 0; a < n;) {
-      if (!(lower[a] > kPelvisReport_m)) {
+      if (!(lower[a] > kPelvisReport_m || raise[a] > kPelvisReport_m)) {
         ++a;
         continue;
       }
       int b = a;
-      double most = 0.0;
-      while (b < n && lower[b] > kPelvisReport_m) most = std::max(most, lower[b++]);
+      double down = 0.0, up = 0.0;
+      while (b < n && (lower[b] > kPelvisReport_m || raise[b] > kPelvisReport_m)) {
+        down = std::max(down, lower[b]);
+        up = std::max(up, raise[b++]);
+      }
       log.add(RepairKind::kPelvisHeight, a, b,
-              fmt("pelvis lowered up to %.1f cm: the stance knees stay bent at least %.0f deg", 100.0 * most,
-                  cfg.min_stance_knee_rad * 180.0 / kPi));
+              fmt("pelvis lowered up to %.1f cm, raised up to %.1f cm: the stance knees stay within %.0f..%.0f deg",
+                  100.0 * down, 100.0 * up, cfg.min_stance_knee_rad * 180.0 / kPi, cfg.max_stance_knee_rad * 180.0 / kPi));
       a = b;
     }
   }

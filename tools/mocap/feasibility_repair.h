@@ -86,6 +86,11 @@ struct RepairConfig {
   // (10th percentile 0.40). The pelvis is lowered (smoothly) where a stance leg would be
   // straighter: 0.5 rad costs at most 2.5 cm of pelvis height. 0 turns it off.
   double min_stance_knee_rad = 0.5;
+  // Deepest knee bend of a stance leg [rad]: the pelvis is raised where a crouch would fold a
+  // stance knee further. perfume's deepest stance knee (1.43 rad after the repair) is danced;
+  // cmu_05_07's crouch at 7.5 s (pelvis at 0.51 m, knee 1.97 rad) asked 414 N·m of a hip
+  // pitch (limit 72) in the TO's result and fell. 0 turns it off.
+  double max_stance_knee_rad = 1.45;
   // Fastest travel [m/s]: a foot's touchdown lies at most this × the time since its previous
   // touchdown from its previous foothold. The built-in dance, danced on floor and carpet,
   // travels at most 0.46 m/s (base, 0.5 s average); perfume and cmu_05_07 fell while
@@ -107,7 +112,7 @@ enum class RepairKind : int {
   kTail = 7,         // both feet brought down at the end
   kForcedDouble = 8, // override: both feet down
   kUpperBodySpeed = 9,  // arm/head accelerations beyond their torques: smoothed
-  kPelvisHeight = 10,   // pelvis lowered so the stance knees stay bent
+  kPelvisHeight = 10,   // pelvis lowered / raised so the stance knees stay within their bend range
   kTravel = 11,         // a step shortened so the dance travels no faster than the robot can
 };
 const char* to_string(RepairKind k);
