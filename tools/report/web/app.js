@@ -131,19 +131,24 @@
   const kForceScale_m_per_N = 1 / 600;  // a standing foot corner (~135 N) draws 0.22 m
   const kFootLoaded_N = 20;             // as sim/motion_loop.cpp: a foot counts in the support above this
   const human = K.human;
-  let humanLines = null;
+  let humanLines = null, humanPoints = null;  // bones, and the keypoints as dots
   if (human) {
     const g = new THREE.BufferGeometry();
     g.setAttribute("position", new THREE.BufferAttribute(new Float32Array(6 * human.bones.length), 3));
     humanLines = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0x1f77b4, transparent: true, opacity: 0.85 }));
     humanLines.frustumCulled = false;
     scene.add(humanLines);
+    const gp = new THREE.BufferGeometry();
+    gp.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * human.names.length), 3));
+    humanPoints = new THREE.Points(gp, new THREE.PointsMaterial({ color: 0x1f77b4, size: 7, sizeAttenuation: false, transparent: true }));
+    humanPoints.frustumCulled = false;
+    scene.add(humanPoints);
     human.frames_f32 = new Float32Array(decodeBase64(human.data));
   }
   const kHumanBeside_m = 0.9;  // "beside": the skeleton walks 0.9 m to the robot's left
 
   // ---- camera: orbit around the robot, following it --------------------------------------
-  const orbit = { azimuth: -0.9, elevation: 0.3, distance: 3.0, target: new THREE.Vector3(0, 0, 0.8) };
+  const orbit = { azimuth: -0.9, elevation: 0.3, distance: 3.4, target: new THREE.Vector3(0, 0, 0.8) };
   function placeCamera() {
     const t = orbit.target, d = orbit.distance;
     camera.position.set(t.x + d * Math.cos(orbit.elevation) * Math.cos(orbit.azimuth),
@@ -388,11 +393,15 @@
     if (humanLines) {
       const mode = $("human-mode").value;
       const hf = Math.round((t_s - human.t0_s) * human.rate_hz);
-      humanLines.visible = run.meta.human && mode !== "off" && hf >= 0 && hf < human.frames;
+      humanLines.visible = humanPoints.visible = run.meta.human && mode !== "off" && hf >= 0 && hf < human.frames;
       if (humanLines.visible) {
         const nk = human.names.length, src = human.frames_f32, dst = humanLines.geometry.attributes.position;
         const dy = mode === "beside" ? kHumanBeside_m : 0;
         humanLines.material.opacity = mode === "over" ? 0.6 : 0.9;
+        const pts = humanPoints.geometry.attributes.position;
+        for (let k = 0; k < nk; k++) pts.setXYZ(k, src[(hf * nk + k) * 3], src[(hf * nk + k) * 3 + 1] + dy, src[(hf * nk + k) * 3 + 2]);
+        pts.needsUpdate = true;
+        humanPoints.material.opacity = humanLines.material.opacity;
         human.bones.forEach(([a, b], i) => {
           dst.setXYZ(2 * i, src[(hf * nk + a) * 3], src[(hf * nk + a) * 3 + 1] + dy, src[(hf * nk + a) * 3 + 2]);
           dst.setXYZ(2 * i + 1, src[(hf * nk + b) * 3], src[(hf * nk + b) * 3 + 1] + dy, src[(hf * nk + b) * 3 + 2]);
@@ -400,7 +409,9 @@
         dst.needsUpdate = true;
       }
     }
-    orbit.target.set(d[o + L.base], d[o + L.base + 1] + (humanLines && humanLines.visible && $("human-mode").value === "beside" ? kHumanBeside_m / 2 : 0), 0.75);
+    // The camera follows the robot (between it and the skeleton's lane when the run has one; the
+    // view does not jump when the skeleton is shown or hidden).
+    orbit.target.set(d[o + L.base], d[o + L.base + 1] + (run.meta.human ? kHumanBeside_m / 2 : 0), 0.75);
     $("clock").textContent = t_s.toFixed(2) + " / " + run.meta.duration_s.toFixed(2) + " s";
     $("scrub").value = Math.round(1000 * t_s / run.meta.duration_s);
     drawTimelineCursor();
@@ -461,7 +472,7 @@
     const table = document.createElement("table");
     const tr = table.insertRow();
     for (const c of t.header) { const th = document.createElement("th"); th.textContent = c; tr.appendChild(th); }
-    for (const r of t.rows) { const row = table.insertRow(); for (const c of r) row.insertCell().textContent = c; }
+    for (const r of t.rows) { const row = table.insertRow(); for (const c of r) row.insertCell().textContent = c.replace(/\*\*/g, ""); }
     sec.appendChild(table);
     if (t.note) { const p = document.createElement("p"); p.textContent = t.note; sec.appendChild(p); }
   }
