@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "rtos_shim/clock.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -81,11 +82,12 @@ std::vector<std::string> cells(const Case& c) {
           f("%llu", static_cast<unsigned long long>(s.deadline_misses))};
 }
 
-// The expected cost of each stage in seconds of wall time per simulated second (measured on
-// the development VM, Release build): only for the progress line's share of each stage.
-constexpr double kRetargetCost = 0.35;   // geometric + repair + TO, per second of dance
+// The progress line counts wall seconds: those spent are measured, those to come estimated
+// from the cost (wall seconds per simulated second) of the motion runs so far. Before the
+// first run, these guesses (the development VM, Release build; MPC planner):
 constexpr double kMotionRunCost = 0.33;  // a dance or stepping run on the online stack
-constexpr double kStandRunCost = 0.1;    // the standing controller
+constexpr double kStandRunCost = 0.12;   // the standing controller
+constexpr double kReportCost_s = 2.0;    // SVG plots and the HTML report's data
 
 }  // namespace
 
@@ -116,6 +118,8 @@ int run_demo(int argc, char** argv) {
   ::mkdir(out.c_str(), 0755);
   Progress progress(quiet);
   progress.set_total(1.0);
+  const rtos::TimeNs start_ns = rtos::now_ns();
+  const auto wall_s = [&] { return 1e-9 * static_cast<double>(rtos::now_ns() - start_ns); };
   auto stage = [&](const char* text) {
     progress.clear();
     if (!quiet) std::printf("%s\n", text);
@@ -147,13 +151,16 @@ int run_demo(int argc, char** argv) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 1;
   }
-  // Progress in expected wall seconds: the retargeting done, the runs to come.
+  // Simulated seconds still to run (motion runs settle 1 s after the motion), and their cost.
   const double dance_s = planner::motion_plan_duration_s(*dance);
   const double steps_s = planner::motion_plan_duration_s(*steps);
-  const double retarget_work = kRetargetCost * dance_s;
-  const double total_work = retarget_work + kMotionRunCost * (3.0 * (dance_s + 1.0) + steps_s + 1.0) + kStandRunCost * 20.0;
-  double work_done = retarget_work;
-  progress.set_total(total_work);
+  double motion_left_s = 3.0 * (dance_s + 1.0) + steps_s + 1.0;
+  double run_cost = kMotionRunCost;
+  const auto estimate_total = [&] {
+    progress.set_total(wall_s() + run_cost * motion_left_s + kStandRunCost * 20.0 + kReportCost_s);
+  };
+  estimate_total();
+  double work_done = wall_s();
 
   std::vector<Case> cases;
   auto run_case = [&](const std::string& name, const std::string& description, const planner::MotionPlan& plan,
@@ -164,10 +171,16 @@ int run_demo(int argc, char** argv) {
     cfg.stack.planner = planner_kind;
     cfg.run.log_path = out + "/" + name + ".csv";
     const double before = work_done;
-    cfg.on_progress = [&](double t_s) { progress.update(before + kMotionRunCost * t_s, name + ": simulating " + std::to_string(static_cast<int>(t_s)) + " s"); };
+    cfg.on_progress = [&](double t_s) {
+      progress.update(before + run_cost * t_s, name + ": simulating " + std::to_string(static_cast<int>(t_s)) + " s");
+    };
     Case c{name, description, {}, {}};
     c.summary = sim::run_motion(*robot, plan, cfg, &c.trace);
-    work_done = before + kMotionRunCost * c.summary.run.sim_time_s;
+    // A run that falls stops early: what it did not simulate is work not to come.
+    motion_left_s -= planner::motion_plan_duration_s(plan) + cfg.settle_s;
+    if (c.summary.run.sim_time_s > 0.0) run_cost = (wall_s() - before) / c.summary.run.sim_time_s;
+    estimate_total();
+    work_done = wall_s();
     std::ofstream(out + "/" + name + ".json") << sim::motion_summary_json(c.summary);
     if (!write_motion_plots(*robot, c.trace, out + "/" + name, name, error)) std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     cases.push_back(std::move(c));
@@ -202,7 +215,7 @@ int run_demo(int argc, char** argv) {
         rc != 0) {
       return rc;
     }
-    work_done += kStandRunCost * 10.0;
+    work_done = wall_s();
   }
 
   stage("== 5/5 report");
