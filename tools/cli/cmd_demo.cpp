@@ -15,7 +15,6 @@
 //      replay of every run with the human skeleton, plots, timeline (repairs, pushes, falls)
 //      and the same tables.
 // The carpet runs' push comes at 15 s in the built-in dance, mid-dance in another.
-#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
@@ -115,7 +114,14 @@ int run_demo(int argc, char** argv) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 2;
   }
-  ::mkdir(out.c_str(), 0755);
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out, ec);
+    if (ec) {
+      std::fprintf(stderr, "kuavo demo: %s: %s\n", out.c_str(), ec.message().c_str());
+      return 1;
+    }
+  }
   Progress progress(quiet);
   progress.set_total(1.0);
   const rtos::TimeNs start_ns = rtos::now_ns();

@@ -362,8 +362,11 @@ bool human_json(const std::string& path, Json& out, std::string& error) {
 bool classic_three(const std::string& module_source, std::string& out, std::string& error) {
   const std::size_t at = module_source.rfind("export{");
   const std::size_t close = at == std::string::npos ? at : module_source.find('}', at);
-  if (close == std::string::npos || module_source.find("import", 0) == 0) {
-    error = "three.module.min.js: no single export list at its end";
+  // The shape this relies on: nothing but ";" and space after the export list, no imports.
+  const bool tail_clean = close != std::string::npos &&
+                          module_source.find_first_not_of("; \n\r\t", close + 1) == std::string::npos;
+  if (!tail_clean || module_source.find("from\"./") != std::string::npos || module_source.find("from\"three") != std::string::npos) {
+    error = "three.module.min.js: not one self-contained module ending with its export list";
     return false;
   }
   std::string object;

@@ -5,7 +5,10 @@
 // triangle budget, so every surface point moves by at most one cell diagonal. Clustering keeps
 // the silhouette, needs no connectivity (Leju's STL files are triangle soups) and is a few
 // dozen lines; quadric edge collapse would keep flat regions better but is not needed at the
-// ~1 000 triangles per link a replay shows. Offline code; allocates.
+// ~1 000 triangles per link a replay shows (Debian's meshlab has it, but as a GUI application
+// with a large dependency tree and version-specific filter scripts: too much for a build step
+// of a report). Runs at report time from ../shared, so no derived mesh is committed.
+// Offline code; allocates.
 #pragma once
 
 #include <array>
