@@ -271,7 +271,8 @@ int run_demo(int argc, char** argv) {
        << "The numbers are in `retarget_report.json` → `dynamic` (RNEA oracle, repairs, expressiveness).\n\n"
        << "![Fig. 4](fig4_knee.svg)\n\n![Fig. 5](fig5_dynamics.svg)\n\n";
   }
-  md << "## Retargeting the built-in dance (`dance.motion`, `dance.csv`, `dance.bvh`)\n\n```json\n"
+  md << "## Retargeting the " << dance_name << " (`dance.motion`, `dance.csv`" << (input.empty() ? ", `dance.bvh`" : "")
+     << ", `human.csv`)\n\n```json\n"
      << slurp(out + "/retarget_report.json") << "\n```\n\n"
      << "## Standing, 10 N·s forward push at t = 5 s\n\n";
   for (const char* ground : {"floor", "carpet"}) {
