@@ -5,6 +5,7 @@
 #include "tools/cli/html_report.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -45,7 +46,10 @@ class HtmlReportData : public ::testing::Test {
  protected:
   void SetUp() override {
     ASSERT_EQ(model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, robot_), model::ModelError::kOk);
-    dir_ = fs::temp_directory_path() / "kuavo_html_report_test";
+    // One folder per test: ctest runs the tests of this file in parallel processes.
+    dir_ = fs::temp_directory_path() /
+           (std::string("kuavo_html_report_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     std::ofstream log(dir_ / "run.csv");

@@ -3,6 +3,7 @@
 #include "tools/report/mesh_decimate.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -97,7 +98,7 @@ TEST(MeshDecimate, EncodingReadsBackWithinItsStep) {
 }
 
 TEST(MeshDecimate, ReadsBinaryAndAsciiStlAndRefusesOthers) {
-  const auto dir = std::filesystem::temp_directory_path() / "kuavo_stl_test";
+  const auto dir = std::filesystem::temp_directory_path() / ("kuavo_stl_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const float tri[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}};
   {
