@@ -193,10 +193,15 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
 
   const rtos::TimeNs wall_start = rtos::now_ns();
   rtos::SimEvent ev;
+  rtos::TimeNs next_progress_ns = 0;
   while (sched.next(ev)) {
     if (ev.kind == rtos::SimEventKind::kPlanApply) {
       stack::stack_apply_plan_rt(*control, *pending);
     } else if (ev.kind == rtos::SimEventKind::kControlTick) {
+      if (config.on_progress && ev.time_ns >= next_progress_ns) {
+        config.on_progress(1e-9 * static_cast<double>(ev.time_ns));
+        next_progress_ns += static_cast<rtos::TimeNs>(MotionRunConfig::kProgressPeriod_s * 1e9);
+      }
       const PlantTruth& truth = plant.truth();
       sensors.sample(truth, ev.time_ns, frame);
       stack::StateOverride state;

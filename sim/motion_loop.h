@@ -5,6 +5,7 @@
 // log bytes (compute-time figures in the summary are wall-clock measurements and vary).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ struct MotionRunConfig {
   // Model mismatch (sim/perturbation.h): the plant and the sensors get the drawn errors,
   // the controller keeps `model`. Inactive (the default): the unperturbed run, bit for bit.
   PlantPerturbation perturbation;
+  // Called with the simulated time every kProgressPeriod_s of it (a CLI's progress line);
+  // empty: never. It only observes: the run and its log do not depend on it.
+  std::function<void(double sim_time_s)> on_progress;
+  static constexpr double kProgressPeriod_s = 0.5;
 };
 
 // The centre of pressure of the ground's normal forces and its margin to the support

@@ -11,9 +11,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${KUAVO_BUILD_DIR:-$here/build}"
 jobs="${KUAVO_JOBS:-$(nproc)}"
 
+# chromium + chromium-driver + python3: the HTML report's browser test (tests/report).
 packages=(build-essential cmake libeigen3-dev libsimbody-dev libsundials-dev
           libtinyxml2-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
-          parallel)
+          parallel python3 chromium chromium-driver)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -3,7 +3,7 @@
 //   kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]
 //                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
-//                  [--torque-weight W] [--figures DIR|none]
+//                  [--torque-weight W] [--figures DIR|none] [--human-csv OUT.csv]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
@@ -16,7 +16,9 @@
 // over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double"
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
 // joint" lines for skeletons the built-in tables miss. --dance-bvh writes the built-in dance as
-// BVH (to inspect it in a viewer).
+// BVH (to inspect it in a viewer). --human-csv writes the human keypoints scaled to the robot
+// (the targets) in the output motion's clock (after the lead-in), one row per frame: the
+// HTML report's skeleton.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -45,7 +47,7 @@ constexpr const char* kUsage =
     "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
     "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
-    "                      [--torque-weight W] [--figures DIR|none]\n";
+    "                      [--torque-weight W] [--figures DIR|none] [--human-csv OUT.csv]\n";
 
 // A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
 // and was accepted), or false with "PATH: why" in error.
@@ -68,9 +70,32 @@ bool write_text(const std::string& path, const std::string& text) {
   return static_cast<bool>(out);
 }
 
+// The targets (robot-proportioned human keypoints), in the output motion's clock.
+std::string human_csv(const mocap::HumanTargets& targets, int lead_frames) {
+  std::string s = "time_s";
+  for (int k = 0; k < mocap::kNumKeypoints; ++k) {
+    if (!targets.present[k]) continue;
+    for (const char* a : {"_x", "_y", "_z"}) s += std::string(",") + mocap::keypoint_name(k) + a;
+  }
+  s += "\n";
+  char buf[64];
+  for (std::size_t f = 0; f < targets.frames.size(); ++f) {
+    std::snprintf(buf, sizeof buf, "%.4f", (static_cast<double>(f) + lead_frames) / targets.rate_hz);
+    s += buf;
+    for (int k = 0; k < mocap::kNumKeypoints; ++k) {
+      if (!targets.present[k]) continue;
+      const auto& p = targets.frames[f].position_m[k];
+      std::snprintf(buf, sizeof buf, ",%.5f,%.5f,%.5f", p.x(), p.y(), p.z());
+      s += buf;
+    }
+    s += "\n";
+  }
+  return s;
+}
+
 int run(int argc, char** argv) {
   std::string input, output, report_path, contacts = "auto", map_path, csv_path, dance_path;
-  std::string stage = "dynamic", horizon_text, repairs_path, torque_text, figures_dir;
+  std::string stage = "dynamic", horizon_text, repairs_path, torque_text, figures_dir, human_path;
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   for (int i = 1; i < argc; ++i) {
@@ -123,6 +148,8 @@ int run(int argc, char** argv) {
       ok = value(dyn_options.csv_path);
     else if (!std::strcmp(a, "--figures"))
       ok = value(figures_dir);
+    else if (!std::strcmp(a, "--human-csv"))
+      ok = value(human_path);
     else if (!std::strcmp(a, "--variant")) {
       std::string v;
       ok = value(v);
@@ -188,7 +215,7 @@ int run(int argc, char** argv) {
         return 2;
       }
     }
-    for (const std::string* out : {&output, &report_path, &csv_path, &dance_path, &dyn_options.csv_path}) {
+    for (const std::string* out : {&output, &report_path, &csv_path, &dance_path, &dyn_options.csv_path, &human_path}) {
       if (!out->empty() && !check_output_file(*out, why)) {
         std::fprintf(stderr, "kuavo retarget: %s\n", why.c_str());
         return 2;
@@ -328,6 +355,13 @@ int run(int argc, char** argv) {
       !write_text(csv_path, mocap::motion_csv(*robot, targets.rate_hz, *out_q, *out_contacts))) {
     std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", csv_path.c_str());
     return 1;
+  }
+  if (!human_path.empty()) {
+    const int lead_frames = stage == "dynamic" ? j["dynamic"].value("lead_in_frames", 0) : 0;
+    if (!write_text(human_path, human_csv(targets, lead_frames))) {
+      std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", human_path.c_str());
+      return 1;
+    }
   }
   j["input"] = input.empty() ? "builtin:default_dance" : input;
   j["variant"] = model::to_string(variant);

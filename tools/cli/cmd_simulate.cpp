@@ -25,6 +25,7 @@
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
 #include "tools/cli/perturb_option.h"
+#include "tools/cli/progress.h"
 #include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
@@ -236,7 +237,15 @@ int run_simulate(int argc, char** argv) {
       std::fprintf(stderr, "kuavo simulate: %s\n", why);
       return 2;
     }
+    // On a terminal: the share of the run simulated and the time left (stderr; never piped).
+    Progress progress(false);
+    progress.set_total(motion_cfg.run.duration_s > 0.0 ? motion_cfg.run.duration_s
+                                                       : planner::motion_plan_duration_s(*plan) + motion_cfg.settle_s);
+    if (progress.shown()) {
+      motion_cfg.on_progress = [&](double t_s) { progress.update(t_s, "simulated " + std::to_string(static_cast<int>(t_s)) + " s"); };
+    }
     const sim::MotionSummary ms = sim::run_motion(*robot, *plan, motion_cfg);
+    progress.clear();
     s = ms.run;
     json = sim::motion_summary_json(ms);
   }

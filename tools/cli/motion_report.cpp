@@ -1,5 +1,6 @@
 #include "tools/cli/motion_report.h"
 
+#include <array>
 #include <cmath>
 
 #include "tools/report/svg_plot.h"
@@ -91,6 +92,60 @@ bool write_motion_plots(const model::Model& robot, const sim::MotionTrace& trace
   return report::write_text_file(stem + "_tracking.svg", report::render_svg_stack(joints), &error) &&
          report::write_text_file(stem + "_com.svg", report::render_svg_stack(com), &error) &&
          report::write_text_file(stem + "_zmp.svg", report::render_svg_stack(zmp), &error);
+}
+
+namespace {
+
+// Sole-centre positions at each touchdown, as dots: one point between NaN separators.
+report::Series touchdowns(const std::string& name, const sim::MotionTrace& t, const std::string& color) {
+  report::Series s;
+  s.name = name;
+  s.color = color;
+  const double nan = std::nan("");
+  std::array<bool, 2> up{false, false};
+  for (std::size_t i = 0; i < t.foot_force_z_N.size(); ++i) {
+    for (int foot = 0; foot < 2; ++foot) {
+      const double f = t.foot_force_z_N[i][foot];
+      if (f < 5.0) up[foot] = true;
+      if (up[foot] && f > 100.0) {
+        up[foot] = false;
+        s.x.insert(s.x.end(), {nan, t.foot_xy_m[i][2 * foot]});
+        s.y.insert(s.y.end(), {nan, t.foot_xy_m[i][2 * foot + 1]});
+      }
+    }
+  }
+  return s;
+}
+
+report::Series knee_series(const std::string& name, const sim::MotionTrace& t, bool plan, const std::string& color) {
+  report::Series s;
+  s.name = name;
+  s.color = color;
+  s.dashed = plan;
+  s.x = t.time_s;
+  for (std::size_t i = 0; i < t.q.size(); ++i) s.y.push_back((plan ? t.q_ref[i] : t.q[i])[model::kLeftLegFirst + 3]);
+  return s;
+}
+
+}  // namespace
+
+bool write_horizon_plots(const sim::MotionTrace& long_horizon, const sim::MotionTrace& short_horizon,
+                         const std::string& stem, std::string& error) {
+  report::Plot knee;
+  knee.title = "carpet: left knee, MPC horizon 1.2 s vs 0.6 s";
+  knee.x_label = "time [s]";
+  knee.y_label = "knee [rad]";
+  knee.series = {knee_series("plan", long_horizon, true, "#7f7f7f"), knee_series("horizon 1.2 s", long_horizon, false, "#1f77b4"),
+                 knee_series("horizon 0.6 s", short_horizon, false, "#d62728")};
+  report::Plot feet;
+  feet.title = "carpet: touchdown positions (sole centres), top view";
+  feet.x_label = "x [m]";
+  feet.y_label = "y [m]";
+  feet.equal_axes = true;
+  feet.height_px = 420;
+  feet.series = {touchdowns("horizon 1.2 s", long_horizon, "#1f77b4"), touchdowns("horizon 0.6 s", short_horizon, "#d62728")};
+  return report::write_text_file(stem + "_knee.svg", report::render_svg(knee), &error) &&
+         report::write_text_file(stem + "_feet.svg", report::render_svg(feet), &error);
 }
 
 }  // namespace kuavo::cli

@@ -13,4 +13,10 @@ namespace kuavo::cli {
 bool write_motion_plots(const model::Model& robot, const sim::MotionTrace& trace, const std::string& stem,
                         const std::string& title, std::string& error);
 
+// The MPC horizon experiment (the paper's Fig. 7): <stem>_knee.svg, the left knee of both runs
+// against the plan, and <stem>_feet.svg, the sole centres at each touchdown (a foot's load
+// rising through 100 N after it had been below 5 N), top view. false with a message.
+bool write_horizon_plots(const sim::MotionTrace& long_horizon, const sim::MotionTrace& short_horizon,
+                         const std::string& stem, std::string& error);
+
 }  // namespace kuavo::cli

@@ -1,0 +1,75 @@
+#include "tools/cli/usage.h"
+
+#include <cstring>
+
+namespace kuavo::cli {
+namespace {
+
+constexpr CommandHelp kHelp[] = {
+    {"demo", "the main job: a BVH (or the built-in dance) through the whole pipeline into a report",
+     "usage: kuavo demo [IN.bvh] [--out DIR] [--planner mpc|kinematic] [--quiet]\n"
+     "  IN.bvh through import, geometric and dynamic retargeting with repairs, then danced by the\n"
+     "  online stack in the simulator: floor, carpet with a 10 N·s push (MPC horizon 1.2 s and 0.6 s),\n"
+     "  20 steps in place, standing with a push. Without IN.bvh: the built-in 30 s dance.\n"
+     "  --out DIR       report folder (default demo_report); open DIR/index.html in a browser\n"
+     "  --planner P     mpc (default) or kinematic (geometric motion + balance filter)\n"
+     "  --quiet         no progress and no stage lines (errors and the report's path only)\n"},
+    {"paper", "the paper's experiments (Figs. 4-7, Table I) beside its numbers, in one page",
+     "usage: kuavo paper [--out DIR] [--quiet]\n"
+     "  Figs. 4/5 (dynamic retargeting of the built-in dance), Fig. 6 (TO horizon sweep 0.2..1.4 s),\n"
+     "  Fig. 7 (carpet, 10 N·s push, MPC horizon 0.6 s vs 1.2 s: knees, foot placement, falls) and\n"
+     "  Table I (MPC solve time against horizon, this machine beside the paper's i9-13900H).\n"
+     "  --out DIR       output folder (default paper_report); open DIR/index.html\n"
+     "  --quiet         no progress and no stage lines\n"},
+    {"replay", "an HTML replay report from simulator logs",
+     "usage: kuavo replay RUN.csv [RUN.csv ...] --out DIR [--retarget-report R.json] [--human H.csv] [--title T]\n"
+     "  RUN.csv: a log of `kuavo simulate --log` (its summary RUN.json beside it is read when present:\n"
+     "  the fall goes on the timeline). --retarget-report: the repairs of `kuavo retarget --report`;\n"
+     "  --human: `kuavo retarget --human-csv` (the skeleton beside the robot). Writes DIR/index.html.\n"},
+    {"retarget", "a BVH dance (or the built-in dance) -> robot motion file + report",
+     "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
+     "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
+     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
+     "                      [--torque-weight W] [--figures DIR|none] [--human-csv OUT.csv]\n"},
+    {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
+     "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42]\n"},
+    {"simulate", "one run in the simulator: standing, a motion, or stepping in place",
+     "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
+     "               [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]\n"
+     "               [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]\n"
+     "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
+     "               [--horizon SECONDS] [--plan-latency-ms MS|measured]\n"
+     "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
+     "               --log run.csv --summary run.json\n"},
+    {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
+     "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] | --example\n"},
+    {"model", "robot model summary",
+     "usage: kuavo model [--variant s45|s42] [--mass KG] --json\n"},
+};
+
+}  // namespace
+
+const CommandHelp* command_help(const char* name) {
+  for (const CommandHelp& h : kHelp) {
+    if (name != nullptr && !std::strcmp(name, h.name)) return &h;
+  }
+  return nullptr;
+}
+
+const CommandHelp* commands_help(int& count) {
+  count = static_cast<int>(sizeof kHelp / sizeof kHelp[0]);
+  return kHelp;
+}
+
+void print_overview(std::FILE* out) {
+  std::fprintf(out, "usage: kuavo <command> [options]      (kuavo help <command>, kuavo <command> --help)\n\ncommands:\n");
+  for (const CommandHelp& h : kHelp) std::fprintf(out, "  %-15s %s\n", h.name, h.summary);
+}
+
+void print_usage(std::FILE* out, const char* name) {
+  const CommandHelp* h = command_help(name);
+  if (h == nullptr) return print_overview(out);
+  std::fputs(h->usage, out);
+}
+
+}  // namespace kuavo::cli
