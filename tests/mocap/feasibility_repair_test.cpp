@@ -857,3 +857,47 @@ TEST(mocap_feasibility_repair, ForcedDoubleSupportHoldsBothFeetDown) {
 
 }  // namespace
 }  // namespace kuavo::mocap
+
+namespace kuavo::mocap {
+namespace {
+
+using namespace kuavo::mocap::test;
+
+// The oracle's second pass on its own: a shoulder swinging ±0.4 rad at 1 Hz; frames [200, 300)
+// scaled to half about their 1-s moving average. Inside the range (away from its ramps) the
+// swing's amplitude is half the original's (the moving average over one period is the
+// swing's centre); beyond the ramps the frames are untouched; a range an override forbids is
+// left alone and not listed.
+TEST(mocap_feasibility_repair, AttenuationScalesGesturesInsideItsRangeOnly) {
+  const int n = 500;
+  const int joint = 7 + 2 * model::kLegJoints;  // left shoulder pitch in q
+  std::vector<ConfigVector> q(n, standing().q);
+  for (int i = 0; i < n; ++i) q[i][joint] += 0.4 * std::sin(2.0 * M_PI * i / kRate_hz);
+  std::vector<ConfigVector> att = q;
+  std::vector<Repair> log;
+  ASSERT_TRUE(attenuate_gestures(att, kRate_hz, {{200, 300, 1.7}}, 0.5, 0.5, 1.8, {}, log));
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_EQ(log[0].kind, RepairKind::kAttenuate);
+  EXPECT_NEAR(log[0].start_s, 2.0 + 1.8, 1e-12);
+  EXPECT_NEAR(log[0].end_s, 3.0 + 1.8, 1e-12);
+  const double centre = standing().q[joint];
+  double inside = 0.0, outside = 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (i >= 200 && i < 300) inside = std::max(inside, std::abs(att[i][joint] - centre));
+    if (i < 150 || i >= 350) outside = std::max(outside, (att[i] - q[i]).cwiseAbs().maxCoeff());
+  }
+  EXPECT_NEAR(inside, 0.2, 0.01);
+  EXPECT_EQ(outside, 0.0);
+  RecordProperty("inside_amplitude_rad", number(inside));
+
+  std::vector<ConfigVector> kept = q;
+  std::vector<Repair> none;
+  RepairOverride o;
+  o.start_s = 0.0, o.end_s = 10.0, o.forbid = RepairKind::kAttenuate;
+  EXPECT_FALSE(attenuate_gestures(kept, kRate_hz, {{200, 300, 1.7}}, 0.5, 0.5, 1.8, {o}, none));
+  EXPECT_TRUE(none.empty());
+  for (int i = 0; i < n; ++i) ASSERT_EQ(kept[i], q[i]);
+}
+
+}  // namespace
+}  // namespace kuavo::mocap

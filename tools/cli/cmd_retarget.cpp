@@ -3,14 +3,16 @@
 //   kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]
 //                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
-//                  [--torque-weight W] [--figures DIR|none] [--human-csv OUT.csv]
+//                  [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
 // geometric stage (what the human did, kinematically on the robot; for those motions
 // `kuavo simulate` and `kuavo_fw` offer --balance-filter on).
 // --torque-weight W turns on the TO's joint-torque hinge (off by default, see
-// dynamic_retarget.h). The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
+// dynamic_retarget.h). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
+// pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
+// more than 1.5× its torque limits, then repair and TO again). The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
 // into the report's directory, or into --figures DIR (none: no figures).
 // --contacts FILE: lines "start_s end_s flight|left|right|double" replace the automatic labels
 // over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double"
@@ -47,7 +49,7 @@ constexpr const char* kUsage =
     "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
     "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
-    "                      [--torque-weight W] [--figures DIR|none] [--human-csv OUT.csv]\n";
+    "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n";
 
 // A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
 // and was accepted), or false with "PATH: why" in error.
@@ -96,6 +98,7 @@ std::string human_csv(const mocap::HumanTargets& targets, int lead_frames) {
 int run(int argc, char** argv) {
   std::string input, output, report_path, contacts = "auto", map_path, csv_path, dance_path;
   std::string stage = "dynamic", horizon_text, repairs_path, torque_text, figures_dir, human_path;
+  std::string attenuate_text;
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   for (int i = 1; i < argc; ++i) {
@@ -142,6 +145,15 @@ int run(int argc, char** argv) {
         return 2;
       }
       if (ok) dyn_options.dynamic.torque_penalty_weight = w;
+    } else if (!std::strcmp(a, "--attenuate")) {
+      ok = value(attenuate_text);
+      char* end = nullptr;
+      const long rounds = ok ? std::strtol(attenuate_text.c_str(), &end, 10) : 0;
+      if (ok && (end == attenuate_text.c_str() || *end != '\0' || rounds < 0 || rounds > 5)) {
+        std::fprintf(stderr, "kuavo retarget: --attenuate needs a round count in [0, 5], got '%s'\n", attenuate_text.c_str());
+        return 2;
+      }
+      if (ok) dyn_options.attenuation_rounds = static_cast<int>(rounds);
     } else if (!std::strcmp(a, "--repairs"))
       ok = value(repairs_path);
     else if (!std::strcmp(a, "--dynamic-csv"))
@@ -172,10 +184,10 @@ int run(int argc, char** argv) {
     }
   }
   if (stage == "geometric" && (!horizon_text.empty() || !repairs_path.empty() || !dyn_options.csv_path.empty() ||
-                               !torque_text.empty() || !figures_dir.empty())) {
+                               !torque_text.empty() || !attenuate_text.empty() || !figures_dir.empty())) {
     std::fprintf(stderr,
-                 "kuavo retarget: --horizon, --repairs, --dynamic-csv, --torque-weight and --figures apply to --stage "
-                 "dynamic only\n");
+                 "kuavo retarget: --horizon, --repairs, --dynamic-csv, --torque-weight, --attenuate and --figures apply to "
+                 "--stage dynamic only\n");
     return 2;
   }
   // Figures next to the report unless told otherwise (none without a report).

@@ -87,16 +87,58 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
                       DynamicStageResult& result, ordered_json& report, std::string& error) {
   const double rate = targets.rate_hz;
-  if (!mocap::repair_motion(robot, geometric.q, geometric.contacts, rate, options.repair, options.overrides,
-                            result.repaired, error)) {
-    return 2;
+  std::vector<dynamics::ConfigVector> reference = geometric.q;  // attenuated between rounds
+  std::vector<mocap::Repair> attenuations;
+  int rounds = 0;
+  double solve_s = 0.0;
+  for (;;) {
+    if (!mocap::repair_motion(robot, reference, geometric.contacts, rate, options.repair, options.overrides,
+                              result.repaired, error)) {
+      return 2;
+    }
+    auto plan = std::make_unique<planner::MotionPlan>();
+    if (!mocap::motion_plan_from_frames(result.repaired.q, result.repaired.contacts, rate, "repaired motion", *plan,
+                                        error)) {
+      return 2;
+    }
+    if (!mocap::dynamic_retarget(robot, *plan, options.dynamic, result.dynamic, error)) return 1;
+    solve_s += result.dynamic.stats.solve_s;
+    if (rounds >= options.attenuation_rounds) break;
+    // The oracle on this round's result: leg torques beyond the ratio, as dance-clock ranges.
+    mocap::DynamicsCheck check;
+    mocap::check_dynamics(robot, result.dynamic.q, result.dynamic.contacts, rate, &result.dynamic.forces_N,
+                          options.dynamic.ocp.friction_coefficient, check);
+    const int lead = result.repaired.lead_frames, n_dance = result.repaired.dance_frames;
+    const int gap = static_cast<int>(std::lround(0.3 * rate));
+    std::vector<mocap::AttenuationRange> ranges;
+    for (int i = 0; i < static_cast<int>(check.tau_Nm.size()); ++i) {
+      const int d = i - lead;
+      if (d < 0 || d >= n_dance) continue;
+      // Stance legs only: their torques hold the robot up; a swing leg's excess costs tracking.
+      double ratio = 0.0;
+      const mocap::ContactLabel label = result.dynamic.contacts[i];
+      for (int j = 0; j < 2 * model::kLegJoints; ++j) {
+        const bool stance = j < model::kLegJoints ? mocap::left_in_contact(label) : mocap::right_in_contact(label);
+        if (stance) ratio = std::max(ratio, std::abs(check.tau_Nm[i][j]) / robot.limits.torque_Nm[j]);
+      }
+      if (!(ratio > options.attenuation_torque_ratio)) continue;
+      if (!ranges.empty() && d - ranges.back().b <= gap) {
+        ranges.back().b = d + 1;
+        ranges.back().torque_ratio = std::max(ranges.back().torque_ratio, ratio);
+      } else {
+        ranges.push_back({d, d + 1, ratio});
+      }
+    }
+    if (ranges.empty()) break;
+    for (auto& r : ranges) r.a = std::max(0, r.a - gap), r.b = std::min(n_dance, r.b + gap);
+    if (!mocap::attenuate_gestures(reference, rate, ranges, options.attenuation_gain, 0.5, lead / rate,
+                                   options.overrides, attenuations)) {
+      break;
+    }
+    ++rounds;
   }
-  auto plan = std::make_unique<planner::MotionPlan>();
-  if (!mocap::motion_plan_from_frames(result.repaired.q, result.repaired.contacts, rate, "repaired motion", *plan,
-                                      error)) {
-    return 2;
-  }
-  if (!mocap::dynamic_retarget(robot, *plan, options.dynamic, result.dynamic, error)) return 1;
+  result.dynamic.stats.solve_s = solve_s;
+  result.repaired.repairs.insert(result.repaired.repairs.end(), attenuations.begin(), attenuations.end());
   result.q = result.dynamic.q;
   result.contacts = result.dynamic.contacts;
   // The loaders refuse a joint outside the model's limits (mocap::check_motion_frame); the

@@ -148,6 +148,7 @@ const char* to_string(RepairKind k) {
     case RepairKind::kUpperBodySpeed: return "upper_body_speed";
     case RepairKind::kPelvisHeight: return "pelvis_height";
     case RepairKind::kTravel: return "travel_speed";
+    case RepairKind::kAttenuate: return "attenuate";
   }
   return "unknown";
 }
@@ -184,13 +185,14 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
       else if (what == "upper") o.forbid = RepairKind::kUpperBodySpeed;
       else if (what == "pelvis") o.forbid = RepairKind::kPelvisHeight;
       else if (what == "travel") o.forbid = RepairKind::kTravel;
+      else if (what == "attenuate") o.forbid = RepairKind::kAttenuate;
       else ok = false;
     } else {
       ok = false;
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|travel|all' or 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|travel|attenuate|all' or 'START_S END_S force double' "
               "(0 <= START_S < END_S)";
       return false;
     }
@@ -756,6 +758,62 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   out.human_steps = count_steps(labels);
   out.robot_steps = count_steps(out.contacts);
   return true;
+}
+
+bool attenuate_gestures(std::vector<ConfigVector>& geometric, double rate_hz, const std::vector<AttenuationRange>& ranges,
+                        double gain, double window_s, double lead_s, const std::vector<RepairOverride>& overrides,
+                        std::vector<Repair>& log) {
+  const int n = static_cast<int>(geometric.size());
+  const int w = std::max(1, static_cast<int>(std::lround(window_s * rate_hz)));
+  constexpr int kJoints = model::kNumJoints;
+  const auto forbidden = [&](int i) {
+    const double t = i / rate_hz;
+    for (const RepairOverride& o : overrides) {
+      if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == RepairKind::kAttenuate)) {
+        return true;
+      }
+    }
+    return false;
+  };
+  // Weight of the scaling per frame: 1 inside a range, ramping to 0 over w frames outside.
+  std::vector<double> weight(n, 0.0);
+  for (const AttenuationRange& r : ranges) {
+    for (int i = std::max(0, r.a - w); i < std::min(n, r.b + w); ++i) {
+      const double s = i < r.a ? 1.0 - static_cast<double>(r.a - i) / w : (i >= r.b ? 1.0 - static_cast<double>(i - r.b + 1) / w : 1.0);
+      weight[i] = std::max(weight[i], smooth_step(std::clamp(s, 0.0, 1.0)));
+    }
+  }
+  std::vector<ConfigVector> out = geometric;
+  bool changed = false;
+  for (int i = 0; i < n; ++i) {
+    if (weight[i] <= 0.0 || forbidden(i)) continue;
+    Eigen::Matrix<double, kJoints, 1> mean = Eigen::Matrix<double, kJoints, 1>::Zero();
+    double z = 0.0;
+    for (int j = i - w; j <= i + w; ++j) {
+      const ConfigVector& q = geometric[std::clamp(j, 0, n - 1)];
+      mean += q.tail<kJoints>();
+      z += q[2];
+    }
+    mean /= 2 * w + 1;
+    z /= 2 * w + 1;
+    const double k = 1.0 - weight[i] * (1.0 - gain);
+    out[i].tail<kJoints>() = mean + k * (geometric[i].tail<kJoints>() - mean);
+    out[i][2] = z + k * (geometric[i][2] - z);
+    changed = true;
+  }
+  geometric = out;
+  for (const AttenuationRange& r : ranges) {
+    if (forbidden(r.a)) continue;
+    Repair x;
+    x.start_s = r.a / rate_hz + lead_s;
+    x.end_s = r.b / rate_hz + lead_s;
+    x.kind = RepairKind::kAttenuate;
+    x.reason = fmt("the dynamic stage's result asked %.1fx a leg joint's torque limit here: the gestures are scaled "
+                   "to %.0f %% about their %.1f s average and the motion optimized again",
+                   r.torque_ratio, 100.0 * gain, 2.0 * window_s);
+    log.push_back(x);
+  }
+  return changed;
 }
 
 }  // namespace kuavo::mocap

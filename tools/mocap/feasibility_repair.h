@@ -27,7 +27,7 @@
 // leg gestures stay). Every repair is listed with its time range, kind and reason.
 //
 // Overrides (a text file, like the contact overrides): lines
-//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, travel, or all)
+//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, travel, attenuate, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
@@ -114,6 +114,7 @@ enum class RepairKind : int {
   kUpperBodySpeed = 9,  // arm/head accelerations beyond their torques: smoothed
   kPelvisHeight = 10,   // pelvis lowered / raised so the stance knees stay within their bend range
   kTravel = 11,         // a step shortened so the dance travels no faster than the robot can
+  kAttenuate = 12,      // the TO's result still over a leg's torque limits: gestures scaled down
 };
 const char* to_string(RepairKind k);
 
@@ -151,6 +152,21 @@ struct RepairedMotion {
 bool repair_motion(const model::Model& robot, const std::vector<dynamics::ConfigVector>& geometric,
                    const std::vector<ContactLabel>& labels, double rate_hz, const RepairConfig& config,
                    const std::vector<RepairOverride>& overrides, RepairedMotion& out, std::string& error);
+
+// The oracle's second pass (tools/cli/retarget_dynamic.cpp runs it): where the dynamic
+// stage's result still asks a leg joint for more than its torque limit, the geometric motion's
+// frames [a, b) (dance clock, frames) are scaled about their moving average over ±window_s
+// (joints and pelvis height; q ← q̄ + gain·(q − q̄), blended in and out over window_s), so the
+// gestures there keep their shape at a smaller amplitude and speed; the repair and the TO then
+// run again. Frames an override forbids (kind attenuate, dance clock) are left alone; false
+// if nothing was changed. Appends one Repair per range (output clock: + lead_s).
+struct AttenuationRange {
+  int a = 0, b = 0;
+  double torque_ratio = 0.0;  // the worst |τ|/limit that asked for it, for the reason
+};
+bool attenuate_gestures(std::vector<dynamics::ConfigVector>& geometric, double rate_hz,
+                        const std::vector<AttenuationRange>& ranges, double gain, double window_s, double lead_s,
+                        const std::vector<RepairOverride>& overrides, std::vector<Repair>& log);
 
 // Count of swing phases (a foot leaving the floor and coming back) in a label sequence.
 int count_steps(const std::vector<ContactLabel>& labels);
