@@ -417,6 +417,7 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
       anchors[s0 + j] = anchor;
     }
     s0 += n_commit;
+    if (cfg.on_progress) cfg.on_progress(static_cast<double>(s0) / S);
   }
   xs[S] = x0;
   us[S] = us[S - 1];

@@ -23,6 +23,7 @@
 // Offline: allocates (the MPC workspace, ~15 MB, on the heap), not real-time.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,8 @@ struct DynamicRetargetConfig {
   double torque_penalty_weight = 0.0;
   double velocity_barrier_mu = 0.01;
   double velocity_barrier_delta_rad_s = 0.1;
+  // Called after each window with the share of the motion committed so far (0…1]; empty: none.
+  std::function<void(double)> on_progress;
   static mpc::MpcConfig default_ocp();
   // A window of horizon_s with the commit scaled to it: a quarter of its stages, at most 10
   // (0.2 s; the default window is 1.0 s). Committing 0.2 s of a 0.4 s window left 0.4 s
