@@ -11,17 +11,17 @@
 //   3. 20 steps in place on the floor (steps_floor.*);
 //   4. standing 10 s on floor and carpet with a 10 N·s push (stand_*.csv/json);
 //   5. REPORT.md: a table of every run's figures and links to the plots.
-#include <sys/stat.h>
-
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "rtos_shim/args.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
@@ -89,19 +89,30 @@ std::string row(const Case& c) {
 }  // namespace
 
 int run_demo(int argc, char** argv) {
-  std::string out = "demo_report";
+  std::string out = "demo_report", planner_name = "mpc";
   stack::PlannerKind planner_kind = stack::PlannerKind::kMpc;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--out") && i + 1 < argc) {
-      out = argv[++i];
-    } else if (!std::strcmp(argv[i], "--planner") && i + 1 < argc && stack::parse_planner(argv[i + 1], planner_kind)) {
-      ++i;
-    } else {
-      std::fprintf(stderr, "usage: kuavo demo [--out DIR] [--planner mpc|kinematic]\n");
+  args::Parser p("kuavo demo");
+  p.text("--out", "DIR", &out);
+  p.choice("--planner", {"mpc", "kinematic"}, &planner_name);
+  constexpr const char* kUsage = "usage: kuavo demo [--out DIR] [--planner mpc|kinematic]\n";
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      std::fputs(kUsage, stdout);
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
       return 2;
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
-  ::mkdir(out.c_str(), 0755);
+  stack::parse_planner(planner_name.c_str(), planner_kind);  // one of the two names
+  // The report folder: created (or already one) before the long run.
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (!std::filesystem::is_directory(out, ec)) {
+    std::fprintf(stderr, "kuavo demo: --out %s: cannot create the directory\n", out.c_str());
+    return 2;
+  }
   std::printf("== 1/5 retargeting the built-in dance\n");
   const bool kinematic = planner_kind == stack::PlannerKind::kKinematic;
   std::vector<std::string> retarget_args = {"retarget", "-o", out + "/dance.motion", "--csv", out + "/dance.csv",
