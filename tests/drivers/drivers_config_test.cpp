@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <functional>
 
 #include "drivers/config/drive_defaults.h"
 #include "drivers/config/drivers_config.h"
@@ -114,11 +115,38 @@ TEST_F(DriversConfigTest, ValidationRefusesPhysicallyAbsurdNumbers) {
       R"({"drives": [{"slot": 3, "counts_per_rev": 0.5}]})",
       R"({"imu": {"device": "/dev/ttyUSB0\u0000/etc/passwd"}})",
       R"({"imu": {"device": "ttyUSB0"}})",
+      R"({"imu": {"baud": 1}})",
+      R"({"ruiwo_motors": [{"id": 5, "torque_max_Nm": 1e308}]})",
+      R"({"ruiwo_motors": [{"id": 5, "velocity_max_rad_s": 1e9}]})",
+      R"({"ruiwo_motors": [{"id": 5, "zero_offset_rad": 1e308}]})",
+      R"({"ruiwo_motors": [{"id": 5, "zero_offset_rad": 100}]})",
   };
   for (const char* text : cases) {
     DriversConfig c = config;
     ASSERT_EQ(apply_drivers_json(text, c, msg), DriverError::kOk) << text << " -> " << msg;
     EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << text;
+  }
+  // Each message names the rule with its unit.
+  DriversConfig ruiwo = config;
+  ASSERT_EQ(apply_drivers_json(R"({"ruiwo_motors": [{"id": 5, "torque_max_Nm": 1e308}]})", ruiwo, msg), DriverError::kOk);
+  EXPECT_EQ(validate_drivers_config(ruiwo, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("Ruiwo motor 0x05: velocity limit 7 rad/s and torque limit 1e+308 N·m must be in (0, 10] rad/s and (0, 50] N·m"),
+            std::string::npos) << msg;
+  // Bus numbers the load check let through (1e308 bit/s loads nothing) or that overflow the
+  // drives' u32 cycle period / u16 heartbeat time.
+  const std::function<void(BusConfig&)> bad_buses[] = {
+      [](BusConfig& b) { b.bitrate_bps = 1e308; },
+      [](BusConfig& b) { b.bitrate_bps = 5e3; },
+      [](BusConfig& b) { b.cycle_rate_hz = 1e-9; },
+      [](BusConfig& b) { b.heartbeat_rate_hz = 1e-9; },
+      [](BusConfig& b) { b.fd = true, b.data_bitrate_bps = 1e12; },
+  };
+  for (const auto& bad : bad_buses) {
+    DriversConfig c = config;
+    bad(c.plan.buses[0]);
+    sync_drives_with_plan(c);
+    EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << msg;
+    EXPECT_NE(msg.find("bitrate must be 10 kbit/s..1 Mbit/s"), std::string::npos) << msg;
   }
   // The defaults and the documented knee ratio still pass.
   DriversConfig c = config;
