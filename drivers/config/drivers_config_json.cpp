@@ -208,6 +208,13 @@ DriverError apply_drivers_json(const std::string& text, DriversConfig& config, s
   } catch (const json::parse_error& e) {
     message = "drivers configuration: not valid JSON at " + line_and_column(text, e.byte > 0 ? e.byte - 1 : 0);
     return DriverError::kBadConfig;
+  } catch (const json::exception& e) {
+    // A number literal no double holds (1e999) is out_of_range, not a parse_error; it escaped
+    // as an exception. nlohmann gives no position for it: its message names the literal.
+    const std::string what = e.what();
+    const std::size_t at = what.find("] ");
+    message = "drivers configuration: not valid JSON: " + (at == std::string::npos ? what : what.substr(at + 2));
+    return DriverError::kBadConfig;
   }
   if (!duplicate.empty()) {
     message = "drivers configuration: duplicate key " + duplicate;

@@ -95,6 +95,9 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
       {R"({"imu": {"device": "/dev/x", "bauds": 1}})", "imu: unknown key 'bauds'"},
       {R"({"ankle_motor_offset_rad": [0.1]})", "ankle_motor_offset_rad"},
       {R"({"devices": [{"bus": 0, "kind": "ethercat", "id": 1, "slot": 0}]})", "devices[0].kind"},
+      // A literal no double holds threw json::out_of_range out of the loader (kuavo_fuzz,
+      // parse:config, seed 22 case 2134): now a refusal naming the literal.
+      {R"({"knee_ratio_motor_per_joint": 1e999})", "not valid JSON: number overflow parsing '1e999'"},
   };
   for (const Case& c : cases) {
     EXPECT_EQ(apply_drivers_json(c.text, config, msg), DriverError::kBadConfig) << c.text;
