@@ -1,7 +1,7 @@
 // kuavo_fuzz: the hostile-input campaign of issue 22.
 //
 //   kuavo_fuzz [--seed N] [--parser-cases N] [--e2e-cases N] [--first-case N]
-//              [--timeout-s S] [--memory-mb MB] [--bvh-frames N] [--findings DIR]
+//              [--timeout-s S] [--memory-mb MB (0: no limit)] [--bvh-frames N] [--findings DIR]
 //
 // 1. In-process (--parser-cases): seeded mutations through the parsers themselves -- BVH
 //    (parse_bvh), motion files (the reader and the frame rules, checksums recomputed after the
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
   p.integer("--e2e-cases", "N", 0, 10'000'000, "cases", &e2e_cases);
   p.integer("--bvh-frames", "N", 1, 100'000, "frames", &bvh_frames);
   p.number("--timeout-s", "S", 0.1, 3600.0, "s", &timeout_s);
-  p.number("--memory-mb", "MB", 16.0, 65536.0, "MB", &memory_mb);
+  p.number("--memory-mb", "MB", 0.0, 65536.0, "MB", &memory_mb);  // 0: no limit (sanitized builds)
   p.text("--findings", "DIR", &findings_dir);
   switch (p.parse(argc, argv)) {
     case kuavo::args::Parser::Result::kHelp:

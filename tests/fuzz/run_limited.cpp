@@ -47,8 +47,10 @@ RunResult run_limited(const std::vector<std::string>& argv, const std::string& w
     dup2(in, 0);
     dup2(out, 1);
     dup2(err, 2);
-    rlimit as{static_cast<rlim_t>(limits.memory_bytes), static_cast<rlim_t>(limits.memory_bytes)};
-    setrlimit(RLIMIT_AS, &as);
+    if (limits.memory_bytes > 0) {
+      rlimit as{static_cast<rlim_t>(limits.memory_bytes), static_cast<rlim_t>(limits.memory_bytes)};
+      setrlimit(RLIMIT_AS, &as);
+    }
     rlimit core{0, 0};
     setrlimit(RLIMIT_CORE, &core);
     execv(args[0], args.data());

@@ -9,7 +9,7 @@ namespace kuavo::fuzz {
 
 struct RunLimits {
   double timeout_s = 20.0;       // then SIGKILL: a hang
-  long memory_bytes = 512L << 20;  // RLIMIT_AS: exhaustion must become exit 1, never a crash
+  long memory_bytes = 512L << 20;  // RLIMIT_AS: exhaustion must become exit 1, never a crash; 0: none
 };
 
 struct RunResult {
