@@ -88,6 +88,8 @@ TEST(SimulateCli, ArgumentsAreStrict) {
       {"--stand 0.1 --push 1:1e9,0,0:0.1", "--push must be T:FX,FY,FZ:DURATION"},
       {"--stand 0.1 --push ' 1:10,0,0:0.1'", "--push must be T:FX,FY,FZ:DURATION"},
       {"--stand 0.1 --log --summary", "--log needs a value (CSV), got option '--summary'"},
+      // A directory as the perturbation file threw from its first read: "internal error", exit 1.
+      {motion + " --duration 0.1 --perturb " + std::string(KUAVO_BINARY_DIR), "nor a readable file"},
       {"--stand 0.1 --seed", "--seed needs a value (N)"},
       {"--stand 0.1 --summary " + kOut + "_missing_dir/run.json", "_missing_dir/run.json: cannot write"},
       {"--stand 0.1 --log " + std::string(KUAVO_BINARY_DIR), ": is a directory"},
@@ -136,6 +138,8 @@ TEST(CommandsCli, EveryCommandRefusesWithTheOptionNamed) {
       {kBin + " retarget --stage geometric --dance-bvh d.bvh in.bvh", "--dance-bvh writes the built-in dance"},
       {kBin + " model --mass 55 --mass 56", "kuavo model: --mass given twice"},
       {urdf2model + " --variant bogus", "urdf2model: --variant must be s45|s42|all, got 'bogus'"},
+      // A directory as the spec threw from its first read: "internal error", exit 1.
+      {kBin + " campaign " + std::string(KUAVO_BINARY_DIR), "kuavo campaign: " KUAVO_BINARY_DIR ": not a regular file"},
   };
   for (const auto& [cmd, message] : cases) {
     const std::string err = kOut + "_commands.stderr";

@@ -90,6 +90,8 @@ struct Harness {
       (r.code == 0 ? t.exit0 : r.code == 1 ? t.exit1 : t.exit2)++;
       if (r.code == 0) why = check_outputs(r);
       if (r.code != 0 && r.err.empty()) why = "exit " + std::to_string(r.code) + " without a message";
+      // An exception that reached main (bad input must be refused where it is read).
+      if (why.empty() && r.err.find("internal error") != std::string::npos) why = "an exception reached main: " + r.err.substr(0, 200);
     }
     if (!why.empty()) finding(kind, index, why, argv, &r, input_name);
   }

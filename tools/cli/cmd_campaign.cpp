@@ -129,6 +129,11 @@ int run_campaign(int argc, char** argv) {
   if (jobs_n > 0) jobs = std::to_string(jobs_n);
   const std::string spec_path = specs.empty() ? "" : specs[0];
   if (spec_path.empty()) return usage();
+  std::string why;
+  if (!check_input_file(spec_path, why)) {  // a directory read as a stream threw ("internal error")
+    std::fprintf(stderr, "kuavo campaign: %s\n", why.c_str());
+    return 2;
+  }
   bool ok = false;
   const std::string text = read_file(spec_path, ok);
   if (!ok) {

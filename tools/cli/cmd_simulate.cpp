@@ -129,7 +129,7 @@ int run_simulate(int argc, char** argv) {
   if (!perturb.empty()) {
     std::string error;
     if (!load_perturbation_set(perturb.c_str(), perturb_set, error)) {
-      std::fprintf(stderr, "kuavo simulate: --perturb %s\n", error.c_str());
+      std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
       return 2;
     }
   }
