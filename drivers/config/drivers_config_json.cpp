@@ -275,6 +275,14 @@ DriverError load_drivers_config(const std::string& path, const model::Model& mod
     message = path + ": cannot read the drivers configuration: not a regular file";
     return DriverError::kConfigUnreadable;
   }
+  // The overlay that sets every key of the robot is ~12 KB; 1 MiB bounds what start-up reads
+  // (a multi-gigabyte file given by mistake was read whole before being refused).
+  constexpr std::uintmax_t kMaxConfigBytes = 1u << 20;
+  if (const std::uintmax_t bytes = std::filesystem::file_size(path, ec); ec || bytes > kMaxConfigBytes) {
+    message = path + ": " + (ec ? std::string("cannot read the drivers configuration")
+                                : std::to_string(bytes) + " bytes, more than a drivers configuration holds (1 MiB)");
+    return DriverError::kBadConfig;
+  }
   std::ifstream in(path);
   if (!in) {
     message = path + ": cannot read the drivers configuration";

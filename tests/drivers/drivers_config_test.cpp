@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 
@@ -215,6 +216,10 @@ TEST_F(DriversConfigTest, LoadFromFile) {
   ASSERT_EQ(load_drivers_config(path, model, loaded, report, msg), DriverError::kOk) << msg;
   EXPECT_EQ(loaded.imu_device, "/dev/ttyUSB1");
   EXPECT_EQ(report.load.size(), 7u);
+  // A file far larger than any configuration is refused by its size, before it is read.
+  std::filesystem::resize_file(path, (1u << 20) + 1);
+  EXPECT_EQ(load_drivers_config(path, model, loaded, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("1048577 bytes, more than a drivers configuration holds (1 MiB)"), std::string::npos) << msg;
   std::remove(path.c_str());
 }
 
