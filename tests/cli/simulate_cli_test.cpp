@@ -152,6 +152,20 @@ TEST(CommandsCli, EveryCommandRefusesWithTheOptionNamed) {
   }
 }
 
+// --help prints the usage on stdout and exits 0 for every command (simulate and campaign
+// printed it on stderr, leaving stdout empty: kuavo_fuzz seed 1, args:simulate case 10597).
+TEST(CommandsCli, HelpIsTheUsageOnStdout) {
+  for (const char* command : {"simulate", "campaign", "retarget", "retarget-sweep", "demo", "model"}) {
+    const std::string out = kOut + "_help.stdout";
+    const int status = std::system((kBin + " " + command + " --help >" + out + " 2>/dev/null").c_str());
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0) << command;
+    std::ifstream in(out);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    EXPECT_EQ(ss.str().rfind("usage: kuavo ", 0), 0u) << command << ": stdout was '" << ss.str() << "'";
+  }
+}
+
 // Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
 // limits around the point where start-up stops fitting (32..64 MB).
 TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {

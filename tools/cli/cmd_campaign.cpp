@@ -36,8 +36,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int usage() {
-  std::fprintf(stderr,
+// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
+int usage(std::FILE* out = stderr) {
+  std::fprintf(out,
                "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]\n"
                "       kuavo campaign --example      print the \"show conditions\" spec\n");
   return 2;
@@ -106,7 +107,7 @@ int run_campaign(int argc, char** argv) {
   p.input_file("--sshloginfile", "FILE", &sshloginfile).modes = kRun;
   switch (p.parse(argc, argv)) {
     case args::Parser::Result::kHelp:
-      usage();
+      usage(stdout);
       return 0;
     case args::Parser::Result::kError:
       std::fprintf(stderr, "%s\n", p.error().c_str());

@@ -37,8 +37,9 @@ using sim::kMaxRunDuration_s;  // the bound on --stand and --duration
 // The three kinds of run; an option outside the kinds it applies to is refused.
 constexpr args::ModeMask kStandRun = 1, kMotionRun = 2, kStepRun = 4;
 
-int usage() {
-  std::fprintf(stderr,
+// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
+int usage(std::FILE* out = stderr) {
+  std::fprintf(out,
                "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
                "                      [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]\n"
                "                      [--seed N] [--latency-ticks N] [--integrator euler|cvode|rkm]\n"
@@ -101,7 +102,7 @@ int run_simulate(int argc, char** argv) {
   };
   switch (p.parse(argc, argv)) {
     case args::Parser::Result::kHelp:
-      usage();
+      usage(stdout);
       return 0;
     case args::Parser::Result::kError:
       return refuse();
