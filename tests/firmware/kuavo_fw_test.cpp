@@ -320,6 +320,9 @@ TEST(KuavoFwSim, PushesModesAndOutputsAreCheckedFirst) {
 // 3.5 s -> 175 iterations (+-2: the planner's releases are not aligned with the dance's start).
 // Wall-clock figures are only printed (a loaded machine may miss a deadline: exit 3).
 TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
+#ifdef KUAVO_SANITIZE
+  GTEST_SKIP() << "a real-time budget: under AddressSanitizer one MPC iteration takes ~32 ms of the 20 ms period";
+#endif
   const std::string motion = write_standing_motion("fw_timing_s45.motion", kuavo::model::Variant::kS45);
   FwRun r = run_fw("--timing " + motion);
   std::printf("%s", r.output.c_str());
