@@ -3,7 +3,8 @@
 // the cycle itself lives in the kuavo_firmware library so the tests run it.
 //
 // Exit codes: 0 ok; 1 runtime failure (CAN/serial cannot be opened, real time
-// refused under --require-rt); 2 bad usage, configuration or motion file (nothing sent).
+// refused under --require-rt, out of memory); 2 bad usage, configuration or motion file
+// (nothing sent). Arguments: the shared strict parser (rtos_shim/args.h).
 //
 // Threads: the 500 Hz control task (drivers, cycle, dance control side) and, with
 // --dance, the 50 Hz planning task (MPC) at a lower priority; they meet only in the two
@@ -28,6 +29,7 @@
 #include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
 #include "firmware/timing.h"
+#include "rtos_shim/args.h"
 #include "rtos_shim/periodic_task.h"
 
 namespace fw = kuavo::firmware;
@@ -59,7 +61,10 @@ constexpr const char* kUsage =
     "  --evict-cache        with --timing: write 64 MB before each control tick (cold caches)\n"
     "  --balance-filter on|off  cart-table ZMP filter of the dance at load (default off: `kuavo\n"
     "                       retarget`'s dynamic stage makes feasible motions; on for --stage geometric)\n"
-    "exit codes: 0 ok, 1 runtime failure (buses, real time), 2 bad usage, configuration or motion file,\n"
+    "  --require-rt applies to a run and --timing, --stand to a run, --dance to a run and --check,\n"
+    "  --evict-cache to --timing; an option outside its mode is refused\n"
+    "exit codes: 0 ok, 1 runtime failure (buses, real time, out of memory), 2 bad usage, configuration\n"
+    "            or motion file,\n"
     "            3 --timing: a deadline was missed, 4 --timing: the dance did not run to its end\n"
     "SIGINT/SIGTERM: e-stop (damping), then exit after 0.5 s.\n";
 
@@ -139,51 +144,59 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
   return report.danced_to_end ? 0 : 4;
 }
 
+// The image's three modes (rtos_shim/args.h refuses an option outside the mode it applies to).
+constexpr kuavo::args::ModeMask kRunMode = 1, kCheckMode = 2, kTimingMode = 4;
+
+// The dance's state, ~20 MB (the MPC workspace ~13 MB, the motion ~6.6 MB): one checked
+// allocation at start-up, before real time (mlockall then locks it). In static storage it made
+// the image's BSS 20 MB, which the kernel could not map under an address-space limit
+// (`ulimit -v 20000`): SIGSEGV before main, with nothing to say why.
+struct DanceMemory {
+  kuavo::planner::MotionPlan motion;  // read-only once loaded
+  fw::DanceChannels channels;
+  fw::DanceControl dance;
+  fw::DancePlanner planner;
+};
+
 int run(int argc, char** argv) {
-  std::string config_path, dance_path;
-  bool balance_filter = false;
-  bool timing = false, evict_cache = false;
-  bool check = false, require_rt = false, stand = false, csp_legs = true;
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+  std::string config_path, dance_path, timing_path, legs = "csp", balance = "off";
+  bool check = false, require_rt = false, stand = false, evict_cache = false;
+  kuavo::args::Parser args("kuavo_fw");
+  args.text("--config", "FILE", &config_path);
+  args.choice("--legs", {"csp", "cst"}, &legs);
+  args.flag("--check", &check);
+  args.flag("--require-rt", &require_rt).modes = kRunMode | kTimingMode;
+  args.flag("--stand", &stand).modes = kRunMode;
+  args.text("--dance", "MOTION_FILE", &dance_path).modes = kRunMode | kCheckMode;
+  args.text("--timing", "MOTION_FILE", &timing_path).modes = kTimingMode;
+  args.flag("--evict-cache", &evict_cache).modes = kTimingMode;
+  args.choice("--balance-filter", {"on", "off"}, &balance);
+  switch (args.parse(argc, argv)) {
+    case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
       return 0;
-    }
-    const bool takes_value = !std::strcmp(a, "--config") || !std::strcmp(a, "--legs") || !std::strcmp(a, "--dance") ||
-                             !std::strcmp(a, "--balance-filter") || !std::strcmp(a, "--timing");
-    if (takes_value && i + 1 >= argc) {
-      std::fprintf(stderr, "kuavo_fw: option '%s' needs a value\n%s", a, kUsage);
+    case kuavo::args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", args.error().c_str(), kUsage);
       return 2;
-    }
-    if (!std::strcmp(a, "--config") && i + 1 < argc) config_path = argv[++i];
-    else if (!std::strcmp(a, "--check")) check = true;
-    else if (!std::strcmp(a, "--legs") && i + 1 < argc) {
-      const char* v = argv[++i];
-      if (std::strcmp(v, "csp") != 0 && std::strcmp(v, "cst") != 0) {
-        std::fprintf(stderr, "kuavo_fw: --legs must be csp or cst, got '%s'\n%s", v, kUsage);
-        return 2;
-      }
-      csp_legs = std::strcmp(v, "csp") == 0;
-    }
-    else if (!std::strcmp(a, "--require-rt")) require_rt = true;
-    else if (!std::strcmp(a, "--stand")) stand = true;
-    else if (!std::strcmp(a, "--dance") && i + 1 < argc) dance_path = argv[++i];
-    else if (!std::strcmp(a, "--balance-filter") && i + 1 < argc) {
-      const char* v = argv[++i];
-      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) {
-        std::fprintf(stderr, "kuavo_fw: --balance-filter must be on or off, got '%s'\n%s", v, kUsage);
-        return 2;
-      }
-      balance_filter = !std::strcmp(v, "on");
-    }
-    else if (!std::strcmp(a, "--timing") && i + 1 < argc) dance_path = argv[++i], timing = true;
-    else if (!std::strcmp(a, "--evict-cache")) evict_cache = true;
-    else {
-      std::fprintf(stderr, "kuavo_fw: unknown argument '%s'\n%s", a, kUsage);
-      return 2;
-    }
+    case kuavo::args::Parser::Result::kOk:
+      break;
   }
+  const bool timing = args.given("--timing");
+  if (check && timing) {
+    std::fprintf(stderr, "kuavo_fw: --check and --timing are two modes; give one\n%s", kUsage);
+    return 2;
+  }
+  if (!args.refuse_inapplicable(timing ? kTimingMode : check ? kCheckMode : kRunMode,
+                                timing ? "--timing" : check ? "--check" : "a run")) {
+    std::fprintf(stderr, "%s\n%s", args.error().c_str(), kUsage);
+    return 2;
+  }
+  if (timing) dance_path = timing_path;
+  if (args.given("--balance-filter") && dance_path.empty()) {
+    std::fprintf(stderr, "kuavo_fw: --balance-filter applies to a motion (--dance or --timing)\n%s", kUsage);
+    return 2;
+  }
+  const bool balance_filter = balance == "on", csp_legs = legs == "csp";
 
   // --- Configuration (before real time; nothing is sent on failure) ---
   static kuavo::model::Model model;
@@ -215,24 +228,30 @@ int run(int argc, char** argv) {
     return 2;
   }
   // The dance: loaded, validated and balance-filtered before anything is sent.
-  static kuavo::planner::MotionPlan motion;  // ~6.6 MB, read-only once loaded
   kuavo::stack::StackConfig stack_config;
   stack_config.planner = kuavo::stack::PlannerKind::kMpc;
-  static fw::DanceChannels channels;
-  static fw::DanceControl dance;
-  static fw::DancePlanner planner;  // the MPC workspace, ~15 MB
+  std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
+    memory.reset(new (std::nothrow) DanceMemory);
+    if (memory == nullptr) {
+      std::fprintf(stderr, "kuavo_fw: out of memory: the dance needs %.0f MB (is the address space limited? ulimit -v)\n",
+                   sizeof(DanceMemory) / 1e6);
+      return 1;
+    }
+  }
+  if (!dance_path.empty()) {
+    kuavo::planner::MotionPlan& motion = memory->motion;
     kuavo::planner::BalanceFilterReport report;
     if (!fw::load_dance_motion(dance_path, model, balance_filter, motion, report, msg)) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", msg.c_str());
       return 2;
     }
     const char* why = nullptr;
-    if (!fw::dance_init(dance, planner, channels, model, stack_config, fw_config, motion, why)) {
+    if (!fw::dance_init(memory->dance, memory->planner, memory->channels, model, stack_config, fw_config, motion, why)) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", why);
       return 2;
     }
-    fw::dance_set_ankle_motors(dance, drivers);  // the WBC plans what the ankle motors can deliver
+    fw::dance_set_ankle_motors(memory->dance, drivers);  // the WBC plans what the ankle motors can deliver
     std::printf("dance: %s, %d frames at %.0f Hz (%.2f s)", dance_path.c_str(), motion.frame_count, motion.rate_hz,
                 kuavo::planner::motion_plan_duration_s(motion));
     if (balance_filter) std::printf("; balance filter moved the CoM by up to %.3f m", report.max_correction_m);
@@ -249,7 +268,10 @@ int run(int argc, char** argv) {
   rt.cpu = fw_config.cpu;
   rt.lock_memory = true;
   rt.on_failure = require_rt ? rtos::RtFailurePolicy::kRequire : rtos::RtFailurePolicy::kBestEffort;
-  if (timing) return run_timing_command(model, drivers, fw_config, motion, rt, evict_cache, dance, planner, channels);
+  if (timing) {
+    return run_timing_command(model, drivers, fw_config, memory->motion, rt, evict_cache, memory->dance, memory->planner,
+                              memory->channels);
+  }
 
   // --- Real time: probed on a short-lived thread; mlockall is process-wide and stays ---
   rtos::RtStatus rt_status;
@@ -286,7 +308,7 @@ int run(int argc, char** argv) {
   static fw::Firmware firmware;
   fw::firmware_init(firmware, model, fw_config, &log);
   const bool dancing = !dance_path.empty();
-  if (dancing) fw::dance_standing_pose(firmware, motion);  // stand up to the dance's first frame
+  if (dancing) fw::dance_standing_pose(firmware, memory->motion);  // stand up to the dance's first frame
   fw::LogWriter writer;
   writer.start(log, stderr);
   std::signal(SIGINT, on_signal);
@@ -295,11 +317,11 @@ int run(int argc, char** argv) {
   static fw::ControlTask control;
   control.firmware = &firmware;
   control.io = &io;
-  control.dance = dancing ? &dance : nullptr;
+  control.dance = dancing ? &memory->dance : nullptr;
   control.stand = stand || dancing;
   control.dance_pending = dancing;
   static FirmwareTask task{&control, &done};
-  static PlannerTask planner_body{&planner, &channels};
+  static PlannerTask planner_body{dancing ? &memory->planner : nullptr, dancing ? &memory->channels : nullptr};
   rtos::PeriodicTask planner_task;
   if (dancing) {
     rtos::PeriodicConfig ppc;
@@ -336,7 +358,7 @@ int run(int argc, char** argv) {
   d::close_buses(ports);
   if (dancing) {
     // After real time: what the dance's output stage changed or refused is reported, never silent.
-    const fw::DanceCounters& c = dance.counters;
+    const fw::DanceCounters& c = memory->dance.counters;
     std::printf("dance: %llu plans taken, %llu rejected (non-finite), %llu kinematic fallbacks, %llu WBC ticks not ok, "
                 "%llu joint references put on a stop (%llu more in finish), %llu torques clipped at peak (largest demand %.2f x peak)\n",
                 static_cast<unsigned long long>(c.plans_taken), static_cast<unsigned long long>(c.plans_rejected),

@@ -58,6 +58,20 @@ BusLoadReport compute_bus_load(const BusPlan& plan) {
   return rep;
 }
 
+namespace {
+
+// Physical ranges of a bus's numbers (outside them a value is a typing error or corruption):
+// - nominal bitrate: ISO 11898-1 classic CAN (and FD's arbitration phase) runs 10 kbit/s..1 Mbit/s;
+// - FD data phase: 8 Mbit/s is the fastest CAN FD transceivers are specified for;
+constexpr double kMinBitrate_bps = 10e3, kMaxBitrate_bps = 1e6, kMaxDataBitrate_bps = 8e6;
+// - cycle rate: the 500 Hz control task is the only sender; 1 Hz..1 kHz leaves the load check
+//   to refuse a too-fast bus with its figure (the cycle period is a u32 count of µs);
+constexpr double kMinCycleRate_hz = 1.0, kMaxCycleRate_hz = 1000.0;
+// - heartbeat: the CiA 301 producer time (0x1017) is a u16 count of ms, 1..65535 ms.
+constexpr double kMinHeartbeatRate_hz = 1000.0 / 65535.0, kMaxHeartbeatRate_hz = 1000.0;
+
+}  // namespace
+
 DriverError check_bus_plan(const BusPlan& plan, BusLoadReport& report, std::string& message) {
   for (std::size_t b = 0; b < plan.buses.size(); ++b) {
     const BusConfig& bus = plan.buses[b];
@@ -65,6 +79,15 @@ DriverError check_bus_plan(const BusPlan& plan, BusLoadReport& report, std::stri
         !(bus.heartbeat_rate_hz >= 0) || (bus.fd && !(bus.data_bitrate_bps >= bus.bitrate_bps))) {
       message = "bus " + std::to_string(b) + " '" + bus.interface +
                 "': empty name, non-positive bitrate or rate, or FD data rate below nominal";
+      return DriverError::kBadConfig;
+    }
+    if (!(bus.bitrate_bps >= kMinBitrate_bps && bus.bitrate_bps <= kMaxBitrate_bps) ||
+        (bus.fd && !(bus.data_bitrate_bps <= kMaxDataBitrate_bps)) ||
+        !(bus.cycle_rate_hz >= kMinCycleRate_hz && bus.cycle_rate_hz <= kMaxCycleRate_hz) ||
+        !(bus.heartbeat_rate_hz == 0.0 ||
+          (bus.heartbeat_rate_hz >= kMinHeartbeatRate_hz && bus.heartbeat_rate_hz <= kMaxHeartbeatRate_hz))) {
+      message = bus.interface + ": bitrate must be 10 kbit/s..1 Mbit/s (FD data phase up to 8 Mbit/s), cycle rate "
+                                "1..1000 Hz, heartbeat rate 0 (off) or 0.0153..1000 Hz";
       return DriverError::kBadConfig;
     }
     for (std::size_t o = 0; o < b; ++o) {

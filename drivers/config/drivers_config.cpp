@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "drivers/config/drive_defaults.h"
+#include "drivers/imu/serial_port.h"
 
 namespace kuavo::drivers {
 
@@ -159,6 +160,11 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
   // A device path is an absolute path without NUL (the kernel would open only up to the NUL).
   if (c.imu_device.empty() || c.imu_device[0] != '/' || c.imu_device.find('\0') != std::string::npos) {
     message = "IMU device path must be an absolute path without NUL bytes";
+    return DriverError::kBadConfig;
+  }
+  if (!serial_baud_supported(c.imu_baud)) {
+    message = "IMU baud rate " + std::to_string(c.imu_baud) +
+              " is not one the serial port sets (115200, 230400, 460800, 921600, 1000000, 2000000, 4000000 baud)";
     return DriverError::kBadConfig;
   }
   message.clear();

@@ -208,6 +208,13 @@ DriverError apply_drivers_json(const std::string& text, DriversConfig& config, s
   } catch (const json::parse_error& e) {
     message = "drivers configuration: not valid JSON at " + line_and_column(text, e.byte > 0 ? e.byte - 1 : 0);
     return DriverError::kBadConfig;
+  } catch (const json::exception& e) {
+    // A number literal no double holds (1e999) is out_of_range, not a parse_error; it escaped
+    // as an exception. nlohmann gives no position for it: its message names the literal.
+    const std::string what = e.what();
+    const std::size_t at = what.find("] ");
+    message = "drivers configuration: not valid JSON: " + (at == std::string::npos ? what : what.substr(at + 2));
+    return DriverError::kBadConfig;
   }
   if (!duplicate.empty()) {
     message = "drivers configuration: duplicate key " + duplicate;
@@ -267,6 +274,14 @@ DriverError load_drivers_config(const std::string& path, const model::Model& mod
   if (!std::filesystem::is_regular_file(status)) {
     message = path + ": cannot read the drivers configuration: not a regular file";
     return DriverError::kConfigUnreadable;
+  }
+  // The overlay that sets every key of the robot is ~12 KB; 1 MiB bounds what start-up reads
+  // (a multi-gigabyte file given by mistake was read whole before being refused).
+  constexpr std::uintmax_t kMaxConfigBytes = 1u << 20;
+  if (const std::uintmax_t bytes = std::filesystem::file_size(path, ec); ec || bytes > kMaxConfigBytes) {
+    message = path + ": " + (ec ? std::string("cannot read the drivers configuration")
+                                : std::to_string(bytes) + " bytes, more than a drivers configuration holds (1 MiB)");
+    return DriverError::kBadConfig;
   }
   std::ifstream in(path);
   if (!in) {

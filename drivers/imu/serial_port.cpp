@@ -25,6 +25,11 @@ bool baud_constant(int baud, speed_t& out) {
 
 }  // namespace
 
+bool serial_baud_supported(int baud) {
+  speed_t unused;
+  return baud_constant(baud, unused);
+}
+
 DriverError open_serial_port(const std::string& device, int baud, int& fd, std::string& message) {
   fd = -1;
   speed_t speed;

@@ -13,6 +13,10 @@ namespace kuavo::drivers {
 
 inline constexpr int kMtiDefaultBaud = 2'000'000;
 
+// The rates open_serial_port can set (the MTi's: 115200 .. 4000000 baud); the configuration
+// check refuses any other, so `kuavo_fw --check` fails where opening the port would.
+bool serial_baud_supported(int baud);
+
 // Opens `device` raw 8N1, no flow control, O_NONBLOCK. On failure `message`
 // names the device and the cause, e.g. "/dev/ttyUSB0: open failed: No such
 // file or directory - IMU not connected or udev rule missing?".

@@ -49,6 +49,15 @@ DriverError build_bus(const std::vector<MotorConfig>& motors, Bus& out, std::str
       message = who + ": empty position range or non-positive velocity/torque limit";
       return DriverError::kBadConfig;
     }
+    // A limit above what the wire carries (ruiwo_codec.h) is no limit: the codec would clamp
+    // there anyway, so 1e308 N·m or 1e9 rad/s is a typing error, not a setting.
+    if (m.velocity_max_rad_s > kVelocityMax_rad_s || m.torque_max_Nm > kTorqueMax_Nm) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, ": velocity limit %g rad/s and torque limit %g N·m must be in (0, %g] rad/s and (0, %g] N·m",
+                    m.velocity_max_rad_s, m.torque_max_Nm, kVelocityMax_rad_s, kTorqueMax_Nm);
+      message = who + buf;
+      return DriverError::kBadConfig;
+    }
     // The joint range mapped to the motor must fit the wire's position range.
     const double a = motor_position_rad(m, m.position_min_rad);
     const double b = motor_position_rad(m, m.position_max_rad);

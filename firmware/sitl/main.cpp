@@ -7,7 +7,6 @@
 // Exit codes: 0 the dance was danced to its end (or the stand held) without a fault or a
 // fall; 1 it was not (the summary says why: faults, fell, error); 2 bad usage,
 // configuration or motion file.
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +20,8 @@
 #include "drivers/config/drivers_config_json.h"
 #include "firmware/dance_motion.h"
 #include "firmware/sitl/sitl_run.h"
+#include "rtos_shim/args.h"
+#include "sim/push_option.h"
 #include "tests/support/alloc_trap.h"
 
 namespace fw = kuavo::firmware;
@@ -42,87 +43,50 @@ constexpr const char* kUsage =
     "  --balance-filter on|off  as kuavo_fw (default off)\n"
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
-    "  --plan-latency-ms MS the planning task's plan applied this long after its state (default 4)\n"
+    "  --plan-latency-ms MS the planning task's plan applied this long after its state, 0..18 ms (default 4)\n"
+    "  --stand applies without --dance, --balance-filter with it; in the other mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
-bool parse_double(const char* text, double& out) {
-  char* end = nullptr;
-  out = std::strtod(text, &end);
-  return end != text && *end == '\0' && std::isfinite(out);
-}
-
-// "T:FX,FY,FZ:DURATION" (s, N, s), as kuavo simulate takes it.
-bool parse_push(const char* text, kuavo::sim::Push& push) {
-  double t, fx, fy, fz, dur;
-  char tail;
-  if (std::sscanf(text, "%lf:%lf,%lf,%lf:%lf%c", &t, &fx, &fy, &fz, &dur, &tail) != 5) return false;
-  if (!(t >= 0.0) || !(dur > 0.0) || !std::isfinite(fx + fy + fz)) return false;
-  push.start_s = t;
-  push.duration_s = dur;
-  push.force_N = kuavo::sim::Vec3(fx, fy, fz);
-  return true;
-}
-
-constexpr double kMaxStand_s = 600.0;
-
-int bad(const char* what, const char* value) {
-  std::fprintf(stderr, "kuavo_fw_sim: %s '%s'\n%s", what, value ? value : "", kUsage);
-  return 2;
-}
+constexpr kuavo::args::ModeMask kDanceMode = 1, kStandMode = 2;
 
 int run(int argc, char** argv) {
   sitl::SitlConfig cfg;
   cfg.loop.legs = sitl::LegBinding::kCsp;
   cfg.loop.seed = 1;
-  std::string dance_path, config_path, summary_path;
-  bool balance_filter = false;
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
-    if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+  std::string dance_path, config_path, summary_path, legs = "csp", balance = "off", ground = "floor";
+  double plan_latency_ms = static_cast<double>(cfg.plan_latency_ns) * 1e-6;
+  kuavo::args::Parser args("kuavo_fw_sim");
+  args.text("--dance", "MOTION_FILE", &dance_path).modes = kDanceMode;
+  args.number("--stand", "SECONDS", 0.0, kuavo::sim::kMaxRunDuration_s, "s", &cfg.stand_s, /*lo_open=*/true).modes = kStandMode;
+  args.text("--config", "FILE", &config_path);
+  args.choice("--legs", {"csp", "cst"}, &legs);
+  args.choice("--balance-filter", {"on", "off"}, &balance).modes = kDanceMode;
+  args.choice("--ground", {"floor", "carpet"}, &ground);
+  args.uint64("--seed", "N", &cfg.loop.seed);
+  args.custom("--push", kuavo::sim::kPushValueName, [&](const char* v) { return kuavo::sim::parse_push(v, cfg.loop.push); });
+  args.number("--plan-latency-ms", "MS", 0.0, 18.0, "ms", &plan_latency_ms);
+  args.output_file("--log", "CSV", &cfg.log_path);
+  args.output_file("--summary", "JSON", &summary_path);
+  switch (args.parse(argc, argv)) {
+    case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
       return 0;
-    }
-    if (v == nullptr) return bad("missing value after", a);
-    if (!std::strcmp(a, "--dance")) {
-      dance_path = v;
-    } else if (!std::strcmp(a, "--stand")) {
-      // Bounded like kuavo simulate's --stand (a run's log and time grow with it).
-      if (!parse_double(v, cfg.stand_s) || !(cfg.stand_s > 0.0 && cfg.stand_s <= kMaxStand_s)) {
-        return bad("--stand needs seconds in (0, 600], got", v);
-      }
-    } else if (!std::strcmp(a, "--config")) {
-      config_path = v;
-    } else if (!std::strcmp(a, "--legs")) {
-      if (!sitl::parse_leg_binding(v, cfg.loop.legs)) return bad("--legs must be csp or cst, got", v);
-    } else if (!std::strcmp(a, "--balance-filter")) {
-      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got", v);
-      balance_filter = !std::strcmp(v, "on");
-    } else if (!std::strcmp(a, "--ground")) {
-      if (!kuavo::sim::parse_ground(v, cfg.loop.ground)) return bad("--ground must be floor or carpet, got", v);
-    } else if (!std::strcmp(a, "--seed")) {
-      char* end = nullptr;
-      errno = 0;
-      cfg.loop.seed = std::strtoull(v, &end, 10);
-      // strtoull takes "-1" as 2^64 - 1 and saturates an overflow: both refused.
-      if (end == v || *end != '\0' || v[0] == '-' || v[0] == '+' || errno == ERANGE) {
-        return bad("--seed needs an unsigned 64-bit integer, got", v);
-      }
-    } else if (!std::strcmp(a, "--push")) {
-      if (!parse_push(v, cfg.loop.push)) return bad("--push must be T:FX,FY,FZ:DURATION (s, N, s), got", v);
-    } else if (!std::strcmp(a, "--plan-latency-ms")) {
-      double ms = 0.0;
-      if (!parse_double(v, ms) || ms < 0.0 || ms > 18.0) return bad("--plan-latency-ms must be 0..18, got", v);
-      cfg.plan_latency_ns = static_cast<kuavo::hal::TimeNs>(std::llround(ms * 1e6));
-    } else if (!std::strcmp(a, "--log")) {
-      cfg.log_path = v;
-    } else if (!std::strcmp(a, "--summary")) {
-      summary_path = v;
-    } else {
-      return bad("unknown argument", a);
-    }
-    ++i;
+    case kuavo::args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", args.error().c_str(), kUsage);
+      return 2;
+    case kuavo::args::Parser::Result::kOk:
+      break;
   }
+  const bool dancing = args.given("--dance");
+  if (!args.refuse_inapplicable(dancing ? kDanceMode : kStandMode, dancing ? "a --dance run" : "a --stand run")) {
+    std::fprintf(stderr, "%s\n%s", args.error().c_str(), kUsage);
+    return 2;
+  }
+  const bool balance_filter = balance == "on";
+  if (!sitl::parse_leg_binding(legs.c_str(), cfg.loop.legs) || !kuavo::sim::parse_ground(ground.c_str(), cfg.loop.ground)) {
+    return 2;  // unreachable: the parser allowed only their names
+  }
+  cfg.plan_latency_ns = static_cast<kuavo::hal::TimeNs>(std::llround(plan_latency_ms * 1e6));
 
   static kuavo::model::Model model;
   if (kuavo::model::build_model(kuavo::model::Variant::kS45, kuavo::model::kDefaultTotalMass_kg, model) !=

@@ -56,6 +56,20 @@ TEST(CampaignSpec, RejectsBadSpecs) {
 
 // A push is the impulse over its duration, starts inside the window, and depends only on
 // the seed; its directions cover the circle.
+// A spec's push and run length within what `kuavo simulate` takes (sim/push_option.h): refused
+// once at the spec, not as an exit 2 in every run.
+TEST(CampaignSpec, RejectsPushesAndRunsSimulateRefuses) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1,)";
+  EXPECT_TRUE(cli::parse_campaign_spec(head + R"("push":{"impulse_Ns":10,"duration_s":0.1,"start_after_s":1,"end_before_s":1}})", s, error)) << error;
+  EXPECT_FALSE(cli::parse_campaign_spec(head + R"("push":{"impulse_Ns":1e6,"duration_s":0.1,"start_after_s":1,"end_before_s":1}})", s, error));
+  EXPECT_NE(error.find("2000 N"), std::string::npos) << error;
+  EXPECT_FALSE(cli::parse_campaign_spec(head + R"("push":{"impulse_Ns":10,"duration_s":100,"start_after_s":1,"end_before_s":1}})", s, error));
+  EXPECT_FALSE(cli::parse_campaign_spec(head + R"("duration_s":1e7})", s, error));
+  EXPECT_NE(error.find("600 s"), std::string::npos) << error;
+}
+
 TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
   cli::PushSpec spec;
   spec.enabled = true;

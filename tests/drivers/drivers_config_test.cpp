@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "drivers/config/drive_defaults.h"
 #include "drivers/config/drivers_config.h"
@@ -94,6 +96,9 @@ TEST_F(DriversConfigTest, JsonErrorsNameTheKeyAndChangeNothing) {
       {R"({"imu": {"device": "/dev/x", "bauds": 1}})", "imu: unknown key 'bauds'"},
       {R"({"ankle_motor_offset_rad": [0.1]})", "ankle_motor_offset_rad"},
       {R"({"devices": [{"bus": 0, "kind": "ethercat", "id": 1, "slot": 0}]})", "devices[0].kind"},
+      // A literal no double holds threw json::out_of_range out of the loader (kuavo_fuzz,
+      // parse:config, seed 22 case 2134): now a refusal naming the literal.
+      {R"({"knee_ratio_motor_per_joint": 1e999})", "not valid JSON: number overflow parsing '1e999'"},
   };
   for (const Case& c : cases) {
     EXPECT_EQ(apply_drivers_json(c.text, config, msg), DriverError::kBadConfig) << c.text;
@@ -114,11 +119,38 @@ TEST_F(DriversConfigTest, ValidationRefusesPhysicallyAbsurdNumbers) {
       R"({"drives": [{"slot": 3, "counts_per_rev": 0.5}]})",
       R"({"imu": {"device": "/dev/ttyUSB0\u0000/etc/passwd"}})",
       R"({"imu": {"device": "ttyUSB0"}})",
+      R"({"imu": {"baud": 1}})",
+      R"({"ruiwo_motors": [{"id": 5, "torque_max_Nm": 1e308}]})",
+      R"({"ruiwo_motors": [{"id": 5, "velocity_max_rad_s": 1e9}]})",
+      R"({"ruiwo_motors": [{"id": 5, "zero_offset_rad": 1e308}]})",
+      R"({"ruiwo_motors": [{"id": 5, "zero_offset_rad": 100}]})",
   };
   for (const char* text : cases) {
     DriversConfig c = config;
     ASSERT_EQ(apply_drivers_json(text, c, msg), DriverError::kOk) << text << " -> " << msg;
     EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << text;
+  }
+  // Each message names the rule with its unit.
+  DriversConfig ruiwo = config;
+  ASSERT_EQ(apply_drivers_json(R"({"ruiwo_motors": [{"id": 5, "torque_max_Nm": 1e308}]})", ruiwo, msg), DriverError::kOk);
+  EXPECT_EQ(validate_drivers_config(ruiwo, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("Ruiwo motor 0x05: velocity limit 7 rad/s and torque limit 1e+308 N·m must be in (0, 10] rad/s and (0, 50] N·m"),
+            std::string::npos) << msg;
+  // Bus numbers the load check let through (1e308 bit/s loads nothing) or that overflow the
+  // drives' u32 cycle period / u16 heartbeat time.
+  const std::function<void(BusConfig&)> bad_buses[] = {
+      [](BusConfig& b) { b.bitrate_bps = 1e308; },
+      [](BusConfig& b) { b.bitrate_bps = 5e3; },
+      [](BusConfig& b) { b.cycle_rate_hz = 1e-9; },
+      [](BusConfig& b) { b.heartbeat_rate_hz = 1e-9; },
+      [](BusConfig& b) { b.fd = true, b.data_bitrate_bps = 1e12; },
+  };
+  for (const auto& bad : bad_buses) {
+    DriversConfig c = config;
+    bad(c.plan.buses[0]);
+    sync_drives_with_plan(c);
+    EXPECT_EQ(validate_drivers_config(c, report, msg), DriverError::kBadConfig) << msg;
+    EXPECT_NE(msg.find("bitrate must be 10 kbit/s..1 Mbit/s"), std::string::npos) << msg;
   }
   // The defaults and the documented knee ratio still pass.
   DriversConfig c = config;
@@ -184,6 +216,10 @@ TEST_F(DriversConfigTest, LoadFromFile) {
   ASSERT_EQ(load_drivers_config(path, model, loaded, report, msg), DriverError::kOk) << msg;
   EXPECT_EQ(loaded.imu_device, "/dev/ttyUSB1");
   EXPECT_EQ(report.load.size(), 7u);
+  // A file far larger than any configuration is refused by its size, before it is read.
+  std::filesystem::resize_file(path, (1u << 20) + 1);
+  EXPECT_EQ(load_drivers_config(path, model, loaded, report, msg), DriverError::kBadConfig);
+  EXPECT_NE(msg.find("1048577 bytes, more than a drivers configuration holds (1 MiB)"), std::string::npos) << msg;
   std::remove(path.c_str());
 }
 

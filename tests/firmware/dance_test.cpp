@@ -232,8 +232,11 @@ TEST(Dance, TwoThreadsHandOverWithoutAllocating) {
   EXPECT_TRUE(d.running);
   EXPECT_EQ(control.allocations.load(), 0u);
   EXPECT_EQ(planner.allocations.load(), 0u);
-  // ~50 plans in 1 s; a loaded desktop may lose some, never most.
+  // ~50 plans in 1 s; a loaded desktop may lose some, never most. (Not under AddressSanitizer:
+  // one MPC iteration takes ~32 ms there, more than the 20 ms period.)
+#ifndef KUAVO_SANITIZE
   EXPECT_GE(d.counters.plans_taken, 25u);
+#endif
   EXPECT_EQ(d.counters.plans_rejected, 0u);
   EXPECT_EQ(d.counters.plans_old_epoch, 0u);
   EXPECT_EQ(planner_side().ws.mpc_failures, 0u);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 namespace kuavo::mocap {
@@ -39,6 +40,24 @@ struct Fixture {
     }
   }
 };
+
+// A frame rate outside 4..500 Hz with valid checksums (kuavo_fuzz, parse:motion, seed 22:
+// 1e308 Hz and 6400 Hz were accepted, a motion of zero duration) is refused as kBadRate.
+TEST(mocap_motion_file, FrameRateOutsideFourTo500HzIsRefused) {
+  Fixture fx;
+  for (const double rate : {1e308, 6400.0, 500.1, 3.9, 0.0, -100.0}) {
+    auto bytes = encode_motion(fx.s45, 100.0, fx.q, fx.labels);
+    std::memcpy(&bytes[24], &rate, 8);
+    put_header_crc(bytes);
+    MotionHeader h;
+    EXPECT_EQ(read_motion_header(bytes.data(), bytes.size(), fx.s45, h), MotionError::kBadRate) << rate;
+  }
+  for (const double rate : {4.0, 100.0, 500.0}) {
+    auto bytes = encode_motion(fx.s45, rate, fx.q, fx.labels);
+    MotionHeader h;
+    EXPECT_EQ(read_motion_header(bytes.data(), bytes.size(), fx.s45, h), MotionError::kOk) << rate;
+  }
+}
 
 TEST(mocap_motion_file, RoundTripIsExact) {
   Fixture fx;

@@ -4,13 +4,6 @@
 #include <cstdlib>
 #include <new>
 
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void __libc_free(void*);
-}
 
 namespace {
 thread_local std::size_t t_count = 0;
@@ -22,6 +15,27 @@ void note(std::size_t n) {
   if (t_armed > 0 && t_first_size == 0) t_first_size = n == 0 ? 1 : n;
 }
 }  // namespace
+
+#ifdef KUAVO_SANITIZE
+// AddressSanitizer owns malloc and operator new: replacing them with glibc's handed glibc blocks
+// to ASan's free and back ("free(): invalid size", SIGABRT in kuavo_fw_sim). Its allocation hook
+// counts every allocation of the calling thread instead, the same count the replacements keep.
+// (Declared here: Debian's GCC 12 ships libasan without <sanitizer/allocator_interface.h>.)
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
+                                                          void (*free_hook)(const volatile void*));
+namespace {
+void on_malloc(const volatile void*, std::size_t n) { note(n); }
+void on_free(const volatile void*) {}
+[[maybe_unused]] const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(on_malloc, on_free);
+}  // namespace
+#else
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
 
 extern "C" {
 void* malloc(std::size_t n) {
@@ -62,6 +76,7 @@ void operator delete(void* p, std::align_val_t) noexcept { free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { free(p); }
+#endif  // KUAVO_SANITIZE
 
 namespace kuavo::test {
 

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "sim/push_option.h"
+
 namespace kuavo::cli {
 namespace {
 
@@ -89,8 +91,8 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
-  if (s.duration_s < 0.0) {
-    error = "\"duration_s\" must be >= 0";
+  if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {
+    error = "\"duration_s\" must be 0..600 s (0: the motion's length)";
     return false;
   }
   if (j.contains("push")) {
@@ -106,6 +108,12 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     }
     if (!(s.push.impulse_Ns > 0.0) || !(s.push.duration_s > 0.0) || s.push.start_after_s < 0.0 || s.push.end_before_s < 0.0) {
       error = "\"push\" needs impulse_Ns > 0, duration_s > 0 and non-negative start_after_s, end_before_s";
+      return false;
+    }
+    // What `kuavo simulate --push` takes (sim/push_option.h), checked here once, not per run.
+    if (!(s.push.duration_s <= sim::kPushMaxDuration_s && s.push.impulse_Ns / s.push.duration_s <= sim::kPushMaxForce_N &&
+          s.push.start_after_s <= sim::kPushMaxStart_s)) {
+      error = "\"push\" must stay a push: duration_s <= 10 s, impulse_Ns / duration_s <= 2000 N, start_after_s <= 600 s";
       return false;
     }
   }

@@ -36,8 +36,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int usage() {
-  std::fprintf(stderr,
+// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
+int usage(std::FILE* out = stderr) {
+  std::fprintf(out,
                "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]\n"
                "       kuavo campaign --example      print the \"show conditions\" spec\n");
   return 2;
@@ -91,42 +92,49 @@ double number_or(const nlohmann::json& j, const char* key, double fallback) {
 }  // namespace
 
 int run_campaign(int argc, char** argv) {
-  std::string spec_path, out_dir = "campaign", sshloginfile, jobs = "100%";
-  int seeds_override = 0;
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
-    if (!std::strcmp(a, "--example")) {
-      std::fputs(kShowConditionsSpec, stdout);
+  std::string out_dir = "campaign", sshloginfile, jobs = "100%";
+  std::vector<std::string> specs;
+  long long seeds_override = 0, jobs_n = 0;
+  bool example = false;
+  constexpr args::ModeMask kRun = 1, kExample = 2;
+  args::Parser p("kuavo campaign");
+  p.positionals("SPEC.json", &specs, 1);
+  p.flag("--example", &example).modes = kExample;
+  p.text("--out", "DIR", &out_dir).modes = kRun;
+  p.integer("--seeds", "N", 1, 100000, "seeds", &seeds_override).modes = kRun;
+  // GNU parallel's -j: a whole number of jobs (its percentages are not offered here).
+  p.integer("--jobs", "N", 1, 4096, "jobs", &jobs_n).modes = kRun;
+  p.input_file("--sshloginfile", "FILE", &sshloginfile).modes = kRun;
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      usage(stdout);
       return 0;
-    } else if (!std::strcmp(a, "--out") && v) {
-      out_dir = v;
-    } else if (!std::strcmp(a, "--seeds") && v) {
-      long long n = 0;
-      if (!parse_integer(v, 1, 100000, n)) {
-        std::fprintf(stderr, "kuavo campaign: --seeds must be 1..100000, got '%s'\n", v);
-        return 2;
-      }
-      seeds_override = static_cast<int>(n);
-    } else if (!std::strcmp(a, "--jobs") && v) {
-      // GNU parallel's -j: a whole number of jobs (its percentages are not offered here).
-      long long n = 0;
-      if (!parse_integer(v, 1, 4096, n)) {
-        std::fprintf(stderr, "kuavo campaign: --jobs must be 1..4096, got '%s'\n", v);
-        return 2;
-      }
-      jobs = v;
-    } else if (!std::strcmp(a, "--sshloginfile") && v) {
-      sshloginfile = v;
-    } else if (a[0] != '-' && spec_path.empty()) {
-      spec_path = a;
-      continue;
-    } else {
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n", p.error().c_str());
       return usage();
-    }
-    ++i;
+    case args::Parser::Result::kOk:
+      break;
   }
+  if (!p.refuse_inapplicable(example ? kExample : kRun, example ? "--example" : "a campaign run")) {
+    std::fprintf(stderr, "%s\n", p.error().c_str());
+    return usage();
+  }
+  if (example && !specs.empty()) {
+    std::fprintf(stderr, "kuavo campaign: --example prints a spec; it takes no SPEC.json\n");
+    return usage();
+  }
+  if (example) {
+    std::fputs(kShowConditionsSpec, stdout);
+    return 0;
+  }
+  if (jobs_n > 0) jobs = std::to_string(jobs_n);
+  const std::string spec_path = specs.empty() ? "" : specs[0];
   if (spec_path.empty()) return usage();
+  std::string why;
+  if (!check_input_file(spec_path, why)) {  // a directory read as a stream threw ("internal error")
+    std::fprintf(stderr, "kuavo campaign: %s\n", why.c_str());
+    return 2;
+  }
   bool ok = false;
   const std::string text = read_file(spec_path, ok);
   if (!ok) {
@@ -139,7 +147,7 @@ int run_campaign(int argc, char** argv) {
     std::fprintf(stderr, "kuavo campaign: %s: %s\n", spec_path.c_str(), error.c_str());
     return 2;
   }
-  if (seeds_override > 0) spec.seeds = seeds_override;
+  if (seeds_override > 0) spec.seeds = static_cast<int>(seeds_override);
   if (std::system("parallel --version > /dev/null 2>&1") != 0) {
     std::fprintf(stderr, "kuavo campaign: GNU parallel is not installed (Debian package 'parallel')\n");
     return 2;

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <filesystem>
 #include <memory>
@@ -28,6 +29,7 @@
 #include <vector>
 
 #include "rtos_shim/clock.h"
+#include "rtos_shim/args.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -91,36 +93,39 @@ constexpr double kReportCost_s = 2.0;    // SVG plots and the HTML report's data
 }  // namespace
 
 int run_demo(int argc, char** argv) {
-  std::string out = "demo_report", input;
+  std::string out = "demo_report", planner_name = "mpc", input;
+  std::vector<std::string> inputs;
   stack::PlannerKind planner_kind = stack::PlannerKind::kMpc;
   bool quiet = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--out") && i + 1 < argc) {
-      out = argv[++i];
-    } else if (!std::strcmp(argv[i], "--planner") && i + 1 < argc && stack::parse_planner(argv[i + 1], planner_kind)) {
-      ++i;
-    } else if (!std::strcmp(argv[i], "--quiet")) {
-      quiet = true;
-    } else if (argv[i][0] != '-' && input.empty()) {
-      input = argv[i];
-    } else {
-      std::fprintf(stderr, "kuavo demo: %s '%s'\n", argv[i][0] == '-' ? "unknown option or missing value" : "more than one input", argv[i]);
+  args::Parser p("kuavo demo");
+  p.positionals("IN.bvh", &inputs, 1);
+  p.text("--out", "DIR", &out);
+  p.choice("--planner", {"mpc", "kinematic"}, &planner_name);
+  p.flag("--quiet", &quiet);
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      print_usage(stdout, "demo");
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n", p.error().c_str());
       print_usage(stderr, "demo");
       return 2;
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
+  stack::parse_planner(planner_name.c_str(), planner_kind);  // one of the two names
+  if (!inputs.empty()) input = inputs.front();
   std::string error;
   if (!input.empty() && !check_input_file(input, error)) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 2;
   }
-  {
-    std::error_code ec;
-    std::filesystem::create_directories(out, ec);
-    if (ec) {
-      std::fprintf(stderr, "kuavo demo: %s: %s\n", out.c_str(), ec.message().c_str());
-      return 1;
-    }
+  // The report folder: created (or already one) before the long run.
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (!std::filesystem::is_directory(out, ec)) {
+    std::fprintf(stderr, "kuavo demo: --out %s: cannot create the directory\n", out.c_str());
+    return 2;
   }
   Progress progress(quiet);
   progress.set_total(1.0);

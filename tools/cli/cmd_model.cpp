@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "controllers/dynamics/rigid_body.h"
@@ -17,24 +18,20 @@ int run_model(int argc, char** argv) {
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   bool json = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--variant") && i + 1 < argc) {
-      if (!model::parse_variant(argv[++i], variant)) {
-        std::fprintf(stderr, "kuavo model: unknown variant '%s' (expected s45 or s42)\n", argv[i]);
-        return 2;
-      }
-    } else if (!std::strcmp(argv[i], "--mass") && i + 1 < argc) {
-      if (!parse_number(argv[++i], 0.0, std::numeric_limits<double>::max(), mass_kg)) {
-        std::fprintf(stderr, "kuavo model: --mass needs a number in kg, got '%s'\n", argv[i]);
-        return 2;
-      }
-    } else if (!std::strcmp(argv[i], "--json")) {
-      json = true;
-    } else {
-      std::fprintf(stderr, "usage: kuavo model [--variant s45|s42] [--mass KG] --json\n");
-      return 2;
-    }
+  std::string variant_name = "s45";
+  args::Parser p("kuavo model");
+  p.choice("--variant", {"s45", "s42"}, &variant_name);
+  // The 55 kg robot scaled: build_model refuses a mass its torso cannot carry; this bounds the token.
+  p.number("--mass", "KG", 1.0, 1000.0, "kg", &mass_kg);
+  p.flag("--json", &json);
+  const args::Parser::Result parsed = p.parse(argc, argv);
+  if (parsed != args::Parser::Result::kOk) {
+    if (parsed == args::Parser::Result::kError) std::fprintf(stderr, "%s\n", p.error().c_str());
+    std::fprintf(parsed == args::Parser::Result::kHelp ? stdout : stderr,
+                 "usage: kuavo model [--variant s45|s42] [--mass KG] --json\n");
+    return parsed == args::Parser::Result::kHelp ? 0 : 2;
   }
+  model::parse_variant(variant_name.c_str(), variant);  // one of the two names
   auto robot = std::make_unique<model::Model>();
   if (const auto err = model::build_model(variant, mass_kg, *robot); err != model::ModelError::kOk) {
     std::fprintf(stderr, "kuavo model: %s (--mass %g)\n", model::to_string(err), mass_kg);

@@ -33,6 +33,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -95,101 +96,66 @@ std::string human_csv(const mocap::HumanTargets& targets, int lead_frames) {
   return s;
 }
 
+// The stages: an option of the dynamic stage given with --stage geometric is refused.
+constexpr args::ModeMask kGeometric = 1, kDynamic = 2;
+
 int run(int argc, char** argv) {
-  std::string input, output, report_path, contacts = "auto", map_path, csv_path, dance_path;
-  std::string stage = "dynamic", horizon_text, repairs_path, torque_text, figures_dir, human_path;
-  std::string attenuate_text;
+  std::string output, report_path, contacts = "auto", map_path, csv_path, dance_path;
+  std::string stage = "dynamic", repairs_path, figures_dir, variant_name = "s45";
+  std::vector<std::string> inputs;
+  std::string human_path;
+  double horizon_s = 0.0, torque_weight = 0.0;
+  long long attenuate_rounds = 0;
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
-  for (int i = 1; i < argc; ++i) {
-    const auto value = [&](std::string& dst) {
-      if (i + 1 >= argc) return false;
-      dst = argv[++i];
-      return true;
-    };
-    const char* a = argv[i];
-    bool ok = true;
-    if (!std::strcmp(a, "-o") || !std::strcmp(a, "--out"))
-      ok = value(output);
-    else if (!std::strcmp(a, "--report"))
-      ok = value(report_path);
-    else if (!std::strcmp(a, "--contacts"))
-      ok = value(contacts);
-    else if (!std::strcmp(a, "--map"))
-      ok = value(map_path);
-    else if (!std::strcmp(a, "--csv"))
-      ok = value(csv_path);
-    else if (!std::strcmp(a, "--dance-bvh"))
-      ok = value(dance_path);
-    else if (!std::strcmp(a, "--stage")) {
-      ok = value(stage);
-      if (ok && stage != "geometric" && stage != "dynamic") {
-        std::fprintf(stderr, "kuavo retarget: --stage must be geometric or dynamic, got '%s'\n", stage.c_str());
-        return 2;
-      }
-    } else if (!std::strcmp(a, "--horizon")) {
-      ok = value(horizon_text);
-      char* end = nullptr;
-      const double h = ok ? std::strtod(horizon_text.c_str(), &end) : 0.0;
-      if (ok && (end == horizon_text.c_str() || *end != '\0' || !(h >= 0.2 && h <= 1.4))) {
-        std::fprintf(stderr, "kuavo retarget: --horizon needs seconds in [0.2, 1.4], got '%s'\n", horizon_text.c_str());
-        return 2;
-      }
-      if (ok) dyn_options.dynamic.set_horizon(h);
-    } else if (!std::strcmp(a, "--torque-weight")) {
-      ok = value(torque_text);
-      char* end = nullptr;
-      const double w = ok ? std::strtod(torque_text.c_str(), &end) : 0.0;
-      if (ok && (end == torque_text.c_str() || *end != '\0' || !(w >= 0.0 && w <= 1e4))) {
-        std::fprintf(stderr, "kuavo retarget: --torque-weight needs a weight in [0, 1e4], got '%s'\n", torque_text.c_str());
-        return 2;
-      }
-      if (ok) dyn_options.dynamic.torque_penalty_weight = w;
-    } else if (!std::strcmp(a, "--attenuate")) {
-      ok = value(attenuate_text);
-      char* end = nullptr;
-      const long rounds = ok ? std::strtol(attenuate_text.c_str(), &end, 10) : 0;
-      if (ok && (end == attenuate_text.c_str() || *end != '\0' || rounds < 0 || rounds > 5)) {
-        std::fprintf(stderr, "kuavo retarget: --attenuate needs a round count in [0, 5], got '%s'\n", attenuate_text.c_str());
-        return 2;
-      }
-      if (ok) dyn_options.attenuation_rounds = static_cast<int>(rounds);
-    } else if (!std::strcmp(a, "--repairs"))
-      ok = value(repairs_path);
-    else if (!std::strcmp(a, "--dynamic-csv"))
-      ok = value(dyn_options.csv_path);
-    else if (!std::strcmp(a, "--figures"))
-      ok = value(figures_dir);
-    else if (!std::strcmp(a, "--human-csv"))
-      ok = value(human_path);
-    else if (!std::strcmp(a, "--variant")) {
-      std::string v;
-      ok = value(v);
-      if (ok && !model::parse_variant(v.c_str(), variant)) {
-        std::fprintf(stderr, "kuavo retarget: unknown variant '%s' (expected s45 or s42)\n", v.c_str());
-        return 2;
-      }
-    } else if (a[0] == '-') {
-      std::fprintf(stderr, "kuavo retarget: unknown option '%s'\n%s", a, kUsage);
+  args::Parser p("kuavo retarget");
+  p.positionals("INPUT.bvh", &inputs, 1);
+  p.output_file("--out", "OUT.motion", &output).alias = "-o";
+  p.output_file("--report", "REPORT.json", &report_path);
+  p.text("--contacts", "auto|none|FILE", &contacts);
+  p.input_file("--map", "MAPPING.txt", &map_path);
+  p.output_file("--csv", "OUT.csv", &csv_path);
+  p.output_file("--dance-bvh", "OUT.bvh", &dance_path);
+  p.choice("--stage", {"geometric", "dynamic"}, &stage);
+  // The offline OCP's window range (mpc_validate_config without plan output).
+  p.number("--horizon", "SECONDS", 0.2, 1.4, "s", &horizon_s).modes = kDynamic;
+  p.input_file("--repairs", "FILE", &repairs_path).modes = kDynamic;
+  p.output_file("--dynamic-csv", "OUT.csv", &dyn_options.csv_path).modes = kDynamic;
+  p.number("--torque-weight", "W", 0.0, 1e4, "", &torque_weight).modes = kDynamic;
+  p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
+  p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
+  p.output_file("--human-csv", "OUT.csv", &human_path);
+  p.choice("--variant", {"s45", "s42"}, &variant_name);
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      std::fputs(kUsage, stdout);
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
       return 2;
-    } else if (input.empty()) {
-      input = a;
-    } else {
-      std::fprintf(stderr, "kuavo retarget: more than one input file ('%s', '%s')\n%s", input.c_str(), a, kUsage);
-      return 2;
-    }
-    if (!ok) {
-      std::fprintf(stderr, "kuavo retarget: option '%s' needs a value\n%s", a, kUsage);
-      return 2;
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
-  if (stage == "geometric" && (!horizon_text.empty() || !repairs_path.empty() || !dyn_options.csv_path.empty() ||
-                               !torque_text.empty() || !attenuate_text.empty() || !figures_dir.empty())) {
-    std::fprintf(stderr,
-                 "kuavo retarget: --horizon, --repairs, --dynamic-csv, --torque-weight, --attenuate and --figures apply to "
-                 "--stage dynamic only\n");
+  if (!p.refuse_inapplicable(stage == "geometric" ? kGeometric : kDynamic, "--stage " + stage)) {
+    std::fprintf(stderr, "%s\n", p.error().c_str());
     return 2;
   }
+  const std::string input = inputs.empty() ? "" : inputs[0];
+  if (!input.empty() && !dance_path.empty()) {
+    std::fprintf(stderr, "kuavo retarget: --dance-bvh writes the built-in dance; it does not apply with INPUT.bvh\n");
+    return 2;
+  }
+  if (!input.empty()) {
+    std::string why;
+    if (!check_input_file(input, why)) {
+      std::fprintf(stderr, "kuavo retarget: %s\n", why.c_str());
+      return 2;
+    }
+  }
+  model::parse_variant(variant_name.c_str(), variant);  // one of the two names
+  if (p.given("--horizon")) dyn_options.dynamic.set_horizon(horizon_s);
+  if (p.given("--torque-weight")) dyn_options.dynamic.torque_penalty_weight = torque_weight;
+  dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);
   // Figures next to the report unless told otherwise (none without a report).
   if (figures_dir.empty() && !report_path.empty()) {
     figures_dir = std::filesystem::path(report_path).parent_path().string();
@@ -216,22 +182,13 @@ int run(int argc, char** argv) {
     return 2;
   }
 
-  // Every file named is checked before the (long) run: side inputs regular, outputs writable.
-  {
+  // Every file named is checked before the (long) run: the parser checked the other inputs
+  // (regular files) and the outputs (writable); --contacts names a file unless auto or none.
+  if (contacts != "auto" && contacts != "none") {
     std::string why;
-    const std::pair<const char*, const std::string*> inputs[] = {
-        {"--map", &map_path}, {"--contacts", &contacts}, {"--repairs", &repairs_path}};
-    for (const auto& [option, in] : inputs) {
-      if (!in->empty() && *in != "auto" && *in != "none" && !check_input_file(*in, why)) {
-        std::fprintf(stderr, "kuavo retarget: %s %s\n", option, why.c_str());
-        return 2;
-      }
-    }
-    for (const std::string* out : {&output, &report_path, &csv_path, &dance_path, &dyn_options.csv_path, &human_path}) {
-      if (!out->empty() && !check_output_file(*out, why)) {
-        std::fprintf(stderr, "kuavo retarget: %s\n", why.c_str());
-        return 2;
-      }
+    if (!check_input_file(contacts, why)) {
+      std::fprintf(stderr, "kuavo retarget: --contacts %s\n", why.c_str());
+      return 2;
     }
   }
   auto robot = std::make_unique<model::Model>();

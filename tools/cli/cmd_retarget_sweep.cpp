@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "rtos_shim/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/cli/retarget_figures.h"
@@ -53,17 +54,22 @@ std::string short_number(double v) {
   return buf;
 }
 
+// "0.2,0.6,1.0": each item a whole number token in the range (rtos_shim/args.h); an empty
+// item (",,", a trailing comma) is refused.
 bool parse_horizons(const std::string& text, std::vector<double>& out) {
-  out.clear();
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const double h = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !(h >= kMinHorizon_s && h <= kMaxHorizon_s)) return false;
-    out.push_back(h);
+  std::vector<double> h;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    double v = 0.0;
+    if (!args::parse_number(item.c_str(), kMinHorizon_s, kMaxHorizon_s, v)) return false;
+    h.push_back(v);
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
   }
-  return !out.empty();
+  out = std::move(h);
+  return true;
 }
 
 // One plot of a figure against the horizon, with the geometric motion's value as a dashed line.
@@ -93,41 +99,40 @@ report::Plot against_horizon(const std::string& title, const std::string& y_labe
 }
 
 int run(int argc, char** argv) {
-  std::string input, out_dir, horizons_text;
+  std::string out_dir, variant_name = "s45";
+  std::vector<std::string> inputs;
   std::vector<double> horizons;
   for (int k = 1; k <= 7; ++k) horizons.push_back(2 * k / 10.0);
   model::Variant variant = model::Variant::kS45;
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (!std::strcmp(a, "--out") && has_value) {
-      out_dir = argv[++i];
-    } else if (!std::strcmp(a, "--horizons") && has_value) {
-      horizons_text = argv[++i];
-      if (!parse_horizons(horizons_text, horizons)) {
-        std::fprintf(stderr, "kuavo retarget-sweep: --horizons needs seconds in [0.2, 1.4], got '%s'\n",
-                     horizons_text.c_str());
-        return 2;
-      }
-      std::sort(horizons.begin(), horizons.end());  // Fig. 6's x axis
-    } else if (!std::strcmp(a, "--variant") && has_value) {
-      if (!model::parse_variant(argv[++i], variant)) {
-        std::fprintf(stderr, "kuavo retarget-sweep: unknown variant '%s' (expected s45 or s42)\n", argv[i]);
-        return 2;
-      }
-    } else if (a[0] == '-') {
-      std::fprintf(stderr, "kuavo retarget-sweep: unknown option or missing value '%s'\n%s", a, kUsage);
+  args::Parser p("kuavo retarget-sweep");
+  p.positionals("INPUT.bvh", &inputs, 1);
+  p.text("--out", "DIR", &out_dir);
+  p.custom("--horizons", "S,S,... with each S in [0.2, 1.4] s",
+           [&](const char* v) { return parse_horizons(v, horizons); });
+  p.choice("--variant", {"s45", "s42"}, &variant_name);
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      std::fputs(kUsage, stdout);
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
       return 2;
-    } else if (input.empty()) {
-      input = a;
-    } else {
-      std::fprintf(stderr, "kuavo retarget-sweep: more than one input file ('%s', '%s')\n%s", input.c_str(), a, kUsage);
-      return 2;
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
+  std::sort(horizons.begin(), horizons.end());  // Fig. 6's x axis
+  model::parse_variant(variant_name.c_str(), variant);  // one of the two names
+  const std::string input = inputs.empty() ? "" : inputs[0];
   if (out_dir.empty()) {
     std::fprintf(stderr, "kuavo retarget-sweep: --out DIR is required\n%s", kUsage);
     return 2;
+  }
+  if (!input.empty()) {
+    std::string why;
+    if (!args::check_input_file(input, why)) {
+      std::fprintf(stderr, "kuavo retarget-sweep: %s\n", why.c_str());
+      return 2;
+    }
   }
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);

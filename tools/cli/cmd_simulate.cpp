@@ -18,9 +18,11 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sim/closed_loop.h"
 #include "sim/motion_loop.h"
+#include "sim/push_option.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/motion_input.h"
@@ -31,44 +33,14 @@
 namespace kuavo::cli {
 namespace {
 
-// Longest simulated run: the longest motion the controller holds is 120 s
-// (planner::kMaxMotionFrames at 100 Hz) plus settling; 600 s bounds the run's per-tick
-// statistics (~300 k WBC ticks, a few MB) and its log, decided before anything runs.
-constexpr double kMaxRunDuration_s = 600.0;
+using sim::kMaxRunDuration_s;  // the bound on --stand and --duration
 
-bool parse_double(const char* text, double& out) {
-  return parse_number(text, -std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), out);
-}
+// The three kinds of run; an option outside the kinds it applies to is refused.
+constexpr args::ModeMask kStandRun = 1, kMotionRun = 2, kStepRun = 4;
 
-// The options that take a value (a missing value is named, not a generic usage).
-constexpr const char* kValueOptions[] = {"--stand", "--step-in-place", "--duration", "--balance-filter", "--planner",
-                                         "--state", "--horizon", "--sensors", "--plan-latency-ms", "--ground",
-                                         "--push", "--seed", "--latency-ticks", "--integrator", "--rtol",
-                                         "--variant", "--mass", "--perturb", "--perturb-seed", "--log", "--summary"};
-// Those that only a MOTION or --step-in-place run reads (refused with --stand, not ignored).
-constexpr const char* kMotionOnlyOptions[] = {"--duration", "--balance-filter", "--planner", "--state", "--horizon",
-                                              "--sensors", "--plan-latency-ms", "--perturb", "--perturb-seed"};
-
-bool is_one_of(const char* a, const auto& names) {
-  for (const char* n : names)
-    if (!std::strcmp(a, n)) return true;
-  return false;
-}
-
-// "T:FX,FY,FZ:DURATION", e.g. 5:100,0,0:0.1 is a 10 N·s forward push at t = 5 s.
-bool parse_push(const char* text, sim::Push& push) {
-  double t, fx, fy, fz, d;
-  char tail;
-  if (std::sscanf(text, "%lf:%lf,%lf,%lf:%lf%c", &t, &fx, &fy, &fz, &d, &tail) != 5) return false;
-  if (!(t >= 0.0) || !(d > 0.0) || !std::isfinite(fx + fy + fz)) return false;
-  push.start_s = t;
-  push.duration_s = d;
-  push.force_N = sim::Vec3(fx, fy, fz);
-  return true;
-}
-
-int usage() {
-  std::fprintf(stderr,
+// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
+int usage(std::FILE* out = stderr) {
+  std::fprintf(out,
                "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
                "                      [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]\n"
                "                      [--seed N] [--latency-ticks N] [--integrator euler|cvode|rkm]\n"
@@ -86,117 +58,94 @@ int run_simulate(int argc, char** argv) {
   sim::MotionRunConfig motion_cfg;
   motion_cfg.stack.planner = stack::PlannerKind::kMpc;
   sim::RunConfig& cfg = motion_cfg.run;
-  std::string motion_path;
-  int steps = -1;
-  bool duration_given = false;
-  bool balance_filter = false;
+  std::vector<std::string> positionals;
+  long long steps = 0, latency_ticks = cfg.command_latency_ticks;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
-  std::string summary_path;
-  bool stand = false;
+  std::string summary_path, balance = "off", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
+  std::string integrator = "cvode", variant_name = "s45", perturb;
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
-  bool perturb_seed_given = false;
-  const char* motion_only = nullptr;  // the first motion-only option given
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
-    auto bad = [&](const char* what) {
-      std::fprintf(stderr, "kuavo simulate: %s '%s'\n", what, v ? v : "");
-      return 2;
-    };
-    if (is_one_of(a, kValueOptions) && v == nullptr) {
-      std::fprintf(stderr, "kuavo simulate: option '%s' needs a value\n", a);
-      return usage();
-    }
-    if (is_one_of(a, kMotionOnlyOptions) && motion_only == nullptr) motion_only = a;
-    if (!std::strcmp(a, "--stand") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
-        return bad(("--stand needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
-      stand = true;
-    } else if (!std::strcmp(a, "--step-in-place") && v) {
-      long long n = 0;
-      if (!parse_integer(v, 1, 200, n)) return bad("--step-in-place needs 1..200 steps, got");
-      steps = static_cast<int>(n);
-    } else if (!std::strcmp(a, "--duration") && v) {
-      if (!parse_double(v, cfg.duration_s) || cfg.duration_s <= 0.0 || cfg.duration_s > kMaxRunDuration_s)
-        return bad(("--duration needs seconds in (0, " + std::to_string(static_cast<int>(kMaxRunDuration_s)) + "], got").c_str());
-      duration_given = true;
-    } else if (!std::strcmp(a, "--balance-filter") && v) {
-      if (std::strcmp(v, "on") != 0 && std::strcmp(v, "off") != 0) return bad("--balance-filter must be on or off, got");
-      balance_filter = std::strcmp(v, "on") == 0;
-    } else if (!std::strcmp(a, "--planner") && v) {
-      if (!stack::parse_planner(v, motion_cfg.stack.planner)) return bad("--planner must be kinematic or mpc, got");
-    } else if (!std::strcmp(a, "--state") && v) {
-      if (std::strcmp(v, "estimator") != 0 && std::strcmp(v, "truth") != 0) return bad("--state must be estimator or truth, got");
-      motion_cfg.use_truth_state = std::strcmp(v, "truth") == 0;
-    } else if (!std::strcmp(a, "--horizon") && v) {
-      if (!parse_double(v, motion_cfg.stack.mpc.horizon_s)) return bad("--horizon needs seconds, got");
-    } else if (!std::strcmp(a, "--sensors") && v) {
-      if (std::strcmp(v, "ideal") != 0 && std::strcmp(v, "mti") != 0) return bad("--sensors must be mti or ideal, got");
-      motion_cfg.ideal_sensors = std::strcmp(v, "ideal") == 0;
-    } else if (!std::strcmp(a, "--plan-latency-ms") && v) {
-      double ms = 0.0;
-      if (!std::strcmp(v, "measured")) {
-        motion_cfg.measured_plan_latency = true;
-      } else if (!parse_double(v, ms) || ms < 0.0 || ms > 100.0) {
-        return bad("--plan-latency-ms must be 0..100 or measured, got");
-      } else {
-        motion_cfg.plan_latency_s = ms * 1e-3;
-      }
-    } else if (!std::strcmp(a, "--ground") && v) {
-      if (!sim::parse_ground(v, cfg.ground)) return bad("--ground must be floor or carpet, got");
-    } else if (!std::strcmp(a, "--push") && v) {
-      if (!parse_push(v, cfg.push)) return bad("--push must be T:FX,FY,FZ:DURATION (s, N, s), got");
-    } else if (!std::strcmp(a, "--seed") && v) {
-      if (!parse_uint64(v, cfg.seed)) return bad("--seed needs an integer in 0..2^64-1, got");
-    } else if (!std::strcmp(a, "--latency-ticks") && v) {
-      long long n = 0;
-      if (!parse_integer(v, 0, 50, n)) return bad("--latency-ticks must be 0..50, got");
-      cfg.command_latency_ticks = static_cast<int>(n);
-    } else if (!std::strcmp(a, "--integrator") && v) {
-      if (!sim::parse_integrator(v, cfg.integrator)) return bad("--integrator must be euler, cvode or rkm, got");
-    } else if (!std::strcmp(a, "--rtol") && v) {
-      if (!parse_double(v, cfg.relative_tolerance) || !(cfg.relative_tolerance > 0.0)) return bad("--rtol needs a positive number, got");
-    } else if (!std::strcmp(a, "--variant") && v) {
-      if (!model::parse_variant(v, variant)) return bad("--variant must be s45 or s42, got");
-    } else if (!std::strcmp(a, "--mass") && v) {
-      if (!parse_double(v, mass_kg)) return bad("--mass needs kg, got");
-    } else if (!std::strcmp(a, "--perturb") && v) {
-      std::string error;
-      if (!load_perturbation_set(v, perturb_set, error)) return bad(error.c_str());
-    } else if (!std::strcmp(a, "--perturb-seed") && v) {
-      if (!parse_uint64(v, perturb_seed)) return bad("--perturb-seed needs an integer in 0..2^64-1, got");
-      perturb_seed_given = true;
-    } else if (!std::strcmp(a, "--log") && v) {
-      cfg.log_path = v;
-    } else if (!std::strcmp(a, "--summary") && v) {
-      summary_path = v;
-    } else if (a[0] != '-' && motion_path.empty()) {
-      motion_path = a;
-      continue;  // a positional argument takes no value
-    } else {
-      return usage();
-    }
-    ++i;
+  args::Parser p("kuavo simulate");
+  p.positionals("MOTION", &positionals, 1);
+  p.number("--stand", "SECONDS", 0.0, kMaxRunDuration_s, "s", &cfg.duration_s, /*lo_open=*/true).modes = kStandRun;
+  p.integer("--step-in-place", "STEPS", 1, 200, "steps", &steps).modes = kStepRun;
+  p.number("--duration", "SECONDS", 0.0, kMaxRunDuration_s, "s", &cfg.duration_s, true).modes = kMotionRun | kStepRun;
+  p.choice("--balance-filter", {"on", "off"}, &balance).modes = kMotionRun | kStepRun;
+  p.choice("--planner", {"kinematic", "mpc"}, &planner).modes = kMotionRun | kStepRun;
+  p.choice("--state", {"estimator", "truth"}, &state).modes = kMotionRun | kStepRun;
+  // The online MPC's window: mpc_validate_config's range with plan output (checked again there).
+  p.number("--horizon", "SECONDS", 0.6, 1.4, "s", &motion_cfg.stack.mpc.horizon_s).modes = kMotionRun | kStepRun;
+  p.choice("--sensors", {"mti", "ideal"}, &sensors).modes = kMotionRun | kStepRun;
+  p.custom("--plan-latency-ms", "MS in 0..100 ms or measured", [&](const char* v) {
+     double ms = 0.0;
+     if (!std::strcmp(v, "measured")) return motion_cfg.measured_plan_latency = true;
+     if (!parse_number(v, 0.0, 100.0, ms)) return false;
+     motion_cfg.plan_latency_s = ms * 1e-3;
+     return true;
+   }).modes = kMotionRun | kStepRun;
+  p.choice("--ground", {"floor", "carpet"}, &ground);
+  p.custom("--push", sim::kPushValueName, [&](const char* v) { return sim::parse_push(v, cfg.push); });
+  p.uint64("--seed", "N", &cfg.seed);
+  p.integer("--latency-ticks", "TICKS", 0, 50, "ticks of 2 ms", &latency_ticks);
+  p.choice("--integrator", {"euler", "cvode", "rkm"}, &integrator);
+  p.number("--rtol", "TOLERANCE", 1e-12, 1e-1, "", &cfg.relative_tolerance);
+  p.choice("--variant", {"s45", "s42"}, &variant_name);
+  // The 55 kg robot scaled: build_model refuses a mass its torso cannot carry; this bounds the token.
+  p.number("--mass", "KG", 1.0, 1000.0, "kg", &mass_kg);
+  p.text("--perturb", "none|show|FILE.json", &perturb).modes = kMotionRun | kStepRun;
+  p.uint64("--perturb-seed", "N", &perturb_seed).modes = kMotionRun | kStepRun;
+  p.output_file("--log", "CSV", &cfg.log_path);
+  p.output_file("--summary", "JSON", &summary_path);
+  auto refuse = [&] {
+    std::fprintf(stderr, "%s\n", p.error().c_str());
+    return usage();
+  };
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      usage(stdout);
+      return 0;
+    case args::Parser::Result::kError:
+      return refuse();
+    case args::Parser::Result::kOk:
+      break;
   }
+  const bool stand = p.given("--stand");
+  const std::string motion_path = positionals.empty() ? "" : positionals[0];
   const int modes = (stand ? 1 : 0) + (motion_path.empty() ? 0 : 1) + (steps > 0 ? 1 : 0);
   if (modes != 1) {
     std::fprintf(stderr, "kuavo simulate: give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS\n");
     return usage();
   }
-  if (stand && motion_only != nullptr) {
-    std::fprintf(stderr, "kuavo simulate: %s applies to MOTION and --step-in-place runs, not --stand\n", motion_only);
-    return 2;
+  if (!p.refuse_inapplicable(stand ? kStandRun : steps > 0 ? kStepRun : kMotionRun,
+                             stand ? "a --stand run" : steps > 0 ? "a --step-in-place run" : "a MOTION run")) {
+    return refuse();
   }
-  // Inputs and outputs checked before the run, not after it.
-  std::string path_error;
-  if ((!motion_path.empty() && !check_input_file(motion_path, path_error)) ||
-      (!cfg.log_path.empty() && !check_output_file(cfg.log_path, path_error)) ||
-      (!summary_path.empty() && !check_output_file(summary_path, path_error))) {
-    std::fprintf(stderr, "kuavo simulate: %s\n", path_error.c_str());
-    return 2;
+  if (!motion_path.empty()) {
+    std::string path_error;
+    if (!check_input_file(motion_path, path_error)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", path_error.c_str());
+      return 2;
+    }
   }
+  if (!perturb.empty()) {
+    std::string error;
+    if (!load_perturbation_set(perturb.c_str(), perturb_set, error)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
+      return 2;
+    }
+  }
+  // The parser allowed only these names.
+  const bool balance_filter = balance == "on";
+  motion_cfg.use_truth_state = state == "truth";
+  motion_cfg.ideal_sensors = sensors == "ideal";
+  cfg.command_latency_ticks = static_cast<int>(latency_ticks);
+  if (!stack::parse_planner(planner.c_str(), motion_cfg.stack.planner) || !sim::parse_ground(ground.c_str(), cfg.ground) ||
+      !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant)) {
+    return usage();
+  }
+  const bool duration_given = p.given("--duration");
+  const bool perturb_seed_given = p.given("--perturb-seed");
   if (!stand && !duration_given) cfg.duration_s = 0.0;  // the motion's length plus settling
   auto robot = std::make_unique<model::Model>();
   if (const auto err = model::build_model(variant, mass_kg, *robot); err != model::ModelError::kOk) {
@@ -217,7 +166,7 @@ int run_simulate(int argc, char** argv) {
   } else {
     auto plan = std::make_unique<planner::MotionPlan>();
     std::string error;
-    const bool loaded = steps > 0 ? make_step_plan(*robot, steps, *plan, error)
+    const bool loaded = steps > 0 ? make_step_plan(*robot, static_cast<int>(steps), *plan, error)
                                   : mocap::load_motion_plan(motion_path, *robot, *plan, error);
     if (!loaded) {
       std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());

@@ -3,10 +3,18 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "tools/cli/args.h"
+
 namespace kuavo::cli {
 
 bool load_perturbation_set(const std::string& arg, sim::PerturbationSet& out, std::string& error) {
   if (sim::perturbation_set_by_name(arg, out)) return true;
+  // A directory opened as a stream threw from its first read ("internal error", exit 1).
+  std::string why;
+  if (!check_input_file(arg, why)) {
+    error = "--perturb: '" + arg + "' is neither a set name (none, show) nor a readable file (" + why + ")";
+    return false;
+  }
   std::ifstream in(arg);
   if (!in) {
     error = "--perturb: '" + arg + "' is neither a set name (none, show) nor a readable file";

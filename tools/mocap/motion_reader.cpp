@@ -54,7 +54,7 @@ const char* to_string(MotionError e) {
     case MotionError::kBadPayloadChecksum:
       return "frame data checksum mismatch (corrupted frames)";
     case MotionError::kBadRate:
-      return "frame rate is not a positive finite number";
+      return "frame rate outside 4..500 Hz";
     case MotionError::kBadLabel:
       return "contact label out of range";
     case MotionError::kIo:
@@ -100,7 +100,7 @@ MotionError read_motion_header(const std::uint8_t* data, std::size_t size, const
     if (std::strncmp(stored, model::joint_name(robot, j), kMotionNameBytes) != 0) return MotionError::kLayoutMismatch;
   }
   const double rate = motion_get_f64(data + 24);
-  if (!std::isfinite(rate) || !(rate > 0.0)) return MotionError::kBadRate;
+  if (!(rate >= kMotionMinRate_hz && rate <= kMotionMaxRate_hz)) return MotionError::kBadRate;
   const std::uint32_t frames = motion_get_u32(data + 32);
   if (frames > kMotionMaxFrames) return MotionError::kTooManyFrames;
   const std::size_t payload = static_cast<std::size_t>(frames) * kMotionRecordBytes;

@@ -100,6 +100,11 @@ inline constexpr double kMotionBaseHeightMin_m = 0.1;
 inline constexpr double kMotionBaseHeightMax_m = 2.0;
 // Horizontal base position: a 100 m square stage around the origin (the clips travel < 10 m).
 inline constexpr double kMotionBaseHorizontalMax_m = 50.0;
+// Frame rate: `kuavo retarget` writes 100 Hz. Slower than 4 Hz the beat of a 120 bpm dance is
+// past the Nyquist rate (the BVH bound kBvhMaxFrameTime_s, same reason); faster than the 500 Hz
+// control tick, frames fall between ticks that never read them. A rate of 1e308 Hz made a
+// motion of zero duration that --check accepted.
+inline constexpr double kMotionMinRate_hz = 4.0, kMotionMaxRate_hz = 500.0;
 // Most frames a motion file may hold: the controller's capacity, checked on the header so a
 // forged count cannot make a loader read or allocate more.
 inline constexpr std::uint32_t kMotionMaxFrames = planner::kMaxMotionFrames;

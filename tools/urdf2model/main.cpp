@@ -1,31 +1,34 @@
 // urdf2model: writes controllers/model/generated/biped_sXX_tables.h from shared/robot.
 //   urdf2model [--robot-dir DIR] [--variant s45|s42|all] [--out-dir DIR]
 #include <cstdio>
-#include <cstring>
+#include <exception>
 #include <fstream>
 #include <string>
 
+#include "rtos_shim/args.h"
 #include "tools/urdf2model/urdf_model.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+constexpr const char* kUsage = "usage: urdf2model [--robot-dir DIR] [--variant s45|s42|all] [--out-dir DIR]\n";
+
+int run(int argc, char** argv) {
   std::string robot_dir = std::string(KUAVO_DEFAULT_SHARED_DIR) + "/robot";
   std::string variant = "all";
   std::string out_dir = "controllers/model/generated";
-  for (int i = 1; i < argc; ++i) {
-    auto next = [&](std::string& v) {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "urdf2model: %s needs a value\n", argv[i]);
-        std::exit(2);
-      }
-      v = argv[++i];
-    };
-    if (!std::strcmp(argv[i], "--robot-dir")) next(robot_dir);
-    else if (!std::strcmp(argv[i], "--variant")) next(variant);
-    else if (!std::strcmp(argv[i], "--out-dir")) next(out_dir);
-    else {
-      std::fprintf(stderr, "usage: urdf2model [--robot-dir DIR] [--variant s45|s42|all] [--out-dir DIR]\n");
+  kuavo::args::Parser p("urdf2model");
+  p.text("--robot-dir", "DIR", &robot_dir);
+  p.choice("--variant", {"s45", "s42", "all"}, &variant);  // an unknown one generated nothing, exit 0
+  p.text("--out-dir", "DIR", &out_dir);
+  switch (p.parse(argc, argv)) {
+    case kuavo::args::Parser::Result::kHelp:
+      std::fputs(kUsage, stdout);
+      return 0;
+    case kuavo::args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
       return 2;
-    }
+    case kuavo::args::Parser::Result::kOk:
+      break;
   }
   for (const char* v : {"s45", "s42"}) {
     if (variant != "all" && variant != v) continue;
@@ -44,4 +47,16 @@ int main(int argc, char** argv) {
     std::printf("wrote %s\n", path.c_str());
   }
   return 0;
+}
+
+}  // namespace
+
+// No exception leaves the program: one line and exit 1.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "urdf2model: internal error: %s\n", e.what());
+  }
+  return 1;
 }
