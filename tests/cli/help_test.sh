@@ -41,4 +41,12 @@ done
 expect 2 "" "usage: kuavo replay" replay --out "$dir/r"
 expect 2 "" "no such file" demo "$dir/missing.bvh" --out "$dir/never"
 [ ! -e "$dir/never" ] || fail "kuavo demo with a missing BVH made its report folder"
+# A run piped or with --quiet shows no progress line (no carriage return); --quiet also drops the
+# summary lines: nothing on stdout, the motion written.
+"$kuavo" retarget --stage geometric -o "$dir/q.motion" --quiet > "$dir/out" 2> "$dir/err" || fail "retarget --quiet failed"
+[ ! -s "$dir/out" ] && [ ! -s "$dir/err" ] || fail "retarget --quiet printed: $(head -c 300 "$dir/out" "$dir/err")"
+[ -s "$dir/q.motion" ] || fail "retarget --quiet wrote no motion"
+"$kuavo" retarget --stage geometric -o "$dir/q.motion" > "$dir/out" 2> "$dir/err" || fail "retarget failed"
+grep -q "kuavo retarget:" "$dir/out" || fail "retarget printed no summary"
+if tr -d '\n' < "$dir/err" | grep -q "$(printf '\r')"; then fail "a piped retarget drew a progress line"; fi
 echo "PASS"

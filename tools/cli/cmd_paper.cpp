@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "sim/motion_loop.h"
+#include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/html_report.h"
 #include "tools/cli/motion_report.h"
@@ -89,16 +90,19 @@ struct HorizonRun {
 int run_paper(int argc, char** argv) {
   std::string out = "paper_report";
   bool quiet = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--out") && i + 1 < argc) {
-      out = argv[++i];
-    } else if (!std::strcmp(argv[i], "--quiet")) {
-      quiet = true;
-    } else {
-      std::fprintf(stderr, "kuavo paper: unknown option or missing value '%s'\n", argv[i]);
+  args::Parser p("kuavo paper");
+  p.text("--out", "DIR", &out);
+  p.flag("--quiet", &quiet);
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      print_usage(stdout, "paper");
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n", p.error().c_str());
       print_usage(stderr, "paper");
       return 2;
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
   std::error_code ec;
   std::filesystem::create_directories(out + "/sweep", ec);

@@ -22,27 +22,22 @@ namespace kuavo::cli {
 int run_replay(int argc, char** argv) {
   std::vector<std::string> logs;
   std::string out, retarget_report, human, title = "Kuavo 4Pro replay";
-  for (int i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    std::string* value = nullptr;
-    if (!std::strcmp(a, "--out")) value = &out;
-    else if (!std::strcmp(a, "--retarget-report")) value = &retarget_report;
-    else if (!std::strcmp(a, "--human")) value = &human;
-    else if (!std::strcmp(a, "--title")) value = &title;
-    if (value != nullptr) {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "kuavo replay: option '%s' needs a value\n", a);
-        print_usage(stderr, "replay");
-        return 2;
-      }
-      *value = argv[++i];
-    } else if (a[0] == '-') {
-      std::fprintf(stderr, "kuavo replay: unknown option '%s'\n", a);
+  args::Parser p("kuavo replay");
+  p.positionals("RUN.csv", &logs, 64);
+  p.text("--out", "DIR", &out);
+  p.input_file("--retarget-report", "R.json", &retarget_report);
+  p.input_file("--human", "H.csv", &human);
+  p.text("--title", "TEXT", &title);
+  switch (p.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      print_usage(stdout, "replay");
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n", p.error().c_str());
       print_usage(stderr, "replay");
       return 2;
-    } else {
-      logs.push_back(a);
-    }
+    case args::Parser::Result::kOk:
+      break;
   }
   if (logs.empty() || out.empty()) {
     std::fprintf(stderr, "kuavo replay: %s\n", logs.empty() ? "no RUN.csv given" : "--out DIR is required");

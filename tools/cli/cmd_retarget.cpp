@@ -37,6 +37,7 @@
 
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/progress.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/mocap/contacts.h"
 #include "tools/mocap/default_dance.h"
@@ -50,7 +51,8 @@ constexpr const char* kUsage =
     "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
     "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
     "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
-    "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n";
+    "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n"
+    "                      [--quiet]\n";
 
 // A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
 // and was accepted), or false with "PATH: why" in error.
@@ -104,6 +106,7 @@ int run(int argc, char** argv) {
   std::string stage = "dynamic", repairs_path, figures_dir, variant_name = "s45";
   std::vector<std::string> inputs;
   std::string human_path;
+  bool quiet = false;
   double horizon_s = 0.0, torque_weight = 0.0;
   long long attenuate_rounds = 0;
   DynamicStageOptions dyn_options;
@@ -125,6 +128,7 @@ int run(int argc, char** argv) {
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
+  p.flag("--quiet", &quiet);
   p.choice("--variant", {"s45", "s42"}, &variant_name);
   switch (p.parse(argc, argv)) {
     case args::Parser::Result::kHelp:
@@ -290,7 +294,16 @@ int run(int argc, char** argv) {
   const std::vector<dynamics::ConfigVector>* out_q = &result.q;
   const std::vector<mocap::ContactLabel>* out_contacts = &result.contacts;
   if (stage == "dynamic") {
+    // A progress line on a terminal (the TO reports after each window; --attenuate rounds
+    // start it again), nothing when piped or with --quiet.
+    Progress progress(quiet);
+    progress.set_total(1.0);
+    if (progress.shown()) {
+      dyn_options.dynamic.on_progress = [&](double done) { progress.update(done, "dynamic retargeting"); };
+    }
     const int code = run_dynamic_stage(*robot, targets, result, dyn_options, dynamic, j, error);
+    progress.clear();
+    dyn_options.dynamic.on_progress = nullptr;
     if (code != 0) {
       std::fprintf(stderr, "kuavo retarget: %s\n", error.c_str());
       return code;
@@ -371,6 +384,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", report_path.c_str());
     return 1;
   }
+  if (quiet) return 0;
   std::printf(
       "kuavo retarget: %s -> %s: %d frames (%.2f s), keypoint error mean %.3f m max %.3f m, "
       "stance slide max %.4f m/s, penetration max %.4f m, limit violations %d/%d, %d contact phases, "
