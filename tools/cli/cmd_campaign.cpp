@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <unistd.h>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -39,7 +40,7 @@ namespace fs = std::filesystem;
 // The usage on `out` (stdout for --help); 2, the exit code of a usage error.
 int usage(std::FILE* out = stderr) {
   std::fprintf(out,
-               "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]\n"
+               "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet]\n"
                "       kuavo campaign --example      print the \"show conditions\" spec\n");
   return 2;
 }
@@ -95,7 +96,7 @@ int run_campaign(int argc, char** argv) {
   std::string out_dir = "campaign", sshloginfile, jobs = "100%";
   std::vector<std::string> specs;
   long long seeds_override = 0, jobs_n = 0;
-  bool example = false;
+  bool example = false, quiet = false;
   constexpr args::ModeMask kRun = 1, kExample = 2;
   args::Parser p("kuavo campaign");
   p.positionals("SPEC.json", &specs, 1);
@@ -105,6 +106,7 @@ int run_campaign(int argc, char** argv) {
   // GNU parallel's -j: a whole number of jobs (its percentages are not offered here).
   p.integer("--jobs", "N", 1, 4096, "jobs", &jobs_n).modes = kRun;
   p.input_file("--sshloginfile", "FILE", &sshloginfile).modes = kRun;
+  p.flag("--quiet", &quiet).modes = kRun;
   switch (p.parse(argc, argv)) {
     case args::Parser::Result::kHelp:
       usage(stdout);
@@ -260,6 +262,8 @@ int run_campaign(int argc, char** argv) {
     std::string cmd = "parallel --will-cite --halt never -j " + quote(jobs) + " --joblog " +
                       quote((dir / "joblog.txt").string());
     if (!sshloginfile.empty()) cmd += " --sshloginfile " + quote(sshloginfile);
+    // Progress (GNU parallel's own: done, left, estimated time) on a terminal, not when piped.
+    if (!quiet && isatty(STDERR_FILENO)) cmd += " --eta";
     cmd += " < " + quote(job_file.string());
     std::fflush(stderr);
     std::system(cmd.c_str());  // a failed run shows as a missing or failed summary below

@@ -29,6 +29,7 @@
 
 #include "rtos_shim/args.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/progress.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/cli/retarget_figures.h"
 #include "tools/mocap/contacts.h"
@@ -42,7 +43,7 @@ namespace {
 using nlohmann::ordered_json;
 
 constexpr const char* kUsage =
-    "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42]\n"
+    "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"
     "       horizons in [0.2, 1.4] s; default 0.2,0.4,0.6,0.8,1.0,1.2,1.4\n";
 // The window range the offline OCP accepts (mpc_validate_config without plan output).
 constexpr double kMinHorizon_s = 0.2, kMaxHorizon_s = 1.4;
@@ -110,6 +111,8 @@ int run(int argc, char** argv) {
   p.custom("--horizons", "S,S,... with each S in [0.2, 1.4] s",
            [&](const char* v) { return parse_horizons(v, horizons); });
   p.choice("--variant", {"s45", "s42"}, &variant_name);
+  bool quiet = false;
+  p.flag("--quiet", &quiet);
   switch (p.parse(argc, argv)) {
     case args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
@@ -179,16 +182,33 @@ int run(int argc, char** argv) {
   std::vector<double> swing(horizons.size(), kNaN), com(horizons.size(), kNaN), per_frames(horizons.size(), kNaN);
   int solved = 0;
   std::string unsound;  // horizons whose result is not a converged optimum, for Fig. 6's titles
+  // A progress line on a terminal: the horizons in turn, each by its TO windows (the longer
+  // windows cost more: weighted by the horizon).
+  Progress progress(quiet);
+  double total = 0.0;
+  for (const double h : horizons) total += h;
+  progress.set_total(total);
+  double done = 0.0;
   for (std::size_t k = 0; k < horizons.size(); ++k) {
     const double h = horizons[k];
     DynamicStageOptions options;
     options.dynamic.set_horizon(h);
+    if (progress.shown()) {
+      options.dynamic.on_progress = [&, h](double f) {
+        char what[64];
+        std::snprintf(what, sizeof what, "horizon %.1f s", h);
+        progress.update(done + f * h, what);
+      };
+    }
     DynamicStageResult result;
     ordered_json report;
     std::string why;
     ordered_json row;
     row["horizon_s"] = h;
-    if (const int code = run_dynamic_stage(*robot, targets, geometric, options, result, report, why); code != 0) {
+    const int code = run_dynamic_stage(*robot, targets, geometric, options, result, report, why);
+    done += h;
+    progress.clear();
+    if (code != 0) {
       row["error"] = why;
       rows.push_back(row);
       unsound += (unsound.empty() ? "" : ", ") + short_number(h) + " s failed";

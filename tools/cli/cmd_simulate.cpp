@@ -48,7 +48,7 @@ int usage(std::FILE* out = stderr) {
                "                      [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
                "                      [--horizon SECONDS] [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
                "                      [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
-               "                      --log run.csv --summary run.json\n");
+               "                      --log run.csv --summary run.json [--quiet]\n");
   return 2;
 }
 
@@ -66,8 +66,10 @@ int run_simulate(int argc, char** argv) {
   std::string integrator = "cvode", variant_name = "s45", perturb;
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
+  bool quiet = false;  // no progress line on a terminal
   args::Parser p("kuavo simulate");
   p.positionals("MOTION", &positionals, 1);
+  p.flag("--quiet", &quiet);
   p.number("--stand", "SECONDS", 0.0, kMaxRunDuration_s, "s", &cfg.duration_s, /*lo_open=*/true).modes = kStandRun;
   p.integer("--step-in-place", "STEPS", 1, 200, "steps", &steps).modes = kStepRun;
   p.number("--duration", "SECONDS", 0.0, kMaxRunDuration_s, "s", &cfg.duration_s, true).modes = kMotionRun | kStepRun;
@@ -187,7 +189,7 @@ int run_simulate(int argc, char** argv) {
       return 2;
     }
     // On a terminal: the share of the run simulated and the time left (stderr; never piped).
-    Progress progress(false);
+    Progress progress(quiet);
     progress.set_total(motion_cfg.run.duration_s > 0.0 ? motion_cfg.run.duration_s
                                                        : planner::motion_plan_duration_s(*plan) + motion_cfg.settle_s);
     if (progress.shown()) {

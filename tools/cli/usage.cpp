@@ -33,7 +33,7 @@ constexpr CommandHelp kHelp[] = {
      "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
-     "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42]\n"},
+     "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"},
     {"simulate", "one run in the simulator: standing, a motion, or stepping in place",
      "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
      "               [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]\n"
@@ -41,9 +41,9 @@ constexpr CommandHelp kHelp[] = {
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
-     "               --log run.csv --summary run.json\n"},
+     "               --log run.csv --summary run.json [--quiet]\n"},
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
-     "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] | --example\n"},
+     "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet] | --example\n"},
     {"model", "robot model summary",
      "usage: kuavo model [--variant s45|s42] [--mass KG] --json\n"},
 };
