@@ -181,6 +181,9 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   planner::PlanKnot motion_now;  // the motion at this tick (metrics)
   double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0;
   std::uint64_t tracked = 0;
+  bool have_com = false;
+  Vec3 com_before = Vec3::Zero(), com_plan_before = Vec3::Zero();
+  std::array<bool, 2> foot_loaded{true, true};
   out.zmp_margin_m_min = 1e9;
   wbc::WbcStatus last_status = wbc::WbcStatus::kOk;
   run.min_base_height_m = plant.truth().q[2];
@@ -266,6 +269,19 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
         sq_vel += (est.base_velocity_world_m_s - v_world).squaredNorm();
         ++tracked;
         out.com_err_m_max = std::max(out.com_err_m_max, (t.com_m - motion_now.com_position_m).norm());
+        if (have_com) {
+          out.com_path_m += (t.com_m - com_before).norm();
+          out.com_path_plan_m += (motion_now.com_position_m - com_plan_before).norm();
+        }
+        have_com = true;
+        com_before = t.com_m;
+        com_plan_before = motion_now.com_position_m;
+        for (int foot = 0; foot < 2; ++foot) {
+          double fz = 0.0;
+          for (int c = 4 * foot; c < 4 * foot + 4; ++c) fz += t.contact_force_N[c].z();
+          if (foot_loaded[foot] && fz < 5.0) ++out.steps, foot_loaded[foot] = false;
+          if (!foot_loaded[foot] && fz > 100.0) foot_loaded[foot] = true;
+        }
         if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
         for (int j = 0; j < model::kNumJoints; ++j) {
           out.torque_ratio_max = std::max(out.torque_ratio_max, std::abs(t.joint_torque_Nm[j]) / model.limits.peak_torque_Nm[j]);
@@ -346,7 +362,8 @@ std::string motion_summary_json(const MotionSummary& s) {
   std::snprintf(buf, sizeof buf,
                 ",\n  \"planner\": \"%s\",\n  \"motion_duration_s\": %.3f,\n"
                 "  \"tracking_rms_rad\": {\"legs\": %.5f, \"arms\": %.5f},\n"
-                "  \"com_err_m_max\": %.5f,\n  \"zmp_margin_m_min\": %.5f,\n  \"zmp_at_edge_s\": %.3f,\n"
+                "  \"com_err_m_max\": %.5f,\n  \"com_path_m\": %.4f,\n  \"com_path_plan_m\": %.4f,\n  \"steps\": %d,\n"
+                "  \"zmp_margin_m_min\": %.5f,\n  \"zmp_at_edge_s\": %.3f,\n"
                 "  \"torque_ratio_max\": %.4f,\n"
                 "  \"mpc_ms\": {\"p50\": %.4f, \"p99\": %.4f, \"max\": %.4f},\n"
                 "  \"wbc_us\": {\"p50\": %.2f, \"p99\": %.2f, \"max\": %.2f},\n"
@@ -355,7 +372,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
-                s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
+                s.com_path_m, s.com_path_plan_m, s.steps, s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),

@@ -62,6 +62,11 @@ struct MotionSummary {
   double tracking_rms_legs_rad = 0.0;  // joint angle vs the motion, over the run
   double tracking_rms_arms_rad = 0.0;
   double com_err_m_max = 0.0;          // ‖CoM − planned CoM‖
+  // What was danced, before a fall (issue 18's "the dance is kept"): the path length (3D, as
+  // mocap::motion_metrics) of the plant's CoM and of the motion's planned CoM over the same ticks, and the stepping
+  // phases (lift-offs: a foot's load below 5 N after it carried over 100 N).
+  double com_path_m = 0.0, com_path_plan_m = 0.0;
+  int steps = 0;
   double zmp_margin_m_min = 0.0;       // centre of pressure to the support polygon's edge
   double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
   double torque_ratio_max = 0.0;       // max over joints and ticks before a fall of |τ_joint| / peak torque

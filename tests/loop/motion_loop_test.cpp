@@ -61,6 +61,15 @@ TEST(MotionLoop, StepsInPlaceTwentyTimesOnTheFloorWithTheEstimator) {
   const auto lifts = lift_offs(trace);
   EXPECT_EQ(lifts[0], 10);  // the plan's 20 swings, alternating, really left the ground
   EXPECT_EQ(lifts[1], 10);
+  // The summary's own count of stepping phases: the plan's 20.
+  EXPECT_EQ(s.steps, 20);
+  // Stepping in place: the CoM sways from foot to foot; the planned sway's path, not zero,
+  // and the danced one within a factor of 2 of it.
+  EXPECT_GT(s.com_path_plan_m, 0.1);
+  EXPECT_GT(s.com_path_m, 0.5 * s.com_path_plan_m);
+  EXPECT_LT(s.com_path_m, 2.0 * s.com_path_plan_m);
+  RecordProperty("com_path_m", std::to_string(s.com_path_m));
+  RecordProperty("com_path_plan_m", std::to_string(s.com_path_plan_m));
   EXPECT_LT(s.run.max_tilt_deg, 5.0);
   EXPECT_LT(s.zmp_at_edge_s, 0.5);  // a foot may roll on an edge briefly at touchdown, not for long
   EXPECT_LT(s.tracking_rms_legs_rad, 0.03);
@@ -81,6 +90,7 @@ TEST(MotionLoop, StepsInPlaceOnCarpet) {
   const auto lifts = lift_offs(trace);
   EXPECT_EQ(lifts[0], 3);
   EXPECT_EQ(lifts[1], 3);
+  EXPECT_EQ(s.steps, 6);
   EXPECT_GT(s.run.max_foot_sink_m, 0.01);  // it is the soft ground
 }
 
@@ -101,7 +111,7 @@ TEST(MotionLoop, SummaryJsonHasTheIssueKeys) {
   sim::MotionSummary s;
   const std::string json = sim::motion_summary_json(s);
   for (const char* key : {"\"fell\"", "\"sim_time_s\"", "\"real_time_factor\"", "\"max_tilt_deg\"", "\"log_sha256\"",
-                          "\"tracking_rms_rad\": {\"legs\"", "\"arms\"", "\"com_err_m_max\"", "\"zmp_margin_m_min\"",
+                          "\"tracking_rms_rad\": {\"legs\"", "\"arms\"", "\"com_err_m_max\"", "\"com_path_m\"", "\"steps\"", "\"zmp_margin_m_min\"",
                           "\"mpc_ms\": {\"p50\"", "\"wbc_us\": {\"p50\"", "\"p99\"", "\"max\"", "\"deadline_misses\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
