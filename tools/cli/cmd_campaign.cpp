@@ -30,20 +30,13 @@
 #include "tools/cli/args.h"
 #include "tools/cli/campaign_spec.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/usage.h"
 #include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
-int usage(std::FILE* out = stderr) {
-  std::fprintf(out,
-               "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet]\n"
-               "       kuavo campaign --example      print the \"show conditions\" spec\n");
-  return 2;
-}
 
 std::string quote(const std::string& s) {
   std::string q = "'";
@@ -107,23 +100,14 @@ int run_campaign(int argc, char** argv) {
   p.integer("--jobs", "N", 1, 4096, "jobs", &jobs_n).modes = kRun;
   p.input_file("--sshloginfile", "FILE", &sshloginfile).modes = kRun;
   p.flag("--quiet", &quiet).modes = kRun;
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      usage(stdout);
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n", p.error().c_str());
-      return usage();
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "campaign"); code >= 0) return code;
   if (!p.refuse_inapplicable(example ? kExample : kRun, example ? "--example" : "a campaign run")) {
     std::fprintf(stderr, "%s\n", p.error().c_str());
-    return usage();
+    return usage_error("campaign");
   }
   if (example && !specs.empty()) {
     std::fprintf(stderr, "kuavo campaign: --example prints a spec; it takes no SPEC.json\n");
-    return usage();
+    return usage_error("campaign");
   }
   if (example) {
     std::fputs(kShowConditionsSpec, stdout);
@@ -131,7 +115,7 @@ int run_campaign(int argc, char** argv) {
   }
   if (jobs_n > 0) jobs = std::to_string(jobs_n);
   const std::string spec_path = specs.empty() ? "" : specs[0];
-  if (spec_path.empty()) return usage();
+  if (spec_path.empty()) return usage_error("campaign");
   std::string why;
   if (!check_input_file(spec_path, why)) {  // a directory read as a stream threw ("internal error")
     std::fprintf(stderr, "kuavo campaign: %s\n", why.c_str());

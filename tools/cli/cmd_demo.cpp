@@ -102,17 +102,7 @@ int run_demo(int argc, char** argv) {
   p.text("--out", "DIR", &out);
   p.choice("--planner", {"mpc", "kinematic"}, &planner_name);
   p.flag("--quiet", &quiet);
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      print_usage(stdout, "demo");
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n", p.error().c_str());
-      print_usage(stderr, "demo");
-      return 2;
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "demo"); code >= 0) return code;
   stack::parse_planner(planner_name.c_str(), planner_kind);  // one of the two names
   if (!inputs.empty()) input = inputs.front();
   std::string error;

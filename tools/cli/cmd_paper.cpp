@@ -93,17 +93,7 @@ int run_paper(int argc, char** argv) {
   args::Parser p("kuavo paper");
   p.text("--out", "DIR", &out);
   p.flag("--quiet", &quiet);
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      print_usage(stdout, "paper");
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n", p.error().c_str());
-      print_usage(stderr, "paper");
-      return 2;
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "paper"); code >= 0) return code;
   std::error_code ec;
   std::filesystem::create_directories(out + "/sweep", ec);
   if (ec) {

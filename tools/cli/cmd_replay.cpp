@@ -28,17 +28,7 @@ int run_replay(int argc, char** argv) {
   p.input_file("--retarget-report", "R.json", &retarget_report);
   p.input_file("--human", "H.csv", &human);
   p.text("--title", "TEXT", &title);
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      print_usage(stdout, "replay");
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n", p.error().c_str());
-      print_usage(stderr, "replay");
-      return 2;
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "replay"); code >= 0) return code;
   if (logs.empty() || out.empty()) {
     std::fprintf(stderr, "kuavo replay: %s\n", logs.empty() ? "no RUN.csv given" : "--out DIR is required");
     print_usage(stderr, "replay");

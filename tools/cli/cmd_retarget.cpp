@@ -37,6 +37,7 @@
 
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/usage.h"
 #include "tools/cli/progress.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/mocap/contacts.h"
@@ -47,12 +48,6 @@
 namespace kuavo::cli {
 namespace {
 
-constexpr const char* kUsage =
-    "usage: kuavo retarget [INPUT.bvh] -o OUT.motion [--variant s45|s42] [--contacts auto|none|FILE]\n"
-    "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
-    "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
-    "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n"
-    "                      [--quiet]\n";
 
 // A side input (mapping, contacts, repairs): a regular file (a directory read as empty text
 // and was accepted), or false with "PATH: why" in error.
@@ -130,16 +125,7 @@ int run(int argc, char** argv) {
   p.output_file("--human-csv", "OUT.csv", &human_path);
   p.flag("--quiet", &quiet);
   p.choice("--variant", {"s45", "s42"}, &variant_name);
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      std::fputs(kUsage, stdout);
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
-      return 2;
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "retarget"); code >= 0) return code;
   if (!p.refuse_inapplicable(stage == "geometric" ? kGeometric : kDynamic, "--stage " + stage)) {
     std::fprintf(stderr, "%s\n", p.error().c_str());
     return 2;
@@ -182,8 +168,8 @@ int run(int argc, char** argv) {
     }
   }
   if (output.empty() && dance_path.empty()) {
-    std::fprintf(stderr, "kuavo retarget: -o OUT.motion is required\n%s", kUsage);
-    return 2;
+    std::fprintf(stderr, "kuavo retarget: -o OUT.motion is required\n");
+    return usage_error("retarget");
   }
 
   // Every file named is checked before the (long) run: the parser checked the other inputs

@@ -29,6 +29,7 @@
 
 #include "rtos_shim/args.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/usage.h"
 #include "tools/cli/progress.h"
 #include "tools/cli/retarget_dynamic.h"
 #include "tools/cli/retarget_figures.h"
@@ -42,9 +43,6 @@ namespace {
 
 using nlohmann::ordered_json;
 
-constexpr const char* kUsage =
-    "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"
-    "       horizons in [0.2, 1.4] s; default 0.2,0.4,0.6,0.8,1.0,1.2,1.4\n";
 // The window range the offline OCP accepts (mpc_validate_config without plan output).
 constexpr double kMinHorizon_s = 0.2, kMaxHorizon_s = 1.4;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -113,22 +111,13 @@ int run(int argc, char** argv) {
   p.choice("--variant", {"s45", "s42"}, &variant_name);
   bool quiet = false;
   p.flag("--quiet", &quiet);
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      std::fputs(kUsage, stdout);
-      return 0;
-    case args::Parser::Result::kError:
-      std::fprintf(stderr, "%s\n%s", p.error().c_str(), kUsage);
-      return 2;
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "retarget-sweep"); code >= 0) return code;
   std::sort(horizons.begin(), horizons.end());  // Fig. 6's x axis
   model::parse_variant(variant_name.c_str(), variant);  // one of the two names
   const std::string input = inputs.empty() ? "" : inputs[0];
   if (out_dir.empty()) {
-    std::fprintf(stderr, "kuavo retarget-sweep: --out DIR is required\n%s", kUsage);
-    return 2;
+    std::fprintf(stderr, "kuavo retarget-sweep: --out DIR is required\n");
+    return usage_error("retarget-sweep");
   }
   if (!input.empty()) {
     std::string why;

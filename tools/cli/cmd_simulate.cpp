@@ -25,6 +25,7 @@
 #include "sim/push_option.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/usage.h"
 #include "tools/cli/motion_input.h"
 #include "tools/cli/perturb_option.h"
 #include "tools/cli/progress.h"
@@ -37,20 +38,6 @@ using sim::kMaxRunDuration_s;  // the bound on --stand and --duration
 
 // The three kinds of run; an option outside the kinds it applies to is refused.
 constexpr args::ModeMask kStandRun = 1, kMotionRun = 2, kStepRun = 4;
-
-// The usage on `out` (stdout for --help); 2, the exit code of a usage error.
-int usage(std::FILE* out = stderr) {
-  std::fprintf(out,
-               "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
-               "                      [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION]\n"
-               "                      [--seed N] [--latency-ticks N] [--integrator euler|cvode|rkm]\n"
-               "                      [--variant s45|s42] [--mass KG]\n"
-               "                      [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
-               "                      [--horizon SECONDS] [--plan-latency-ms MS|measured] [--duration SECONDS]\n"
-               "                      [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
-               "                      --log run.csv --summary run.json [--quiet]\n");
-  return 2;
-}
 
 }  // namespace
 
@@ -101,23 +88,15 @@ int run_simulate(int argc, char** argv) {
   p.output_file("--summary", "JSON", &summary_path);
   auto refuse = [&] {
     std::fprintf(stderr, "%s\n", p.error().c_str());
-    return usage();
+    return usage_error("simulate");
   };
-  switch (p.parse(argc, argv)) {
-    case args::Parser::Result::kHelp:
-      usage(stdout);
-      return 0;
-    case args::Parser::Result::kError:
-      return refuse();
-    case args::Parser::Result::kOk:
-      break;
-  }
+  if (const int code = parse_command_line(p, argc, argv, "simulate"); code >= 0) return code;
   const bool stand = p.given("--stand");
   const std::string motion_path = positionals.empty() ? "" : positionals[0];
   const int modes = (stand ? 1 : 0) + (motion_path.empty() ? 0 : 1) + (steps > 0 ? 1 : 0);
   if (modes != 1) {
     std::fprintf(stderr, "kuavo simulate: give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS\n");
-    return usage();
+    return usage_error("simulate");
   }
   if (!p.refuse_inapplicable(stand ? kStandRun : steps > 0 ? kStepRun : kMotionRun,
                              stand ? "a --stand run" : steps > 0 ? "a --step-in-place run" : "a MOTION run")) {
@@ -144,7 +123,7 @@ int run_simulate(int argc, char** argv) {
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
   if (!stack::parse_planner(planner.c_str(), motion_cfg.stack.planner) || !sim::parse_ground(ground.c_str(), cfg.ground) ||
       !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant)) {
-    return usage();
+    return usage_error("simulate");
   }
   const bool duration_given = p.given("--duration");
   const bool perturb_seed_given = p.given("--perturb-seed");

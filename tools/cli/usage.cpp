@@ -33,7 +33,8 @@ constexpr CommandHelp kHelp[] = {
      "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
-     "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"},
+     "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"
+     "       horizons in [0.2, 1.4] s; default 0.2,0.4,0.6,0.8,1.0,1.2,1.4\n"},
     {"simulate", "one run in the simulator: standing, a motion, or stepping in place",
      "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
      "               [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]\n"
@@ -43,7 +44,8 @@ constexpr CommandHelp kHelp[] = {
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
      "               --log run.csv --summary run.json [--quiet]\n"},
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
-     "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet] | --example\n"},
+     "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet]\n"
+     "       kuavo campaign --example      print the \"show conditions\" spec\n"},
     {"model", "robot model summary",
      "usage: kuavo model [--variant s45|s42] [--mass KG] --json\n"},
 };
@@ -71,6 +73,25 @@ void print_usage(std::FILE* out, const char* name) {
   const CommandHelp* h = command_help(name);
   if (h == nullptr) return print_overview(out);
   std::fputs(h->usage, out);
+}
+
+int usage_error(const char* name) {
+  print_usage(stderr, name);
+  return 2;
+}
+
+int parse_command_line(args::Parser& parser, int argc, char** argv, const char* name) {
+  switch (parser.parse(argc, argv)) {
+    case args::Parser::Result::kHelp:
+      print_usage(stdout, name);
+      return 0;
+    case args::Parser::Result::kError:
+      std::fprintf(stderr, "%s\n", parser.error().c_str());
+      return usage_error(name);
+    case args::Parser::Result::kOk:
+      break;
+  }
+  return -1;
 }
 
 }  // namespace kuavo::cli

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "rtos_shim/args.h"
+
 namespace kuavo::cli {
 
 struct CommandHelp {
@@ -21,5 +23,10 @@ const CommandHelp* commands_help(int& count);
 void print_overview(std::FILE* out);
 // One command's usage to out (the overview for an unknown name).
 void print_usage(std::FILE* out, const char* name);
+// A usage error: the command's usage on stderr; returns 2, the exit code.
+int usage_error(const char* name);
+// Parses a command's line: -1 to go on; else the exit code (0 after --help, the usage on
+// stdout; 2 after a refusal, its message and the usage on stderr).
+int parse_command_line(args::Parser& parser, int argc, char** argv, const char* name);
 
 }  // namespace kuavo::cli
