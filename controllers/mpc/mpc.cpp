@@ -340,6 +340,8 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
     bool any = false;
     for (int c = first; c < first + kPointsPerFoot; ++c) any = any || knot.in_contact[c];
     if (!any) continue;
+    std::array<Vec3, kPointsPerFoot> corner;  // base axes, once per foot (not per joint)
+    for (int c = first; c < first + kPointsPerFoot; ++c) corner[c - first] = dynamics::frame_position(model, p.data, c);
     for (int joint = 0; joint < model::kLegJoints; ++joint) {  // hip roll … ankle roll
       const int j = foot * model::kLegJoints + joint;
       const int body = j + 1;
@@ -349,7 +351,7 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
       double tau = 0.0;
       for (int c = first; c < first + kPointsPerFoot; ++c) {
         if (!knot.in_contact[c]) continue;
-        const Vec3 r = p.rotation * (dynamics::frame_position(model, p.data, c) - origin);
+        const Vec3 r = p.rotation * (corner[c - first] - origin);
         const Vec3 gc = axis.cross(r);
         g.segment<3>(3 * (c - first)) = gc;
         tau += gc.dot(ws.u[k].segment<3>(kUForces + 3 * c));

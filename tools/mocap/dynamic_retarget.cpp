@@ -88,7 +88,6 @@ mpc::MpcConfig DynamicRetargetConfig::default_ocp() {
   // MPC keeps 50 so the robot may step out of trouble).
   c.weight_swing_xy = 2.0e4;
   c.stance_position_gain_1_s = 10.0;
-  c.stance_leg_torque_share = 0.9;
   return c;
 }
 

@@ -132,6 +132,14 @@ bool limit_acceleration(std::vector<V>& x, int j, double a_max, double rate_hz, 
   return any;
 }
 
+// An override forbids `kind` at dance time t [s].
+bool forbids(const std::vector<RepairOverride>& overrides, RepairKind kind, double t) {
+  for (const RepairOverride& o : overrides) {
+    if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == kind)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 const char* to_string(RepairKind k) {
@@ -238,14 +246,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   const auto dance_frame = [&](int i) { return std::clamp(i - lead, 0, n_dance - 1); };
   const auto in_dance = [&](int i) { return i >= lead && i < lead + n_dance; };
   const auto dance_time = [&](int i) { return (i - lead) / rate_hz; };
-  const auto forbidden = [&](RepairKind kind, int i) {
-    if (!in_dance(i)) return false;
-    const double t = dance_time(i);
-    for (const RepairOverride& o : overrides) {
-      if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == kind)) return true;
-    }
-    return false;
-  };
+  const auto forbidden = [&](RepairKind kind, int i) { return in_dance(i) && forbids(overrides, kind, dance_time(i)); };
   const auto forced_double = [&](int i) {
     if (!in_dance(i)) return false;
     const double t = dance_time(i);
@@ -766,15 +767,7 @@ bool attenuate_gestures(std::vector<ConfigVector>& geometric, double rate_hz, co
   const int n = static_cast<int>(geometric.size());
   const int w = std::max(1, static_cast<int>(std::lround(window_s * rate_hz)));
   constexpr int kJoints = model::kNumJoints;
-  const auto forbidden = [&](int i) {
-    const double t = i / rate_hz;
-    for (const RepairOverride& o : overrides) {
-      if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == RepairKind::kAttenuate)) {
-        return true;
-      }
-    }
-    return false;
-  };
+  const auto forbidden = [&](int i) { return forbids(overrides, RepairKind::kAttenuate, i / rate_hz); };
   // Weight of the scaling per frame: 1 inside a range, ramping to 0 over w frames outside.
   std::vector<double> weight(n, 0.0);
   for (const AttenuationRange& r : ranges) {
