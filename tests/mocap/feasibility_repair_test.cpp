@@ -316,11 +316,15 @@ TEST(mocap_feasibility_repair, SlowValidStepNeedsNoRepair) {
 
 // A hop (both feet 3 cm up for 0.2 s, the pelvis with them): both feet stay down, the
 // pelvis keeps its bounce, the flight is listed over exactly its frames.
+// The bounce keeps the human's pelvis height exactly with the vertical acceleration limit
+// off (this hop's 6.7 m/s² is beyond the default; FastDipIsSmoothedToWhatTheFeetCarry).
 TEST(mocap_feasibility_repair, HopBecomesADoubleSupportBounce) {
   const int n = 150, a = 50, b = 70;
   const Motion m = hop_motion(n, a, b);
-  const RepairedMotion r = repair(m);
-  expect_dancable(r, n);
+  RepairConfig cfg;
+  cfg.max_vertical_acceleration_m_s2 = 0.0;
+  const RepairedMotion r = repair(m, {}, cfg);
+  expect_dancable(r, n, cfg);
   SCOPED_TRACE(listing(r));
   const Repair* flight = first(r, RepairKind::kFlight);
   ASSERT_NE(flight, nullptr);
@@ -694,6 +698,58 @@ TEST(mocap_feasibility_repair, DeepCrouchIsRaisedToTheKneeBound) {
   for (const ConfigVector& q : r.q) deepest = std::max({deepest, q[knee_l], q[knee_r]});
   EXPECT_LE(deepest, cfg.max_stance_knee_rad + 0.05);
   RecordProperty("deepest_knee_rad", number(deepest));
+}
+
+// A dip of 8 cm in 0.3 s in double support: 8.8 m/s² at its bottom, beyond the 0.5 g the
+// feet carry (RepairConfig::max_vertical_acceleration_m_s2). The repair smooths it until no
+// frame's second difference of the pelvis height is beyond the limit (checked here from the
+// frames, not from the repair's own bookkeeping); the dip stays a dip; `forbid bounce` gives
+// exactly what the repair gives with the limit off.
+TEST(mocap_feasibility_repair, FastDipIsSmoothedToWhatTheFeetCarry) {
+  const int n = 200, a = 80, b = 110;
+  const double depth = 0.08;
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    if (i >= a && i <= b) k.base_shift.z() = -depth * std::sin(M_PI * (i - a) / (b - a));
+    return k;
+  });
+  const RepairConfig cfg;
+  const double limit = cfg.max_vertical_acceleration_m_s2 / (kRate_hz * kRate_hz);
+  double before = 0.0;
+  for (int i = 1; i + 1 < n; ++i) before = std::max(before, std::abs(m.q[i + 1][2] - 2.0 * m.q[i][2] + m.q[i - 1][2]));
+  ASSERT_GT(before, 1.5 * limit) << "precondition: the dip is beyond the limit";
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* bounce = first(r, RepairKind::kBounce);
+  ASSERT_NE(bounce, nullptr);
+  EXPECT_LE(bounce->start_s, (r.lead_frames + a) / kRate_hz);
+  EXPECT_GE(bounce->end_s, (r.lead_frames + b) / kRate_hz);
+  const int total = static_cast<int>(r.q.size());
+  double after = 0.0, lowest = r.q[0][2];
+  for (int i = 1; i + 1 < total; ++i) {
+    after = std::max(after, std::abs(r.q[i + 1][2] - 2.0 * r.q[i][2] + r.q[i - 1][2]));
+    lowest = std::min(lowest, r.q[i][2]);
+  }
+  EXPECT_LE(after, limit * (1.0 + 1e-6));
+  const double kept = r.q[0][2] - lowest;  // frame 0 stands
+  EXPECT_GT(kept, 0.25 * depth) << "smoothed, not flattened";
+  EXPECT_LT(kept, depth);
+  RecordProperty("dip_kept_m", number(kept));
+
+  std::vector<RepairOverride> overrides;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0 2 forbid bounce\n", overrides, error)) << error;
+  const RepairedMotion forbidden = repair(m, overrides);
+  EXPECT_FALSE(has(forbidden, RepairKind::kBounce));
+  RepairConfig off;
+  off.max_vertical_acceleration_m_s2 = 0.0;
+  const RepairedMotion unlimited = repair(m, {}, off);  // the other repairs (pelvis_height) as they are
+  ASSERT_EQ(forbidden.q.size(), unlimited.q.size());
+  for (std::size_t i = 0; i < unlimited.q.size(); ++i) ASSERT_EQ(forbidden.q[i], unlimited.q[i]) << i;
+  double deepest = 0.0;
+  for (const ConfigVector& q : unlimited.q) deepest = std::max(deepest, unlimited.q[0][2] - q[2]);
+  EXPECT_GT(deepest, kept + 0.01) << "the forbidden smoothing would have taken more than 1 cm off the dip";
 }
 
 // Walking at 0.6 m/s: steps of 0.3 m, each foot 0.6 m per 1 s cycle (0.15 s double support,

@@ -157,6 +157,7 @@ const char* to_string(RepairKind k) {
     case RepairKind::kPelvisHeight: return "pelvis_height";
     case RepairKind::kTravel: return "travel_speed";
     case RepairKind::kAttenuate: return "attenuate";
+    case RepairKind::kBounce: return "bounce";
   }
   return "unknown";
 }
@@ -194,13 +195,14 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
       else if (what == "pelvis") o.forbid = RepairKind::kPelvisHeight;
       else if (what == "travel") o.forbid = RepairKind::kTravel;
       else if (what == "attenuate") o.forbid = RepairKind::kAttenuate;
+      else if (what == "bounce") o.forbid = RepairKind::kBounce;
       else ok = false;
     } else {
       ok = false;
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|travel|attenuate|all' or 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all' or 'START_S END_S force double' "
               "(0 <= START_S < END_S)";
       return false;
     }
@@ -520,6 +522,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   // head as geometric; legs by IK to the feet.
   std::vector<Vec3> base_pos(n);
   std::vector<Mat3> base_rot(n);
+  std::vector<double> tilt_over(n, 0.0);  // the human's tilt where it was limited [rad]
   for (int i = 0; i < n; ++i) {
     const int d = dance_frame(i);
     const ConfigVector& g = geometric[d];
@@ -539,8 +542,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       if (axis.norm() > 1e-9) {
         rot = Eigen::AngleAxisd(tilt - cfg.max_base_tilt_rad, axis.normalized()).toRotationMatrix() * rot;
       }
-      log.add(RepairKind::kTilt, i, i + 1,
-              fmt("pelvis tilted %.0f deg, limited to %.0f deg", tilt * 180.0 / kPi, cfg.max_base_tilt_rad * 180.0 / kPi));
+      tilt_over[i] = tilt;
     }
     // Yaw within the stance feet's hip-yaw range (mean of the feet on the floor).
     double sc = 0.0, ss = 0.0;
@@ -559,6 +561,19 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     }
     base_pos[i] = pos;
     base_rot[i] = rot;
+  }
+  // One entry per run of tilted frames, with its largest tilt.
+  for (int a = 0; a < n;) {
+    if (tilt_over[a] <= 0.0) {
+      ++a;
+      continue;
+    }
+    int b = a;
+    double worst = 0.0;
+    while (b < n && tilt_over[b] > 0.0) worst = std::max(worst, tilt_over[b++]);
+    log.add(RepairKind::kTilt, a, b,
+            fmt("pelvis tilted up to %.0f deg, limited to %.0f deg", worst * 180.0 / kPi, cfg.max_base_tilt_rad * 180.0 / kPi));
+    a = b;
   }
   // Stance knees within [min_stance_knee_rad, max_stance_knee_rad]: the pelvis comes down
   // where a stance leg (hip pitch to ankle pitch) would stretch beyond the length its least
@@ -631,6 +646,37 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
               fmt("pelvis lowered up to %.1f cm, raised up to %.1f cm: the stance knees stay within %.0f..%.0f deg",
                   100.0 * down, 100.0 * up, cfg.min_stance_knee_rad * 180.0 / kPi, cfg.max_stance_knee_rad * 180.0 / kPi));
       a = b;
+    }
+  }
+  // Pelvis height with its vertical acceleration within ±max_vertical_acceleration_m_s2 (a
+  // hop kept as a bounce, a drop into a crouch): smoothed where it is beyond, as the upper
+  // body's (limit_acceleration). Reported where the height moved by more than kPelvisReport_m.
+  if (cfg.max_vertical_acceleration_m_s2 > 0.0) {
+    std::vector<Vec3> limited = base_pos;
+    std::vector<bool> changed(n, false);
+    if (limit_acceleration(limited, 2, cfg.max_vertical_acceleration_m_s2, rate_hz, changed)) {
+      std::vector<double> moved(n, 0.0);
+      for (int i = 0; i < n; ++i) {
+        if (!changed[i] || forbidden(RepairKind::kBounce, std::clamp(i, lead, lead + n_dance - 1))) continue;
+        moved[i] = limited[i].z() - base_pos[i].z();
+        base_pos[i].z() = limited[i].z();
+      }
+      for (int a = 0; a < n;) {
+        if (!(std::abs(moved[a]) > kPelvisReport_m)) {
+          ++a;
+          continue;
+        }
+        // The whole smoothed stretch around it, with its largest change.
+        int b = a;
+        while (a > 0 && changed[a - 1]) --a;
+        double most = 0.0;
+        while (b < n && changed[b]) most = std::max(most, std::abs(moved[b++]));
+        log.add(RepairKind::kBounce, a, b,
+                fmt("the pelvis rises or drops faster than the feet can carry (vertical acceleration beyond %.1f m/s^2): "
+                    "smoothed, height changed up to %.1f cm",
+                    cfg.max_vertical_acceleration_m_s2, 100.0 * most));
+        a = b;
+      }
     }
   }
   // Lead-in and tail: standing on the footholds, blended into / out of the dance.

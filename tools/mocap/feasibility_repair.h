@@ -4,7 +4,8 @@
 // What a human dance holds that this robot cannot do as captured, and what each becomes:
 //  - flight (hops, leaps, jetés: neither foot on the floor) → the foot that left last stays
 //    down until the other lands (a leap becomes a step, a hop a double-support bounce: the
-//    pelvis keeps its vertical motion, the feet stay planted);
+//    pelvis keeps its vertical motion within the acceleration the planted feet can carry,
+//    max_vertical_acceleration_m_s2; so does a fast drop into a crouch);
 //  - swings shorter than the leg can lift and place a foot (min_swing_s) and double-support
 //    phases shorter than a weight transfer (min_double_support_s) → re-timed: touch-down or
 //    lift-off delayed by the missing time; the schedule is re-read from the human at every
@@ -27,7 +28,8 @@
 // leg gestures stay). Every repair is listed with its time range, kind and reason.
 //
 // Overrides (a text file, like the contact overrides): lines
-//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, travel, attenuate, or all)
+//   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, bounce, travel,
+//                                  attenuate, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
@@ -99,6 +101,14 @@ struct RepairConfig {
   // path; later steps make up the lag (each within the limit); a lag left at the end stays
   // (the stride repair's relative placement carries it). 0 turns it off.
   double max_travel_speed_m_s = 0.45;
+  // Largest vertical acceleration of the pelvis, up or down [m/s²]. With the feet planted the
+  // body cannot drop faster than g (the floor does not pull) and the legs cannot push
+  // arbitrarily hard: at half of g the feet carry between 0.5 and 1.5 × the weight, leaving
+  // the friction cones and the ankles their load. A hop kept as a double-support bounce
+  // (cmu_05_07 at 5.5–7.7 s: the pelvis dropped 0.21 m in 0.35 s and rose again) had the TO's
+  // feet carrying 19 N of the 540 N weight and asked 414 N·m of a hip pitch (limit 72) at the
+  // top. 0 turns it off.
+  double max_vertical_acceleration_m_s2 = 0.5 * 9.81;
 };
 
 enum class RepairKind : int {
@@ -115,6 +125,7 @@ enum class RepairKind : int {
   kPelvisHeight = 10,   // pelvis lowered / raised so the stance knees stay within their bend range
   kTravel = 11,         // a step shortened so the dance travels no faster than the robot can
   kAttenuate = 12,      // the TO's result still over a leg's torque limits: gestures scaled down
+  kBounce = 13,         // the pelvis's vertical acceleration limited (a bounce or a drop smoothed)
 };
 const char* to_string(RepairKind k);
 
