@@ -1,12 +1,16 @@
 // kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS
 //                [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
+//                [--engine simbody|mujoco]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
 //                --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
+// --engine: the plant -- simbody (default: our tables, our contact model) or mujoco (Leju's
+// MJCF, MuJoCo's contact; sim/mujoco_plant.h); the controller and the HAL are the same.
+// --integrator, --rtol and --perturb belong to the simbody plant; mujoco models the floor only.
 // Defaults: the MPC planner, no balance filter (the motions of `kuavo retarget`'s dynamic
 // stage are dynamically feasible; the filter, a cart-table ZMP preview, is kept for
 // geometric-stage motions and the kinematic planner: --balance-filter on).
@@ -22,6 +26,7 @@
 
 #include "sim/closed_loop.h"
 #include "sim/motion_loop.h"
+#include "sim/mujoco_plant.h"
 #include "sim/push_option.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -50,7 +55,7 @@ int run_simulate(int argc, char** argv) {
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path, balance = "off", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
-  std::string integrator = "cvode", variant_name = "s45", perturb;
+  std::string integrator = "cvode", variant_name = "s45", perturb, engine = "simbody";
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
   bool quiet = false;  // no progress line on a terminal
@@ -80,6 +85,7 @@ int run_simulate(int argc, char** argv) {
   p.choice("--integrator", {"euler", "cvode", "rkm"}, &integrator);
   p.number("--rtol", "TOLERANCE", 1e-12, 1e-1, "", &cfg.relative_tolerance);
   p.choice("--variant", {"s45", "s42"}, &variant_name);
+  p.choice("--engine", {"simbody", "mujoco"}, &engine);
   // The 55 kg robot scaled: build_model refuses a mass its torso cannot carry; this bounds the token.
   p.number("--mass", "KG", 1.0, 1000.0, "kg", &mass_kg);
   p.text("--perturb", "none|show|FILE.json", &perturb).modes = kMotionRun | kStepRun;
@@ -122,8 +128,21 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.ideal_sensors = sensors == "ideal";
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
   if (!stack::parse_planner(planner.c_str(), motion_cfg.stack.planner) || !sim::parse_ground(ground.c_str(), cfg.ground) ||
-      !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant)) {
+      !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant) ||
+      !sim::parse_engine(engine.c_str(), cfg.engine)) {
     return usage_error("simulate");
+  }
+  if (cfg.engine == sim::Engine::kMujoco) {
+    for (const char* simbody_only : {"--integrator", "--rtol", "--perturb", "--perturb-seed"}) {
+      if (p.given(simbody_only)) {
+        std::fprintf(stderr, "kuavo simulate: %s applies to the simbody engine, not --engine mujoco\n", simbody_only);
+        return 2;
+      }
+    }
+    if (const char* why = sim::mujoco_ground_refusal(cfg.ground)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", why);
+      return 2;
+    }
   }
   const bool duration_given = p.given("--duration");
   const bool perturb_seed_given = p.given("--perturb-seed");
