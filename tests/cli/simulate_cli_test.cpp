@@ -187,6 +187,23 @@ TEST(SimulateCli, EngineMujocoRefusesSimbodyOptionsAndNamesItself) {
   EXPECT_NE(ss.str().find("\"fell\": false"), std::string::npos) << ss.str();
 }
 
+// --engine both: one summary holding both runs and whether they agree; MuJoCo's log beside.
+TEST(SimulateCli, EngineBothWritesOneSummaryAndTwoLogs) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string summary = kOut + "_both.json", log = kOut + "_both.csv";
+  const CliRun r = simulate("--stand 0.2 --engine both --log " + log + " --summary " + summary, "_both");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(summary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  for (const char* key : {"\"engine\": \"both\"", "\"agree\": true", "\"simbody\": {", "\"mujoco\": {",
+                          "\"engine\": \"simbody\"", "\"engine\": \"mujoco\""}) {
+    EXPECT_NE(ss.str().find(key), std::string::npos) << key << " in\n" << ss.str();
+  }
+  EXPECT_TRUE(std::filesystem::exists(log));
+  EXPECT_TRUE(std::filesystem::exists(kOut + "_both.mujoco.csv"));
+}
+
 // Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
 // limits around the point where start-up stops fitting (32..64 MB).
 TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {
