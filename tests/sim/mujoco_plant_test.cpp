@@ -1,6 +1,7 @@
 // The MuJoCo plant (Leju's MJCF, MuJoCo's contact) against our model and the Simbody plant.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -92,6 +93,70 @@ TEST(MujocoModel, KinematicsAndMassDistributionMatchOurModel) {
     // to 6 digits; the whole robot's CoM differs by 0.3 mm.
     EXPECT_LT((t.com_m - data->com_m).norm(), 5e-4);
   }
+}
+
+// A passive drop: the standing pose released 5 cm above the floor, drives disabled. In
+// uniform gravity an unactuated robot at rest falls without changing shape, so until its
+// soles touch, both CoM paths are z0 - g·t²/2 (the independent expectation), and both
+// touch down at sqrt(2·h/g) = 101 ms. Tolerances: Simbody's CVODE to 1e-3 relative, so
+// 0.1 mm; MuJoCo's semi-implicit Euler at 0.5 ms falls g·t·dt/2 further (0.22 mm at
+// 90 ms), so 0.3 mm; touch-down within the 2 ms tick that follows. After it the limp
+// robot folds up, differently in each world: not compared.
+template <class PlantT>
+void passive_drop(PlantT& plant, double gap_m, std::vector<double>& com_z, std::vector<double>& fz) {
+  const model::Model& m = robot();
+  auto ctl = std::make_unique<control::StandingState>();
+  control::standing_init(m, control::StandingConfig{}, *ctl);
+  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
+  q.tail<model::kNumJoints>() = ctl->pose_rad;
+  control::place_on_ground(m, ctl->data, q);
+  if constexpr (std::is_same_v<PlantT, sim::MujocoPlant>) sim::reset_on_floor(plant, q);
+  q[2] += gap_m;
+  plant.reset(q, dynamics::VelocityVector::Zero());
+  plant.set_command(hal::CommandFrame{});  // every joint kDisabled
+  com_z.push_back(plant.truth().com_m.z());
+  fz.push_back(0.0);
+  for (int k = 0; k < 100; ++k) {
+    ASSERT_EQ(plant.advance(0.002), sim::PlantError::kOk) << plant.last_error();
+    com_z.push_back(plant.truth().com_m.z());
+    double f = 0.0;
+    for (const Vec3& c : plant.truth().contact_force_N) f += c.z();
+    fz.push_back(f);
+  }
+}
+
+TEST(MujocoVsSimbody, PassiveDropFallsAsGravitySaysAndTouchesDownTogether) {
+  const model::Model& m = robot();
+  sim::Plant simbody(m, sim::PlantConfig{});
+  sim::MujocoPlant mujoco(m, sim::MujocoPlantConfig{});
+  ASSERT_TRUE(mujoco.ok()) << mujoco.last_error();
+  constexpr double kGap_m = 0.05, kTick_s = 0.002;
+  std::vector<double> z_s, f_s, z_m, f_m;
+  passive_drop(simbody, kGap_m, z_s, f_s);
+  passive_drop(mujoco, kGap_m, z_m, f_m);
+  const double g = model::kGravity_m_s2, touch_s = std::sqrt(2.0 * kGap_m / g);
+  double worst_s = 0.0, worst_m = 0.0;
+  for (std::size_t k = 0; k * kTick_s < touch_s - kTick_s; ++k) {
+    const double t = k * kTick_s, fall = 0.5 * g * t * t;
+    worst_s = std::max(worst_s, std::abs(z_s[0] - z_s[k] - fall));
+    worst_m = std::max(worst_m, std::abs(z_m[0] - z_m[k] - fall));
+    EXPECT_EQ(f_s[k], 0.0) << t;
+    EXPECT_EQ(f_m[k], 0.0) << t;
+  }
+  EXPECT_LT(worst_s, 1e-4);
+  EXPECT_LT(worst_m, 3e-4);
+  auto first_touch_s = [&](const std::vector<double>& f) {
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      if (f[k] > 0.0) return k * kTick_s;
+    }
+    return -1.0;
+  };
+  EXPECT_GE(first_touch_s(f_s), touch_s);
+  EXPECT_LE(first_touch_s(f_s), touch_s + kTick_s);
+  EXPECT_GE(first_touch_s(f_m), touch_s);
+  EXPECT_LE(first_touch_s(f_m), touch_s + kTick_s);
+  std::printf("passive drop 5 cm: free fall off g·t²/2 by %.2g m (simbody), %.2g m (mujoco); touch-down %.3f / %.3f s, "
+              "expected %.4f s\n", worst_s, worst_m, first_touch_s(f_s), first_touch_s(f_m), touch_s);
 }
 
 // The standing pose placed on the floor of each simulator and raised by drop_m, then the
