@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <type_traits>
 #include <memory>
 #include <vector>
 
@@ -9,6 +11,7 @@
 #include "controllers/standing/standing_controller.h"
 #include "rtos_shim/clock.h"
 #include "rtos_shim/lockstep_scheduler.h"
+#include "sim/mujoco_plant.h"
 #include "sim/sensor_model.h"
 #include "sim/run_log.h"
 
@@ -39,24 +42,23 @@ void write_row(double t, const PlantTruth& truth, Log& log) {
   log.write(buf, static_cast<std::size_t>(n));
 }
 
-}  // namespace
-
-RunSummary run_standing(const model::Model& model, const RunConfig& config) {
+// The loop over either plant (Plant, MujocoPlant): same controller, sensors and log.
+template <class PlantT>
+RunSummary standing_loop(const model::Model& model, const RunConfig& config, PlantT& plant) {
   RunSummary out;
+  out.engine = config.engine;
   // Controller state in one block allocated before the loop (static in the firmware).
   auto controller = std::make_unique<control::StandingState>();
   control::standing_init(model, control::StandingConfig{}, *controller);
 
-  PlantConfig plant_cfg;
-  plant_cfg.ground = config.ground;
-  plant_cfg.integrator = config.integrator;
-  plant_cfg.relative_tolerance = config.relative_tolerance;
-  plant_cfg.absolute_tolerance = 0.1 * config.relative_tolerance;
-  Plant plant(model, plant_cfg);
   dynamics::ConfigVector q0 = dynamics::neutral_configuration(model);
   q0.tail<model::kNumJoints>() = controller->pose_rad;
   control::place_on_ground(model, controller->data, q0);
-  plant.reset(q0, dynamics::VelocityVector::Zero());
+  if constexpr (std::is_same_v<PlantT, MujocoPlant>) {
+    reset_on_floor(plant, q0);
+  } else {
+    plant.reset(q0, dynamics::VelocityVector::Zero());
+  }
   plant.set_push(config.push);
 
   SensorModel sensors(config.seed);
@@ -116,6 +118,41 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
   return out;
 }
 
+}  // namespace
+
+bool parse_engine(const char* text, Engine& out) {
+  if (text == nullptr) return false;
+  if (!std::strcmp(text, "simbody")) out = Engine::kSimbody;
+  else if (!std::strcmp(text, "mujoco")) out = Engine::kMujoco;
+  else return false;
+  return true;
+}
+
+const char* to_string(Engine e) { return e == Engine::kMujoco ? "mujoco" : "simbody"; }
+
+RunSummary run_standing(const model::Model& model, const RunConfig& config) {
+  if (config.engine == Engine::kMujoco) {
+    MujocoPlantConfig plant_cfg;
+    plant_cfg.ground = config.ground;
+    MujocoPlant plant(model, plant_cfg);
+    if (!plant.ok()) {
+      RunSummary out;
+      out.engine = config.engine;
+      out.ok = false;
+      out.error = plant.last_error();
+      return out;
+    }
+    return standing_loop(model, config, plant);
+  }
+  PlantConfig plant_cfg;
+  plant_cfg.ground = config.ground;
+  plant_cfg.integrator = config.integrator;
+  plant_cfg.relative_tolerance = config.relative_tolerance;
+  plant_cfg.absolute_tolerance = 0.1 * config.relative_tolerance;
+  Plant plant(model, plant_cfg);
+  return standing_loop(model, config, plant);
+}
+
 void record_plant_state(const PlantTruth& t, double time_s, RunSummary& s) {
   const double tilt = tilt_deg(t.q);
   s.max_tilt_deg = std::max(s.max_tilt_deg, tilt);
@@ -127,26 +164,15 @@ void record_plant_state(const PlantTruth& t, double time_s, RunSummary& s) {
   }
 }
 
-void finish_run_summary(const Plant& plant, double wall_s, const std::string& log_sha256, RunSummary& s) {
-  s.sim_time_s = plant.time_s();
-  s.real_time_factor = wall_s > 0.0 ? s.sim_time_s / wall_s : 0.0;
-  s.torque_saturations = plant.torque_saturations();
-  if (s.control_ticks > 0) {
-    s.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / s.control_ticks;
-    s.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / s.control_ticks;
-  }
-  s.log_sha256 = log_sha256;
-}
-
 std::string summary_json(const RunSummary& s) {
   char buf[1024];
   std::snprintf(buf, sizeof buf,
-                "{\n  \"ok\": %s,\n  \"error\": \"%s\",\n  \"fell\": %s,\n  \"fell_at_s\": %.3f,\n"
+                "{\n  \"ok\": %s,\n  \"error\": \"%s\",\n  \"engine\": \"%s\",\n  \"fell\": %s,\n  \"fell_at_s\": %.3f,\n"
                 "  \"sim_time_s\": %.3f,\n  \"real_time_factor\": %.3f,\n  \"max_tilt_deg\": %.4f,\n"
                 "  \"min_base_height_m\": %.4f,\n  \"max_foot_sink_m\": %.4f,\n  \"torque_saturations\": %llu,\n  \"control_ticks\": %llu,\n"
                 "  \"plant_evaluations_per_tick\": %.2f,\n  \"plant_steps_per_tick\": %.2f,\n"
                 "  \"log_sha256\": \"%s\"\n}\n",
-                s.ok ? "true" : "false", s.error.c_str(), s.fell ? "true" : "false", s.fell_at_s, s.sim_time_s,
+                s.ok ? "true" : "false", s.error.c_str(), to_string(s.engine), s.fell ? "true" : "false", s.fell_at_s, s.sim_time_s,
                 s.real_time_factor, s.max_tilt_deg, s.min_base_height_m, s.max_foot_sink_m,
                 static_cast<unsigned long long>(s.torque_saturations),
                 static_cast<unsigned long long>(s.control_ticks), s.plant_evaluations_per_tick, s.plant_steps_per_tick,

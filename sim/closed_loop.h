@@ -1,5 +1,5 @@
-// The deterministic closed loop on the desktop: Simbody plant, sensor model and
-// a controller, stepped in lockstep virtual time (rtos_shim's scheduler). Writes
+// The deterministic closed loop on the desktop: a plant (Simbody, or MuJoCo on Leju's
+// MJCF: RunConfig::engine), sensor model and a controller, stepped in lockstep virtual time (rtos_shim's scheduler). Writes
 // a CSV log (one row per control tick) and returns a summary. Same inputs, same
 // binary: byte-identical log. Only the real-time factor reads a clock (rtos_shim).
 #pragma once
@@ -11,6 +11,13 @@
 #include "sim/plant.h"
 
 namespace kuavo::sim {
+
+// Which simulator runs the robot: our Simbody plant (sim/plant.h: our tables, our contact
+// model) or MuJoCo (sim/mujoco_plant.h: Leju's MJCF, MuJoCo's contact). The controller,
+// the HAL, the drive law and the sensor model are the same for both.
+enum class Engine : std::uint8_t { kSimbody = 0, kMujoco = 1 };
+bool parse_engine(const char* text, Engine& out);  // "simbody" | "mujoco"
+const char* to_string(Engine e);
 
 // The longest run the command lines accept (kuavo simulate, kuavo_fw_sim, campaign specs): the
 // longest motion the controller holds is 120 s (planner::kMaxMotionFrames at 100 Hz) plus
@@ -24,13 +31,15 @@ struct RunConfig {
   std::uint64_t seed = 1;
   std::string log_path;        // empty: no CSV file (the hash is still computed)
   int command_latency_ticks = 0;  // commands reach the drives this many control ticks late
-  Integrator integrator = Integrator::kCvodeBdf;
+  Engine engine = Engine::kSimbody;
+  Integrator integrator = Integrator::kCvodeBdf;  // the Simbody engine's
   double relative_tolerance = PlantConfig{}.relative_tolerance;
 };
 
 struct RunSummary {
   bool ok = true;              // false: the simulation itself failed (see error)
   std::string error;
+  Engine engine = Engine::kSimbody;
   bool fell = false;           // torso below 0.5 m or tilted beyond 45°
   double fell_at_s = -1.0;
   double sim_time_s = 0.0;
@@ -40,8 +49,8 @@ struct RunSummary {
   double max_foot_sink_m = 0.0;  // deepest sole-corner penetration
   std::uint64_t torque_saturations = 0;
   std::uint64_t control_ticks = 0;
-  double plant_evaluations_per_tick = 0.0;  // Simbody forward-dynamics calls per 2 ms
-  double plant_steps_per_tick = 0.0;        // CVODE steps per 2 ms
+  double plant_evaluations_per_tick = 0.0;  // forward-dynamics calls per 2 ms (Simbody's or MuJoCo's)
+  double plant_steps_per_tick = 0.0;        // integrator steps per 2 ms (CVODE's or MuJoCo's)
   std::string log_sha256;
 };
 
@@ -53,7 +62,18 @@ inline constexpr double kControlPeriod_s = 0.002;  // 500 Hz
 // Shared by the closed loops. After each plant step: tilt, height, sink, fall.
 void record_plant_state(const PlantTruth& truth, double time_s, RunSummary& s);
 // After the loop: time, real-time factor (wall_s from rtos_shim), plant counters, log hash.
-void finish_run_summary(const Plant& plant, double wall_s, const std::string& log_sha256, RunSummary& s);
+// PlantT: Plant or MujocoPlant.
+template <class PlantT>
+void finish_run_summary(const PlantT& plant, double wall_s, const std::string& log_sha256, RunSummary& s) {
+  s.sim_time_s = plant.time_s();
+  s.real_time_factor = wall_s > 0.0 ? s.sim_time_s / wall_s : 0.0;
+  s.torque_saturations = plant.torque_saturations();
+  if (s.control_ticks > 0) {
+    s.plant_evaluations_per_tick = static_cast<double>(plant.derivative_evaluations()) / s.control_ticks;
+    s.plant_steps_per_tick = static_cast<double>(plant.integrator_stats().steps) / s.control_ticks;
+  }
+  s.log_sha256 = log_sha256;
+}
 
 // Stands the robot in the standing pose under the standing controller.
 RunSummary run_standing(const model::Model& model, const RunConfig& config);

@@ -5,11 +5,13 @@
 #include <cstdio>
 #include <memory>
 #include <random>
+#include <type_traits>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
 #include "rtos_shim/clock.h"
 #include "rtos_shim/lockstep_scheduler.h"
+#include "sim/mujoco_plant.h"
 #include "sim/run_log.h"
 #include "sim/sensor_model.h"
 #include "controllers/planner/support_polygon.h"
@@ -76,10 +78,15 @@ Percentiles percentiles(std::vector<double> samples) {
   return p;
 }
 
-MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
+namespace {
+
+// The loop over either plant (Plant, MujocoPlant): the same stack, sensors, log and figures.
+template <class PlantT>
+MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
                          MotionTrace* trace) {
   MotionSummary out;
   RunSummary& run = out.run;
+  run.engine = config.run.engine;
   out.planner = stack::to_string(config.stack.planner);
   out.motion_duration_s = planner::motion_plan_duration_s(motion);
   if (const char* why = stack::stack_validate_config(config.stack)) {
@@ -105,22 +112,42 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
     perturbed_model(model, perturb, *plant_model);
     out.perturbation_json = perturbation_json(perturb, *plant_model);
   }
-  PlantConfig plant_cfg;
-  plant_cfg.ground = perturbed_ground(config.run.ground, perturb);
-  plant_cfg.integrator = config.run.integrator;
-  plant_cfg.relative_tolerance = config.run.relative_tolerance;
-  plant_cfg.absolute_tolerance = 0.1 * config.run.relative_tolerance;
-  if (perturb.active) plant_cfg.actuation = &perturb.actuation;
-  Plant plant(*plant_model, plant_cfg);
+  std::unique_ptr<PlantT> plant_owner;
   dynamics::ConfigVector q0 = motion.q[0];
   control::place_on_ground(model, *metrics_data, q0);
-  plant.reset(q0, dynamics::VelocityVector::Zero());
-  if (plant_cfg.ground.terrain != nullptr) {
+  if constexpr (std::is_same_v<PlantT, MujocoPlant>) {
+    if (perturb.active) {
+      run.ok = false;
+      run.error = "perturbations (--perturb) apply to the simbody engine only";
+      return out;
+    }
+    MujocoPlantConfig plant_cfg;
+    plant_cfg.ground = config.run.ground;
+    plant_owner = std::make_unique<MujocoPlant>(model, plant_cfg);
+    if (!plant_owner->ok()) {
+      run.ok = false;
+      run.error = plant_owner->last_error();
+      return out;
+    }
+    reset_on_floor(*plant_owner, q0);
+  } else {
+    PlantConfig plant_cfg;
+    plant_cfg.ground = perturbed_ground(config.run.ground, perturb);
+    plant_cfg.integrator = config.run.integrator;
+    plant_cfg.relative_tolerance = config.run.relative_tolerance;
+    plant_cfg.absolute_tolerance = 0.1 * config.run.relative_tolerance;
+    if (perturb.active) plant_cfg.actuation = &perturb.actuation;
+    plant_owner = std::make_unique<Plant>(*plant_model, plant_cfg);
+    plant_owner->reset(q0, dynamics::VelocityVector::Zero());
+  }
+  PlantT& plant = *plant_owner;
+  const GroundParams ground = perturbed_ground(config.run.ground, perturb);
+  if (ground.terrain != nullptr) {
     // Raise the robot until its lowest corner touches the uneven ground (the others hang
     // above it and the robot settles: the stage is not the controller's flat floor).
     double lift_m = -1e9;
     for (const Vec3& c : plant.truth().contact_point_m) {
-      lift_m = std::max(lift_m, terrain_height_m(*plant_cfg.ground.terrain, c.x(), c.y()) - c.z());
+      lift_m = std::max(lift_m, terrain_height_m(*ground.terrain, c.x(), c.y()) - c.z());
     }
     q0[2] += lift_m;
     plant.reset(q0, dynamics::VelocityVector::Zero());
@@ -352,6 +379,14 @@ MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& m
   out.plans_skipped = sched.stats().plans_skipped;
   out.mpc_failures = planner_ws->mpc_failures;
   return out;
+}
+
+}  // namespace
+
+MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
+                         MotionTrace* trace) {
+  if (config.run.engine == Engine::kMujoco) return motion_run<MujocoPlant>(model, motion, config, trace);
+  return motion_run<Plant>(model, motion, config, trace);
 }
 
 std::string motion_summary_json(const MotionSummary& s) {

@@ -1,5 +1,5 @@
 // The online stack (controllers/stack) following a motion in the simulator: Simbody
-// plant, seeded sensors, the 500 Hz control task and the 50 Hz planning task in lockstep
+// plant (or MuJoCo's: run.engine), seeded sensors, the 500 Hz control task and the 50 Hz planning task in lockstep
 // virtual time, the planner's latency modelled. Writes a CSV row per control tick and
 // returns the summary figures. Deterministic: same inputs and binary → the same
 // log bytes (compute-time figures in the summary are wall-clock measurements and vary).

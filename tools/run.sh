@@ -12,7 +12,8 @@ build="${KUAVO_BUILD_DIR:-$here/build}"
 jobs="${KUAVO_JOBS:-$(nproc)}"
 
 # chromium + chromium-driver + python3: the HTML report's browser test (tests/report).
-packages=(build-essential cmake libeigen3-dev libsimbody-dev libsundials-dev
+# libmujoco-dev: the second simulator (kuavo simulate --engine mujoco).
+packages=(build-essential cmake libeigen3-dev libsimbody-dev libsundials-dev libmujoco-dev
           libtinyxml2-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
           parallel python3 chromium chromium-driver)
 missing=()

@@ -166,6 +166,44 @@ TEST(CommandsCli, HelpIsTheUsageOnStdout) {
   }
 }
 
+// --engine mujoco: Simbody-only options and the carpet are refused with a reason; a short
+// stand runs and its summary names the engine.
+TEST(SimulateCli, EngineMujocoRefusesSimbodyOptionsAndNamesItself) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const CliRun carpet = simulate("--stand 0.1 --engine mujoco --ground carpet", "_mj_carpet");
+  EXPECT_EQ(carpet.exit_code, 2) << carpet.err;
+  EXPECT_NE(carpet.err.find("carpet"), std::string::npos) << carpet.err;
+  const CliRun rkm = simulate("--stand 0.1 --engine mujoco --integrator rkm", "_mj_rkm");
+  EXPECT_EQ(rkm.exit_code, 2) << rkm.err;
+  EXPECT_NE(rkm.err.find("--integrator applies to the simbody engine"), std::string::npos) << rkm.err;
+  EXPECT_EQ(simulate("--stand 0.1 --engine ode", "_mj_bad").exit_code, 2);
+  const std::string summary = kOut + "_mj.json";
+  const CliRun ok = simulate("--stand 0.2 --engine mujoco --summary " + summary, "_mj_ok");
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  std::ifstream in(summary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  EXPECT_NE(ss.str().find("\"engine\": \"mujoco\""), std::string::npos) << ss.str();
+  EXPECT_NE(ss.str().find("\"fell\": false"), std::string::npos) << ss.str();
+}
+
+// --engine both: one summary holding both runs and whether they agree; MuJoCo's log beside.
+TEST(SimulateCli, EngineBothWritesOneSummaryAndTwoLogs) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string summary = kOut + "_both.json", log = kOut + "_both.csv";
+  const CliRun r = simulate("--stand 0.2 --engine both --log " + log + " --summary " + summary, "_both");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(summary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  for (const char* key : {"\"engine\": \"both\"", "\"agree\": true", "\"simbody\": {", "\"mujoco\": {",
+                          "\"engine\": \"simbody\"", "\"engine\": \"mujoco\""}) {
+    EXPECT_NE(ss.str().find(key), std::string::npos) << key << " in\n" << ss.str();
+  }
+  EXPECT_TRUE(std::filesystem::exists(log));
+  EXPECT_TRUE(std::filesystem::exists(kOut + "_both.mujoco.csv"));
+}
+
 // Memory exhaustion becomes one line and exit 1, not an abort: the run under address-space
 // limits around the point where start-up stops fitting (32..64 MB).
 TEST(SimulateCli, OutOfMemoryIsOneLineAndExitOne) {

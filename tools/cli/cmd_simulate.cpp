@@ -1,12 +1,18 @@
 // kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS
 //                [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
+//                [--engine simbody|mujoco|both]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
 //                --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
 // --step-in-place run the online stack (estimator, planner, WBC) following the motion.
+// --engine: the plant -- simbody (default: our tables, our contact model) or mujoco (Leju's
+// MJCF, MuJoCo's contact; sim/mujoco_plant.h); the controller and the HAL are the same.
+// --integrator, --rtol and --perturb belong to the simbody plant; mujoco models the floor only.
+// both: the run on each (the MuJoCo log beside --log as NAME.mujoco.csv), one summary holding
+// both and the disagreements in words (sim/engine_compare.h).
 // Defaults: the MPC planner, no balance filter (the motions of `kuavo retarget`'s dynamic
 // stage are dynamically feasible; the filter, a cart-table ZMP preview, is kept for
 // geometric-stage motions and the kinematic planner: --balance-filter on).
@@ -21,7 +27,9 @@
 #include <vector>
 
 #include "sim/closed_loop.h"
+#include "sim/engine_compare.h"
 #include "sim/motion_loop.h"
+#include "sim/mujoco_plant.h"
 #include "sim/push_option.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -50,7 +58,7 @@ int run_simulate(int argc, char** argv) {
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
   std::string summary_path, balance = "off", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
-  std::string integrator = "cvode", variant_name = "s45", perturb;
+  std::string integrator = "cvode", variant_name = "s45", perturb, engine = "simbody";
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
   bool quiet = false;  // no progress line on a terminal
@@ -80,6 +88,7 @@ int run_simulate(int argc, char** argv) {
   p.choice("--integrator", {"euler", "cvode", "rkm"}, &integrator);
   p.number("--rtol", "TOLERANCE", 1e-12, 1e-1, "", &cfg.relative_tolerance);
   p.choice("--variant", {"s45", "s42"}, &variant_name);
+  p.choice("--engine", {"simbody", "mujoco", "both"}, &engine);
   // The 55 kg robot scaled: build_model refuses a mass its torso cannot carry; this bounds the token.
   p.number("--mass", "KG", 1.0, 1000.0, "kg", &mass_kg);
   p.text("--perturb", "none|show|FILE.json", &perturb).modes = kMotionRun | kStepRun;
@@ -122,8 +131,22 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.ideal_sensors = sensors == "ideal";
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
   if (!stack::parse_planner(planner.c_str(), motion_cfg.stack.planner) || !sim::parse_ground(ground.c_str(), cfg.ground) ||
-      !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant)) {
+      !sim::parse_integrator(integrator.c_str(), cfg.integrator) || !model::parse_variant(variant_name.c_str(), variant) ||
+      !(engine == "both" || sim::parse_engine(engine.c_str(), cfg.engine))) {
     return usage_error("simulate");
+  }
+  const bool both_engines = engine == "both";
+  if (cfg.engine == sim::Engine::kMujoco || both_engines) {
+    for (const char* simbody_only : {"--integrator", "--rtol", "--perturb", "--perturb-seed"}) {
+      if (p.given(simbody_only)) {
+        std::fprintf(stderr, "kuavo simulate: %s applies to the simbody engine, not --engine %s\n", simbody_only, engine.c_str());
+        return 2;
+      }
+    }
+    if (const char* why = sim::mujoco_ground_refusal(cfg.ground)) {
+      std::fprintf(stderr, "kuavo simulate: %s\n", why);
+      return 2;
+    }
   }
   const bool duration_given = p.given("--duration");
   const bool perturb_seed_given = p.given("--perturb-seed");
@@ -139,13 +162,9 @@ int run_simulate(int argc, char** argv) {
     std::fprintf(stderr, "kuavo simulate: --perturb applies to MOTION and --step-in-place runs, not --stand\n");
     return 2;
   }
-  sim::RunSummary s;
-  std::string json;
-  if (stand) {
-    s = sim::run_standing(*robot, cfg);
-    json = sim::summary_json(s);
-  } else {
-    auto plan = std::make_unique<planner::MotionPlan>();
+  std::unique_ptr<planner::MotionPlan> plan;
+  if (!stand) {
+    plan = std::make_unique<planner::MotionPlan>();
     std::string error;
     const bool loaded = steps > 0 ? make_step_plan(*robot, static_cast<int>(steps), *plan, error)
                                   : mocap::load_motion_plan(motion_path, *robot, *plan, error);
@@ -167,17 +186,49 @@ int run_simulate(int argc, char** argv) {
       std::fprintf(stderr, "kuavo simulate: %s\n", why);
       return 2;
     }
+  }
+  // One run on one engine; its summary and JSON (a --stand run's summary is MotionSummary::run).
+  auto run_on = [&](sim::Engine e, const std::string& log_path, sim::MotionSummary& ms) {
+    sim::MotionRunConfig c = motion_cfg;
+    c.run.engine = e;
+    c.run.log_path = log_path;
+    if (stand) {
+      ms.run = sim::run_standing(*robot, c.run);
+      return sim::summary_json(ms.run);
+    }
     // On a terminal: the share of the run simulated and the time left (stderr; never piped).
     Progress progress(quiet);
-    progress.set_total(motion_cfg.run.duration_s > 0.0 ? motion_cfg.run.duration_s
-                                                       : planner::motion_plan_duration_s(*plan) + motion_cfg.settle_s);
+    progress.set_total(c.run.duration_s > 0.0 ? c.run.duration_s : planner::motion_plan_duration_s(*plan) + c.settle_s);
     if (progress.shown()) {
-      motion_cfg.on_progress = [&](double t_s) { progress.update(t_s, "simulated " + std::to_string(static_cast<int>(t_s)) + " s"); };
+      c.on_progress = [&](double t_s) {
+        progress.update(t_s, std::string(sim::to_string(e)) + ": simulated " + std::to_string(static_cast<int>(t_s)) + " s");
+      };
     }
-    const sim::MotionSummary ms = sim::run_motion(*robot, *plan, motion_cfg);
+    ms = sim::run_motion(*robot, *plan, c);
     progress.clear();
+    return sim::motion_summary_json(ms);
+  };
+  sim::RunSummary s;
+  std::string json;
+  if (!both_engines) {
+    sim::MotionSummary ms;
+    json = run_on(cfg.engine, cfg.log_path, ms);
     s = ms.run;
-    json = sim::motion_summary_json(ms);
+  } else {
+    // The MuJoCo run's log goes beside the Simbody one: run.csv -> run.mujoco.csv.
+    std::string mujoco_log = cfg.log_path;
+    if (!mujoco_log.empty()) {
+      const std::size_t dot = mujoco_log.rfind('.'), slash = mujoco_log.rfind('/');
+      const std::size_t at = dot != std::string::npos && (slash == std::string::npos || dot > slash) ? dot : mujoco_log.size();
+      mujoco_log.insert(at, ".mujoco");
+    }
+    sim::MotionSummary on_simbody, on_mujoco;
+    const std::string simbody_json = run_on(sim::Engine::kSimbody, cfg.log_path, on_simbody);
+    const std::string mujoco_json = run_on(sim::Engine::kMujoco, mujoco_log, on_mujoco);
+    const sim::EngineComparison cmp = sim::compare_engines(on_simbody, on_mujoco);
+    json = sim::engine_comparison_json(cmp, simbody_json, mujoco_json);
+    s = on_simbody.run.ok ? on_mujoco.run : on_simbody.run;  // exit 1 when either run failed
+    for (const std::string& d : cmp.disagreements) std::fprintf(stderr, "kuavo simulate: the engines disagree: %s\n", d.c_str());
   }
   if (!summary_path.empty()) {
     std::ofstream out(summary_path);

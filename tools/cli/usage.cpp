@@ -39,6 +39,8 @@ constexpr CommandHelp kHelp[] = {
      "usage: kuavo simulate --stand SECONDS | MOTION | --step-in-place STEPS\n"
      "               [--ground floor|carpet] [--push T:FX,FY,FZ:DURATION] [--seed N]\n"
      "               [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]\n"
+     "               [--engine simbody|mujoco|both]   (mujoco: Leju's MJCF and MuJoCo's contact; floor only;\n"
+     "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
