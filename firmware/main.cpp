@@ -147,7 +147,7 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
 // The image's three modes (rtos_shim/args.h refuses an option outside the mode it applies to).
 constexpr kuavo::args::ModeMask kRunMode = 1, kCheckMode = 2, kTimingMode = 4;
 
-// The dance's state, ~20 MB (the MPC workspace ~13 MB, the motion ~6.6 MB): one checked
+// The dance's state, ~22 MB (the MPC workspace ~13 MB, the motion 8.74 MB): one checked
 // allocation at start-up, before real time (mlockall then locks it). In static storage it made
 // the image's BSS 20 MB, which the kernel could not map under an address-space limit
 // (`ulimit -v 20000`): SIGSEGV before main, with nothing to say why.

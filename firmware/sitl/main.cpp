@@ -105,7 +105,7 @@ int run(int argc, char** argv) {
     }
   }
   cfg.loop.drivers = &drivers;
-  auto motion = std::make_unique<kuavo::planner::MotionPlan>();  // ~6.6 MB
+  auto motion = std::make_unique<kuavo::planner::MotionPlan>();  // 8.74 MB at 5 min capacity
   if (!dance_path.empty()) {
     kuavo::planner::BalanceFilterReport report;
     std::string msg;

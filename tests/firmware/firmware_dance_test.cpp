@@ -48,7 +48,7 @@ constexpr double kWithSideSteps_s = 5.95;
 
 // The built-in dance's first `seconds`, as kuavo_fw --dance loads a file.
 planner::MotionPlan* make_dance_prefix(double seconds) {
-  auto* plan = new planner::MotionPlan;  // ~6.6 MB, kept for the process (static below)
+  auto* plan = new planner::MotionPlan;  // 8.74 MB, kept for the process (static below)
   const model::Model& robot = test_support::test_model();
   std::string error;
   EXPECT_TRUE(mocap::built_in_dance_plan(robot, *plan, error, seconds)) << error;

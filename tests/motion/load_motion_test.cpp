@@ -95,5 +95,42 @@ TEST(LoadMotion, MessagesNameTheFrameAndTheJoint) {
   EXPECT_NE(r.error.find("no_such.motion: cannot open"), std::string::npos) << r.error;
 }
 
+// Five minutes at 100 Hz, both end frames, plus what the dynamic stage adds: the plan's
+// capacity, written by the tool writer, loads through the online reader and the plan holds it
+// (frames, and velocities against the sway's analytic derivative); one frame more is refused
+// with the capacity named, by the file size and, for a header that lies, by the header.
+TEST(LoadMotion, HoldsFiveMinutesAndRefusesOneFrameMore) {
+  ASSERT_GE(planner::kMaxMotionFrames, 5 * 60 * 100 + 1);
+  RecordProperty("sizeof_MotionPlan_bytes", std::to_string(sizeof(planner::MotionPlan)));
+  const std::vector<ConfigVector> q = swaying_stand(planner::kMaxMotionFrames);
+  Loaded r = load(write("load_capacity.motion", q));
+  ASSERT_TRUE(r.ok) << r.error;
+  ASSERT_EQ(r.plan->frame_count, planner::kMaxMotionFrames);
+  EXPECT_GE(planner::motion_plan_duration_s(*r.plan), 300.0);
+  for (int i : {0, 1, 15000, planner::kMaxMotionFrames - 1}) EXPECT_EQ(r.plan->q[i], q[i]) << "frame " << i;
+  for (int i : {1, 12345, planner::kMaxMotionFrames - 2}) {
+    const double expected = 0.2 * M_PI * std::cos(M_PI * i / kRate_hz);  // d/dt of 0.2 sin(π t)
+    EXPECT_NEAR(planner::motion_plan_velocity(*r.plan, i)[6 + kArmJoint], expected, 1e-3) << "frame " << i;
+  }
+
+  std::vector<ConfigVector> more = q;
+  more.push_back(q.back());
+  r = load(write("load_capacity_plus_one.motion", more));
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("more than the largest motion"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find(std::to_string(planner::kMaxMotionFrames) + " frames"), std::string::npos) << r.error;
+  // The header check on its own (a file cut to its header plus what fits cannot get past it).
+  const std::vector<ContactLabel> labels(more.size(), ContactLabel::kDoubleSupport);
+  const std::vector<std::uint8_t> bytes = mocap::encode_motion(test::s45_robot(), kRate_hz, more, labels);
+  MotionHeader header;
+  std::string error;
+  EXPECT_FALSE(check_motion_header(bytes, test::s45_robot(), "forged", header, error));
+  EXPECT_NE(error.find("forged: more frames than the controller can hold: the header says " +
+                       std::to_string(planner::kMaxMotionFrames + 1) + " frames, the capacity is " +
+                       std::to_string(planner::kMaxMotionFrames)),
+            std::string::npos)
+      << error;
+}
+
 }  // namespace
 }  // namespace kuavo::motion
