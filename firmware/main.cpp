@@ -19,6 +19,7 @@
 #include <string>
 
 #include "controllers/model/model.h"
+#include "controllers/motion/load_motion.h"
 #include "controllers/wbc/wbc_config.h"
 #include "drivers/bus/open_buses.h"
 #include "drivers/config/drivers_config_json.h"
@@ -26,7 +27,6 @@
 #include "firmware/control_cycle.h"
 #include "firmware/control_task.h"
 #include "firmware/dance.h"
-#include "firmware/dance_motion.h"
 #include "firmware/robot_io.h"
 #include "firmware/timing.h"
 #include "rtos_shim/args.h"
@@ -147,7 +147,7 @@ int run_timing_command(const kuavo::model::Model& model, const d::DriversConfig&
 // The image's three modes (rtos_shim/args.h refuses an option outside the mode it applies to).
 constexpr kuavo::args::ModeMask kRunMode = 1, kCheckMode = 2, kTimingMode = 4;
 
-// The dance's state, ~20 MB (the MPC workspace ~13 MB, the motion ~6.6 MB): one checked
+// The dance's state, ~22 MB (the MPC workspace ~13 MB, the motion 8.74 MB): one checked
 // allocation at start-up, before real time (mlockall then locks it). In static storage it made
 // the image's BSS 20 MB, which the kernel could not map under an address-space limit
 // (`ulimit -v 20000`): SIGSEGV before main, with nothing to say why.
@@ -242,7 +242,7 @@ int run(int argc, char** argv) {
   if (!dance_path.empty()) {
     kuavo::planner::MotionPlan& motion = memory->motion;
     kuavo::planner::BalanceFilterReport report;
-    if (!fw::load_dance_motion(dance_path, model, balance_filter, motion, report, msg)) {
+    if (!kuavo::motion::load_motion(dance_path, model, {.balance_filter = balance_filter}, motion, report, msg)) {
       std::fprintf(stderr, "kuavo_fw: --dance: %s\n", msg.c_str());
       return 2;
     }

@@ -20,7 +20,7 @@ bool parse_engine(const char* text, Engine& out);  // "simbody" | "mujoco"
 const char* to_string(Engine e);
 
 // The longest run the command lines accept (kuavo simulate, kuavo_fw_sim, campaign specs): the
-// longest motion the controller holds is 120 s (planner::kMaxMotionFrames at 100 Hz) plus
+// longest motion the controller holds is 310 s (planner::kMaxMotionFrames at 100 Hz) plus
 // settling; 600 s bounds a run's per-tick statistics (~300 k WBC ticks, a few MB) and its log.
 inline constexpr double kMaxRunDuration_s = 600.0;
 

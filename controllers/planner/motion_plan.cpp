@@ -28,7 +28,7 @@ VelocityVector difference(const ConfigVector& qa, const ConfigVector& qb, double
 
 }  // namespace
 
-const char* motion_plan_finish(MotionPlan& plan) {
+const char* motion_plan_finish(const MotionPlan& plan) {
   if (!(plan.rate_hz >= 1.0 && plan.rate_hz <= 10000.0)) return "motion rate outside 1..10000 Hz";
   if (plan.frame_count < 2) return "a motion needs at least two frames";
   if (plan.frame_count > kMaxMotionFrames) return "motion longer than kMaxMotionFrames";
@@ -36,12 +36,12 @@ const char* motion_plan_finish(MotionPlan& plan) {
     if (!plan.q[i].allFinite()) return "motion frame with a non-finite value";
     if (std::abs(plan.q[i].segment<4>(3).norm() - 1.0) > 1e-6) return "motion frame whose base quaternion is not unit";
   }
-  const double dt_s = 1.0 / plan.rate_hz;
-  const int last = plan.frame_count - 1;
-  plan.v[0].setZero();
-  plan.v[last].setZero();
-  for (int i = 1; i < last; ++i) plan.v[i] = difference(plan.q[i - 1], plan.q[i + 1], 2.0 * dt_s);
   return nullptr;
+}
+
+VelocityVector motion_plan_velocity(const MotionPlan& plan, int i) {
+  if (i <= 0 || i >= plan.frame_count - 1) return VelocityVector::Zero();
+  return difference(plan.q[i - 1], plan.q[i + 1], 2.0 * (1.0 / plan.rate_hz));
 }
 
 double motion_plan_duration_s(const MotionPlan& plan) {
@@ -69,7 +69,7 @@ void motion_plan_sample_rt(const model::Model& model, dynamics::Data& data, cons
     const ConfigVector& q1 = plan.q[i + 1];
     q = (1.0 - a) * q0 + a * q1;
     q.segment<4>(3) = orientation(q0).slerp(a, orientation(q1)).coeffs();
-    v = (1.0 - a) * plan.v[i] + a * plan.v[i + 1];
+    v = (1.0 - a) * motion_plan_velocity(plan, i) + a * motion_plan_velocity(plan, i + 1);
   }
   ContactFlags flags{};
   for (int c = 0; c < kNumPoints; ++c) flags[c] = plan.foot_contact[i][c < kCornersPerFoot ? kLeftFoot : kRightFoot];

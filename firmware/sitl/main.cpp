@@ -17,8 +17,8 @@
 #include <new>
 #include <string>
 
+#include "controllers/motion/load_motion.h"
 #include "drivers/config/drivers_config_json.h"
-#include "firmware/dance_motion.h"
 #include "firmware/sitl/sitl_run.h"
 #include "rtos_shim/args.h"
 #include "sim/push_option.h"
@@ -105,11 +105,11 @@ int run(int argc, char** argv) {
     }
   }
   cfg.loop.drivers = &drivers;
-  auto motion = std::make_unique<kuavo::planner::MotionPlan>();  // ~6.6 MB
+  auto motion = std::make_unique<kuavo::planner::MotionPlan>();  // 8.74 MB at 5 min capacity
   if (!dance_path.empty()) {
     kuavo::planner::BalanceFilterReport report;
     std::string msg;
-    if (!fw::load_dance_motion(dance_path, model, balance_filter, *motion, report, msg)) {
+    if (!kuavo::motion::load_motion(dance_path, model, {.balance_filter = balance_filter}, *motion, report, msg)) {
       std::fprintf(stderr, "kuavo_fw_sim: --dance: %s\n", msg.c_str());
       return 2;
     }

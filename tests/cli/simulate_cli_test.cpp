@@ -50,6 +50,36 @@ std::string standing_motion() {
   return path;
 }
 
+// One motion path: `kuavo simulate` loads a motion file with the firmware's own loader
+// (controllers/motion/load_motion.h), so a motion the robot refuses -- here one whose first
+// frame has the soles 3 cm up (the robot dances from standing) -- is refused by both, with the
+// same reason. kuavo simulate accepted it before the two shared the loader.
+TEST(SimulateCli, RefusesWhatTheFirmwareRefuses) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  model::Model robot;
+  ASSERT_EQ(model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, robot), model::ModelError::kOk);
+  std::vector<dynamics::ConfigVector> q(201, test::standing_configuration());
+  for (auto& f : q) f[2] += 0.03;
+  const std::vector<mocap::ContactLabel> labels(q.size(), mocap::ContactLabel::kDoubleSupport);
+  const std::string path = kOut + "_lifted.motion";
+  std::string error;
+  ASSERT_TRUE(mocap::write_motion_file(path, mocap::encode_motion(robot, 100.0, q, labels), error)) << error;
+  const std::string reason = "the first frame does not stand";
+  const CliRun sim = simulate(path + " --duration 1", "_lifted");
+  EXPECT_EQ(sim.exit_code, 2) << sim.err;
+  EXPECT_NE(sim.err.find(reason), std::string::npos) << sim.err;
+  const std::string fw_err = kOut + "_lifted_fw.stderr";
+  const int status = std::system((std::string(KUAVO_BINARY_DIR) + "/firmware/kuavo_fw --check --dance " + path +
+                                  " >/dev/null 2>" + fw_err).c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2);
+  std::ifstream in(fw_err);
+  std::ostringstream fw;
+  fw << in.rdbuf();
+  EXPECT_NE(fw.str().find(reason), std::string::npos) << fw.str();
+  // The same file standing is accepted by both (the refusal is the first frame, nothing else).
+  EXPECT_EQ(simulate(standing_motion() + " --duration 0.1", "_standing_ok").exit_code, 0);
+}
+
 TEST(SimulateCli, DirectoryAsMotionIsRefused) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const CliRun r = simulate(std::string(KUAVO_BINARY_DIR) + " --duration 1", "_dir");

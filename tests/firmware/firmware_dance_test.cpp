@@ -30,8 +30,8 @@
 #include <memory>
 #include <vector>
 
+#include "controllers/motion/load_motion.h"
 #include "controllers/planner/balance_filter.h"
-#include "firmware/dance_motion.h"
 #include "tests/firmware/firmware_loop.h"
 #include "tools/mocap/motion_plan_io.h"
 
@@ -48,15 +48,12 @@ constexpr double kWithSideSteps_s = 5.95;
 
 // The built-in dance's first `seconds`, as kuavo_fw --dance loads a file.
 planner::MotionPlan* make_dance_prefix(double seconds) {
-  auto* plan = new planner::MotionPlan;  // ~6.6 MB, kept for the process (static below)
+  auto* plan = new planner::MotionPlan;  // 8.74 MB, kept for the process (static below)
   const model::Model& robot = test_support::test_model();
   std::string error;
   EXPECT_TRUE(mocap::built_in_dance_plan(robot, *plan, error, seconds)) << error;
-  static dynamics::Data data;
-  EXPECT_EQ(dance_motion_start_standing(robot, data, *plan), nullptr);
-  auto ws = std::make_unique<planner::BalanceFilterWorkspace>();
   planner::BalanceFilterReport report;
-  EXPECT_EQ(planner::balance_filter(robot, planner::BalanceFilterConfig{}, *plan, *ws, report), nullptr);
+  EXPECT_TRUE(motion::prepare_motion(robot, {.balance_filter = true}, "built-in dance", *plan, report, error)) << error;
   return plan;
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "tools/mocap/bvh.h"
 #include "tools/mocap/motion_file.h"
 
 namespace kuavo::mocap {
@@ -133,6 +134,27 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   EXPECT_NE(slurp(kOut + "_bad_horizon.stderr").find("[0.2, 1.4]"), std::string::npos);
 }
 
+// --duration: the built-in dance in whole 30 s cycles (default_dance_test.cpp checks the
+// cycles themselves); the BVH written with --dance-bvh says how long it is.
+TEST(mocap_cli, BuiltInDanceTakesADuration) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  ASSERT_EQ(run("--duration 90 --dance-bvh " + kOut + "_90.bvh", "_d90"), 0) << slurp(kOut + "_d90.stderr");
+  Bvh bvh;
+  std::string error;
+  ASSERT_TRUE(load_bvh_file(kOut + "_90.bvh", bvh, error)) << error;
+  EXPECT_EQ(bvh.frame_count, 3 * 1500 + 1);  // 90 s at 50 fps, both ends
+  EXPECT_EQ(run("--duration 45 -o " + kOut + "_d45.motion", "_d45"), 2);
+  EXPECT_NE(slurp(kOut + "_d45.stderr").find("--duration 45 s: the built-in dance repeats its 30 s cycle"),
+            std::string::npos)
+      << slurp(kOut + "_d45.stderr");
+  EXPECT_EQ(run("--duration 330 -o " + kOut + "_d330.motion", "_d330"), 2);
+  EXPECT_NE(slurp(kOut + "_d330.stderr").find("--duration"), std::string::npos) << slurp(kOut + "_d330.stderr");
+  const std::string clip = std::string(KUAVO_SHARED_DIR) + "/mocap/cmu_05_20_mb.bvh";
+  EXPECT_EQ(run(clip + " --duration 60 -o " + kOut + "_dclip.motion", "_dclip"), 2);
+  EXPECT_NE(slurp(kOut + "_dclip.stderr").find("does not apply with INPUT.bvh"), std::string::npos)
+      << slurp(kOut + "_dclip.stderr");
+}
+
 // Side inputs must be regular files (a directory read as empty text and was accepted), and the
 // outputs are checked writable before the run.
 TEST(mocap_cli, DirectoriesAndUnwritableOutputsAreRefusedUpFront) {
@@ -188,9 +210,10 @@ TEST(mocap_cli, MotionsTheLoadersRefuseAreNotWritten) {
     std::string motion;
     const char* expect;
   };
-  std::string slow = "MOTION\nFrames: 600\nFrame Time: 0.25\n", lifted = "MOTION\nFrames: 600\nFrame Time: 0.0083333\n";
+  // slow: 1300 frames of 0.25 s (the BVH bound) = 324.75 s, past the plan's 310 s.
+  std::string slow = "MOTION\nFrames: 1300\nFrame Time: 0.25\n", lifted = "MOTION\nFrames: 600\nFrame Time: 0.0083333\n";
+  for (std::size_t k = 0; k < 1300; ++k) slow += rows[k % 600] + "\n";
   for (std::size_t k = 0; k < 600; ++k) {
-    slow += rows[k] + "\n";
     std::istringstream values(rows[k]);
     double x, y;
     values >> x >> y;
@@ -199,7 +222,7 @@ TEST(mocap_cli, MotionsTheLoadersRefuseAreNotWritten) {
     lifted += std::to_string(x) + " " + std::to_string(k >= 500 ? y + 200.0 : y) + rest + "\n";
   }
   const Case cases[] = {
-      {"_long", slow, "14976 frames at 100 Hz, more than the 12000 a robot motion holds"},
+      {"_long", slow, "32476 frames at 100 Hz, more than the 31000 a robot motion holds"},
       {"_lifted", lifted, "not one the robot can load: frame"},
   };
   for (const Case& c : cases) {

@@ -133,7 +133,7 @@ TEST(StepInPlace, StanceFeetStayPlantedSwingFeetLiftAndTheComIsOverTheStanceFoot
   double max_lift = 0.0, worst_stance_slip = 0.0, worst_com_outside = -1.0;
   PlanKnot knot;
   for (int i = 0; i < plan.frame_count; ++i) {
-    plan_knot_from_state(m, data, plan.q[i], plan.v[i], {}, 0, knot);
+    plan_knot_from_state(m, data, plan.q[i], motion_plan_velocity(plan, i), {}, 0, knot);
     const bool is_double = plan.foot_contact[i][0] && plan.foot_contact[i][1];
     if (was_double && !is_double) ++swings;
     was_double = is_double;

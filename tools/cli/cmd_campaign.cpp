@@ -25,13 +25,13 @@
 #include <vector>
 
 #include "controllers/model/model.h"
+#include "controllers/motion/load_motion.h"
 #include "controllers/planner/motion_plan.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/args.h"
 #include "tools/cli/campaign_spec.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/usage.h"
-#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
 namespace {
@@ -165,7 +165,8 @@ int run_campaign(int argc, char** argv) {
     } else {
       m.path = fs::absolute(entry).string();
     }
-    if (!mocap::load_motion_plan(m.path, *robot, *plan, error)) {
+    planner::BalanceFilterReport no_filter;  // loaded as `kuavo simulate` will: refused here first
+    if (!motion::load_motion(m.path, *robot, {}, *plan, no_filter, error)) {
       std::fprintf(stderr, "kuavo campaign: %s\n", error.c_str());
       return 2;
     }

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "controllers/motion/load_motion.h"
 #include "rtos_shim/clock.h"
 #include "rtos_shim/args.h"
 #include "sim/motion_loop.h"
@@ -38,7 +39,6 @@
 #include "tools/cli/subcommand.h"
 #include "tools/cli/usage.h"
 #include "tools/cli/motion_input.h"
-#include "tools/mocap/motion_plan_io.h"
 #include "tools/cli/motion_report.h"
 #include "tools/report/svg_plot.h"
 
@@ -147,8 +147,8 @@ int run_demo(int argc, char** argv) {
   auto dance = std::make_unique<planner::MotionPlan>();
   auto steps = std::make_unique<planner::MotionPlan>();
   planner::BalanceFilterReport filter;
-  if (!mocap::load_motion_plan(out + "/dance.motion", *robot, *dance, error) ||
-      (kinematic && !filter_motion_plan(*robot, *dance, filter, error)) || !make_step_plan(*robot, 20, *steps, error)) {
+  if (!motion::load_motion(out + "/dance.motion", *robot, {.balance_filter = kinematic}, *dance, filter, error) ||
+      !make_step_plan(*robot, 20, *steps, error)) {
     std::fprintf(stderr, "kuavo demo: %s\n", error.c_str());
     return 1;
   }

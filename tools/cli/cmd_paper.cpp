@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "controllers/motion/load_motion.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
@@ -30,7 +31,6 @@
 #include "tools/cli/progress.h"
 #include "tools/cli/subcommand.h"
 #include "tools/cli/usage.h"
-#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
 namespace {
@@ -129,7 +129,8 @@ int run_paper(int argc, char** argv) {
   if (model::build_model(model::Variant::kS45, model::kDefaultTotalMass_kg, *robot) != model::ModelError::kOk) return 1;
   auto dance = std::make_unique<planner::MotionPlan>();
   std::string error;
-  if (!mocap::load_motion_plan(out + "/dance.motion", *robot, *dance, error)) {
+  planner::BalanceFilterReport no_filter;
+  if (!motion::load_motion(out + "/dance.motion", *robot, {}, *dance, no_filter, error)) {
     std::fprintf(stderr, "kuavo paper: %s\n", error.c_str());
     return 1;
   }

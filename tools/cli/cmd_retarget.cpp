@@ -4,6 +4,7 @@
 //                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
 //                  [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]
+//                  [--duration S]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
@@ -18,7 +19,9 @@
 // over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double"
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
 // joint" lines for skeletons the built-in tables miss. --dance-bvh writes the built-in dance as
-// BVH (to inspect it in a viewer). --human-csv writes the human keypoints scaled to the robot
+// BVH (to inspect it in a viewer). --duration S: the built-in dance's length, a whole number
+// of its 30 s cycles up to 300 s (default 30 s; 240 s makes the 4-minute motion). --human-csv
+// writes the human keypoints scaled to the robot
 // (the targets) in the output motion's clock (after the lead-in), one row per frame: the
 // HTML report's skeleton.
 #include <algorithm>
@@ -102,7 +105,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> inputs;
   std::string human_path;
   bool quiet = false;
-  double horizon_s = 0.0, torque_weight = 0.0;
+  double horizon_s = 0.0, torque_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0;
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
@@ -123,6 +126,8 @@ int run(int argc, char** argv) {
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
+  p.number("--duration", "SECONDS", mocap::kDefaultDanceDuration_s,
+           mocap::kDefaultDanceDuration_s * mocap::kDefaultDanceMaxCycles, "s", &dance_duration_s);
   p.flag("--quiet", &quiet);
   p.choice("--variant", {"s45", "s42"}, &variant_name);
   if (const int code = parse_command_line(p, argc, argv, "retarget"); code >= 0) return code;
@@ -133,6 +138,16 @@ int run(int argc, char** argv) {
   const std::string input = inputs.empty() ? "" : inputs[0];
   if (!input.empty() && !dance_path.empty()) {
     std::fprintf(stderr, "kuavo retarget: --dance-bvh writes the built-in dance; it does not apply with INPUT.bvh\n");
+    return 2;
+  }
+  const int dance_cycles = mocap::default_dance_cycles(dance_duration_s);
+  if (!input.empty() && p.given("--duration")) {
+    std::fprintf(stderr, "kuavo retarget: --duration sets the built-in dance's length; it does not apply with INPUT.bvh\n");
+    return 2;
+  }
+  if (dance_cycles == 0) {
+    std::fprintf(stderr, "kuavo retarget: --duration %g s: the built-in dance repeats its %g s cycle; give a multiple of it\n",
+                 dance_duration_s, mocap::kDefaultDanceDuration_s);
     return 2;
   }
   if (!input.empty()) {
@@ -191,7 +206,7 @@ int run(int argc, char** argv) {
   mocap::Bvh bvh;
   std::string error;
   if (input.empty()) {
-    bvh = mocap::default_dance_bvh();
+    bvh = mocap::default_dance_bvh(dance_cycles);
     if (!dance_path.empty() && !write_text(dance_path, mocap::write_bvh(bvh))) {
       std::fprintf(stderr, "kuavo retarget: %s: cannot write\n", dance_path.c_str());
       return 1;

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "controllers/motion/load_motion.h"
 #include "sim/closed_loop.h"
 #include "sim/engine_compare.h"
 #include "sim/motion_loop.h"
@@ -37,7 +38,6 @@
 #include "tools/cli/motion_input.h"
 #include "tools/cli/perturb_option.h"
 #include "tools/cli/progress.h"
-#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::cli {
 namespace {
@@ -166,14 +166,14 @@ int run_simulate(int argc, char** argv) {
   if (!stand) {
     plan = std::make_unique<planner::MotionPlan>();
     std::string error;
-    const bool loaded = steps > 0 ? make_step_plan(*robot, static_cast<int>(steps), *plan, error)
-                                  : mocap::load_motion_plan(motion_path, *robot, *plan, error);
-    if (!loaded) {
-      std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
-      return 2;
-    }
     planner::BalanceFilterReport filter_report;
-    if (balance_filter && !filter_motion_plan(*robot, *plan, filter_report, error)) {
+    // A motion file through the firmware's own loader (the same checks, standing start and
+    // filter); the step-in-place gait is made here and filtered on request.
+    const bool loaded = steps > 0 ? make_step_plan(*robot, static_cast<int>(steps), *plan, error) &&
+                                        (!balance_filter || filter_motion_plan(*robot, *plan, filter_report, error))
+                                  : motion::load_motion(motion_path, *robot, {.balance_filter = balance_filter}, *plan,
+                                                        filter_report, error);
+    if (!loaded) {
       std::fprintf(stderr, "kuavo simulate: %s\n", error.c_str());
       return 2;
     }

@@ -1,6 +1,6 @@
-// What `kuavo simulate` and `kuavo demo` play besides a motion file (which
-// tools/mocap/motion_plan_io.h loads): the balance filter over it, or the built-in
-// step-in-place gait, as a planner::MotionPlan (allocated once, before the loop).
+// What `kuavo simulate` and `kuavo demo` play besides a motion file (which the online loader,
+// controllers/motion/load_motion.h, reads as the firmware does): the built-in step-in-place
+// gait, and the balance filter over it, as a planner::MotionPlan (allocated once, before the loop).
 #pragma once
 
 #include <memory>

@@ -31,6 +31,7 @@ constexpr CommandHelp kHelp[] = {
      "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
      "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
      "                      [--torque-weight W] [--attenuate ROUNDS] [--figures DIR|none] [--human-csv OUT.csv]\n"
+     "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
      "usage: kuavo retarget-sweep [INPUT.bvh] --out DIR [--horizons S,S,...] [--variant s45|s42] [--quiet]\n"

@@ -1,22 +1,14 @@
-// Contact labels: which feet support the robot. Stable numbers: motion files store them.
-// Kept apart from contacts.h (detection) so the motion-file reader needs nothing else.
+// The contact labels are the motion file's (controllers/motion/contact_label.h, defined with
+// the online reader); the offline pipeline, which makes them, names them in its own namespace.
 #pragma once
 
-#include <cstdint>
+#include "controllers/motion/contact_label.h"
 
 namespace kuavo::mocap {
 
-enum class ContactLabel : std::uint8_t { kFlight = 0, kLeftSupport = 1, kRightSupport = 2, kDoubleSupport = 3 };
-
-inline bool left_in_contact(ContactLabel c) {
-  return c == ContactLabel::kLeftSupport || c == ContactLabel::kDoubleSupport;
-}
-inline bool right_in_contact(ContactLabel c) {
-  return c == ContactLabel::kRightSupport || c == ContactLabel::kDoubleSupport;
-}
-inline ContactLabel make_label(bool left, bool right) {
-  return left ? (right ? ContactLabel::kDoubleSupport : ContactLabel::kLeftSupport)
-              : (right ? ContactLabel::kRightSupport : ContactLabel::kFlight);
-}
+using motion::ContactLabel;
+using motion::left_in_contact;
+using motion::make_label;
+using motion::right_in_contact;
 
 }  // namespace kuavo::mocap

@@ -170,8 +170,9 @@ struct ArmParams {
   double abduction, swing, elbow;  // [rad]: 0 = arm down; swing > 0 forward; elbow flexion
 };
 
-// Arm choreography for one arm (side +1 left, -1 right).
-ArmParams arm_at(double t, double side) {
+// Arm choreography for one arm (side +1 left, -1 right). Always inlined, as when one_cycle
+// was its only caller: the 30 s dance keeps its bits (see one_cycle).
+[[gnu::always_inline]] inline ArmParams arm_at(double t, double side) {
   const double w = 2.0 * kPi;
   struct Phase {
     double a, b;
@@ -199,6 +200,17 @@ ArmParams arm_at(double t, double side) {
   out.swing /= total;
   out.elbow = std::max(0.15, out.elbow / total);  // a bent elbow keeps the bend plane defined
   return out;
+}
+
+// The arms d_s from a seam (negative: before it): the earlier cycle's settle cross-fades into
+// the later cycle's intro linearly over kSeamFade_s centred on the seam, as the cycle's own
+// phases fade (phase_weight's 0.4 s ramps).
+constexpr double kSeamFade_s = 0.4;
+ArmParams arm_across_seam(double d_s, double side) {
+  const ArmParams before = arm_at(kDefaultDanceDuration_s + d_s, side), after = arm_at(d_s, side);
+  const double w = std::clamp(d_s / kSeamFade_s + 0.5, 0.0, 1.0);
+  return {(1.0 - w) * before.abduction + w * after.abduction, (1.0 - w) * before.swing + w * after.swing,
+          (1.0 - w) * before.elbow + w * after.elbow};
 }
 
 Mat3 yaw_matrix(double yaw) {
@@ -258,9 +270,11 @@ void put_rotation(Bvh& b, int joint, double* row, const Mat3& local) {
   row[c + 2] = e[2] * kRadToDeg;
 }
 
-}  // namespace
-
-Bvh default_dance_bvh() {
+// One cycle: kDefaultDanceDuration_s, both end frames. Not inlined: compiled as its own
+// function the 30 s dance keeps its bits (the build contracts a·b + c into FMAs, so where a
+// body is inlined decides the last bits; checked by comparing `kuavo retarget --dance-bvh`
+// before and after).
+[[gnu::noinline]] Bvh one_cycle() {
   Bvh b;
   for (int i = 0; i < kJointCount; ++i) {
     const JointDef& d = kSkeleton[i];
@@ -337,6 +351,48 @@ Bvh default_dance_bvh() {
       const int arm = s == 0 ? kLArm : kRArm;
       put_rotation(b, arm, row, upper);
       put_rotation(b, arm + 1, row, upper.transpose() * fore);
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+int default_dance_cycles(double duration_s) {
+  const double cycles = std::round(duration_s / kDefaultDanceDuration_s);
+  if (!(std::abs(duration_s - cycles * kDefaultDanceDuration_s) <= 1e-3) || cycles < 1 || cycles > kDefaultDanceMaxCycles)
+    return 0;
+  return static_cast<int>(cycles);
+}
+
+Bvh default_dance_bvh(int cycles) {
+  Bvh b = one_cycle();
+  cycles = std::clamp(cycles, 1, kDefaultDanceMaxCycles);
+  if (cycles == 1) return b;
+  // Every cycle's frames are the first's (a seam frame is the first of the later cycle; the
+  // last frame is the first cycle's last), but for the arms within half a fade of a seam.
+  const int per_cycle = b.frame_count - 1;
+  const std::vector<double> first = b.motion;
+  const auto width = static_cast<std::size_t>(b.channel_count);
+  b.frame_count = cycles * per_cycle + 1;
+  b.motion.resize(static_cast<std::size_t>(b.frame_count) * width);
+  for (int f = per_cycle + 1; f < b.frame_count; ++f) {
+    const int local = f - std::min(f / per_cycle, cycles - 1) * per_cycle;
+    std::copy_n(first.begin() + static_cast<std::ptrdiff_t>(local * width), width,
+                b.motion.begin() + static_cast<std::ptrdiff_t>(f * width));
+  }
+  const int half_fade = static_cast<int>(std::lround(0.5 * kSeamFade_s / b.frame_time_s));
+  for (int c = 1; c < cycles; ++c) {
+    for (int f = c * per_cycle - half_fade + 1; f < c * per_cycle + half_fade; ++f) {
+      double* row = b.motion.data() + static_cast<std::size_t>(f) * width;
+      for (int s = 0; s < 2; ++s) {
+        const double side = s == 0 ? 1.0 : -1.0;
+        Mat3 upper, fore;
+        arm_rotations(arm_across_seam((f - c * per_cycle) * b.frame_time_s, side), side, upper, fore);
+        const int arm = s == 0 ? kLArm : kRArm;
+        put_rotation(b, arm, row, upper);
+        put_rotation(b, arm + 1, row, upper.transpose() * fore);
+      }
     }
   }
   return b;

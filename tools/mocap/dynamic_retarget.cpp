@@ -138,7 +138,7 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
     return false;
   }
   for (int i = 0; i < plan.frame_count; ++i) {
-    if (!plan.q[i].allFinite() || !plan.v[i].allFinite()) {
+    if (!plan.q[i].allFinite()) {  // the velocities are differences of these frames
       error = "dynamic retargeting: frame " + std::to_string(i) + " is not finite";
       return false;
     }
@@ -170,7 +170,7 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
   std::vector<mpc::HeadVector> heads(S + 1);
   std::vector<planner::ContactFlags> flags(S + 1);
   StateVector x0;
-  mpc::state_from_configuration(robot, *data, plan.q[0], plan.v[0], x0);
+  mpc::state_from_configuration(robot, *data, plan.q[0], planner::motion_plan_velocity(plan, 0), x0);
   // Where each stance corner landed in the committed trajectory: the stance rows hold it
   // there (not on the reference's foothold, which the swing cost only approaches; pulling a
   // landed foot onto it would slide it).

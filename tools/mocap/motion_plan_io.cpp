@@ -5,7 +5,6 @@
 #include "tools/mocap/contacts.h"
 #include "tools/mocap/default_dance.h"
 #include "tools/mocap/human_targets.h"
-#include "tools/mocap/motion_file.h"
 #include "tools/mocap/retarget.h"
 #include "tools/mocap/skeleton_map.h"
 
@@ -34,14 +33,6 @@ bool motion_plan_from_frames(const std::vector<dynamics::ConfigVector>& q, const
     return false;
   }
   return true;
-}
-
-bool load_motion_plan(const std::string& path, const model::Model& robot, planner::MotionPlan& plan, std::string& error) {
-  MotionHeader header;
-  std::vector<dynamics::ConfigVector> q;
-  std::vector<ContactLabel> labels;
-  if (!load_motion_file(path, robot, header, q, labels, error)) return false;
-  return motion_plan_from_frames(q, labels, header.rate_hz, path, plan, error);
 }
 
 bool built_in_dance_plan(const model::Model& robot, planner::MotionPlan& plan, std::string& error, double first_s) {

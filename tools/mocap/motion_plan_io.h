@@ -1,6 +1,7 @@
-// From the offline pipeline's outputs to the controller's MotionPlan (start-up, allocates):
-// a motion file as `kuavo retarget` writes it, or the built-in dance retargeted in memory.
-// Used by the `kuavo` tool, the firmware image (`kuavo_fw --dance`), tests and benchmarks.
+// From the offline pipeline's in-memory outputs to the controller's MotionPlan (allocates):
+// frames and labels, or the built-in dance retargeted in memory. Used by the `kuavo` tool,
+// tests and benchmarks. A motion *file* is loaded by the online code's one loader
+// (controllers/motion/load_motion.h), as the firmware loads it.
 #pragma once
 
 #include <string>
@@ -16,10 +17,6 @@ namespace kuavo::mocap {
 // motion_plan_finish refuses it.
 bool motion_plan_from_frames(const std::vector<dynamics::ConfigVector>& q, const std::vector<ContactLabel>& labels,
                              double rate_hz, const std::string& what, planner::MotionPlan& plan, std::string& error);
-
-// Reads and validates a motion file (variant, layout, checksums, frames) into plan.
-// false with a message naming the file and the problem.
-bool load_motion_plan(const std::string& path, const model::Model& robot, planner::MotionPlan& plan, std::string& error);
 
 // The built-in dance (default_dance.h) retargeted with the default options, exactly as
 // `kuavo retarget` without an input file makes it (no balance filter). first_s > 0: only

@@ -1,5 +1,7 @@
 // Robot motion file: the retargeted dance, for the controller and the firmware. This header
-// is the reader (and the format); motion_file.h adds the tool-side writer, loader and CSV.
+// is the format and its reader; load_motion.h turns a file into the controller's MotionPlan
+// (the firmware and `kuavo simulate` both); tools/mocap/motion_file.h adds the offline
+// writer and CSV.
 //
 // Binary layout, version 1 (all integers little-endian, doubles IEEE-754 little-endian):
 //
@@ -25,7 +27,7 @@
 //      281    7  reserved (0)
 //
 // The reader (read_motion_header / read_motion_frame) works on a byte buffer in place,
-// allocates nothing and throws nothing, so firmware can use it as is.
+// allocates nothing and throws nothing.
 #pragma once
 
 #include <cstddef>
@@ -34,9 +36,9 @@
 #include "controllers/dynamics/data.h"
 #include "controllers/model/model.h"
 #include "controllers/planner/motion_plan.h"
-#include "tools/mocap/contact_label.h"
+#include "controllers/motion/contact_label.h"
 
-namespace kuavo::mocap {
+namespace kuavo::motion {
 
 inline constexpr char kMotionMagic[8] = {'K', 'U', 'A', 'V', 'O', 'M', 'O', 'T'};
 inline constexpr std::uint32_t kMotionVersion = 1;
@@ -120,4 +122,4 @@ MotionError read_motion_frame(const std::uint8_t* data, std::size_t size, std::u
 // (controller order); on kNonFinite / kBaseImplausible it is -1.
 MotionError check_motion_frame(const model::Model& robot, const dynamics::ConfigVector& q, int& joint);
 
-}  // namespace kuavo::mocap
+}  // namespace kuavo::motion

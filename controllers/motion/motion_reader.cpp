@@ -1,9 +1,9 @@
-#include "tools/mocap/motion_reader.h"
+#include "controllers/motion/motion_reader.h"
 
 #include <cmath>
 #include <cstring>
 
-namespace kuavo::mocap {
+namespace kuavo::motion {
 namespace {
 constexpr int kNq = model::kNq;
 }  // namespace
@@ -142,4 +142,4 @@ MotionError check_motion_frame(const model::Model& robot, const dynamics::Config
   return MotionError::kOk;
 }
 
-}  // namespace kuavo::mocap
+}  // namespace kuavo::motion
