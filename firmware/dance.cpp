@@ -86,6 +86,7 @@ void map_ankle_motors_rt(AnkleMotors& a, const hal::SensorFrame& sensors, wbc::A
       out.joint_to_motor[leg](1, c) = motor[5];
     }
     out.limit_Nm[leg] = a.limit_Nm[leg];
+    out.velocity_gain_Nm_s_per_rad[leg] = a.velocity_gain_Nm_s_per_rad[leg];
     if (!ok) out.active = false;
   }
   if (!out.active) ++a.unmapped_ticks;
@@ -101,8 +102,14 @@ void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig&
     const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
     for (int k = 0; k < 2; ++k) {
       a.limit_Nm[leg](k) = 0.0;
+      a.velocity_gain_Nm_s_per_rad[leg](k) = 0.0;
       for (const drivers::DriveEntry& e : drivers.drives) {
-        if (e.slot == first + 4 + k) a.limit_Nm[leg](k) = e.config.torque_limit_Nm;
+        if (e.slot != first + 4 + k) continue;
+        a.limit_Nm[leg](k) = e.config.torque_limit_Nm;
+        // CSP: the torque offset carries csp_kd·(motor velocity of v_ref) (robot_io.cpp).
+        if (e.config.mode == drivers::canopen::kModeCyclicSyncPosition) {
+          a.velocity_gain_Nm_s_per_rad[leg](k) = e.config.csp_kd_Nm_s_per_rad;
+        }
       }
       if (!(a.limit_Nm[leg](k) > 0.0)) a.active = false;  // no drive on that slot: not a CiA 402 ankle
     }

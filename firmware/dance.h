@@ -110,13 +110,15 @@ struct DanceCounters {
   double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
 };
 
-// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps). The WBC
-// plans ankle torques up to each motor's clamp: a smaller share, leaving the CSP drive's own
-// feedback room on top, fell sooner in the firmware-in-the-loop dance (firmware/README.md).
+// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps), mapped at
+// each tick's sampled ankle angles for the WBC (WbcConfig::ankle_motor_torque_share of the
+// clamp, the rest left to the CSP drive's own feedback).
 struct AnkleMotors {
   bool active = false;
   std::array<drivers::LegTransmission, 2> legs{};
   std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // per motor (A, B)
+  // The binding's velocity feed-forward per motor (CSP: the drive's kd), hal::AnkleMotorLimits.
+  std::array<Eigen::Vector2d, 2> velocity_gain_Nm_s_per_rad{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::uint64_t unmapped_ticks = 0;  // ticks an ankle could not be mapped (joint-space limits only)
 };
 

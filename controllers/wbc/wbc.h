@@ -5,8 +5,9 @@
 //   torques eliminated: τ = M_j q̈ + b_j − J_jᵀ f is recovered afterwards (rows 6.. of the EoM)
 //   equalities:   the 6 floating-base rows  M_b q̈ + b_b = J_bᵀ f
 //   inequalities: friction pyramid, 4 rows per stance point (|f_x|, |f_y| ≤ μ f_z);
-//                 ankle motor limits: each ankle pair's two motor torques, J⁻ᵀ (τ_pitch, τ_roll)
-//                 through the linkage, within the motors' limits, 4 rows (off: ±∞) -- a joint-space
+//                 ankle motor limits: each ankle pair's two motor commands, J⁻ᵀ (τ_pitch, τ_roll)
+//                 through the linkage plus the binding's velocity feed-forward, within
+//                 ankle_motor_torque_share of the motors' limits, 4 rows (off: ±∞) -- a joint-space
 //                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B))
 //                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
@@ -25,6 +26,7 @@
 #pragma once
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/hal/ankle_motor_limits.h"
 #include "controllers/qp/dense_qp_solver.h"
 #include "controllers/wbc/wbc_config.h"
 #include "controllers/wbc/wbc_reference.h"
@@ -58,15 +60,9 @@ struct WbcDiagnostics {
   dynamics::JointVector torque_Nm = dynamics::JointVector::Zero();
 };
 
-// The ankle pairs in motor space, set by the hardware binding before each tick (the firmware:
-// firmware/dance.cpp, from the drivers' leg transmissions at the sampled ankle angles).
-// motor torques (A, B) = joint_to_motor[leg] · (τ_pitch, τ_roll); |motor k| ≤ limit_Nm[leg][k].
-// Inactive (the simulator's plant drives joints directly): no rows.
-struct AnkleMotorLimits {
-  bool active = false;
-  std::array<Eigen::Matrix2d, 2> joint_to_motor{Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()};
-  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-};
+// The ankle pairs in motor space (controllers/hal/ankle_motor_limits.h), set by the binding
+// before each tick. Inactive: no rows.
+using AnkleMotorLimits = hal::AnkleMotorLimits;
 
 // ~190 KB with the QP: static storage only.
 struct WbcWorkspace {
