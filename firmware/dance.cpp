@@ -37,6 +37,7 @@ void publish_request_rt(DanceControl& d, std::uint32_t epoch, hal::TimeNs t_ns) 
   r.t_state_ns = t_ns;
   r.q = d.stack.estimate.q;
   r.v = d.stack.estimate.v;
+  r.ankle_motors = d.stack.wbc.ankle_motor_limits;
   d.channels->request.publish_rt();
 }
 
@@ -304,6 +305,7 @@ bool dance_plan_rt(DancePlanner& p, DanceChannels& channels) noexcept {
     p.epoch = r.epoch;
   }
   p.last_sequence = r.sequence;
+  p.ws.mpc.ankle_motor_limits = r.ankle_motors;
   PlanMessage& m = channels.plan.back_rt();
   m.epoch = r.epoch;
   stack::stack_plan_rt(*p.model, *p.config, p.ws, *p.motion, r.q, r.v, r.t_state_ns, m.plan);

@@ -57,11 +57,13 @@ struct PlanRequest {
   hal::TimeNs t_state_ns = 0;  // motion time of the estimate
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  hal::AnkleMotorLimits ankle_motors;  // at the same sample, as the WBC bounds them
 
   PlanRequest() noexcept {}
   PlanRequest(const PlanRequest& o) noexcept { *this = o; }
   PlanRequest& operator=(const PlanRequest& o) noexcept {
     epoch = o.epoch, sequence = o.sequence, t_state_ns = o.t_state_ns, q = o.q, v = o.v;
+    ankle_motors = o.ankle_motors;
     return *this;
   }
 };
@@ -112,7 +114,8 @@ struct DanceCounters {
 
 // The ankle pairs in motor space (the drivers' leg transmissions and motor clamps), mapped at
 // each tick's sampled ankle angles for the WBC (WbcConfig::ankle_motor_torque_share of the
-// clamp, the rest left to the CSP drive's own feedback).
+// clamp, the rest left to the CSP drive's own feedback) and handed with each plan request
+// to the MPC (its stance-leg torque barrier).
 struct AnkleMotors {
   bool active = false;
   std::array<drivers::LegTransmission, 2> legs{};
