@@ -205,6 +205,12 @@ hal::TimeNs FirmwareLoop::ticks_to_damping(hal::TimeNs max_ns, CycleInputs in) {
   return -1;
 }
 
+void FirmwareLoop::hang_on_gantry() {
+  gantry_ = true;
+  const dynamics::ConfigVector q = plant_->truth().q;
+  plant_->reset(q, dynamics::VelocityVector::Zero(), plant_->time_s());
+}
+
 double FirmwareLoop::tilt_deg() const {
   const auto& q = plant_->truth().q;
   hal::ImuSample s;
