@@ -117,6 +117,26 @@ void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig&
   }
 }
 
+void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers) {
+  hal::SerialLegDriveLimits& s = control.serial_drives;
+  s = hal::SerialLegDriveLimits{};
+  int found = 0;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+    for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+      for (const drivers::DriveEntry& e : drivers.drives) {
+        if (e.slot != first + k || e.config.mode != drivers::canopen::kModeCyclicSyncPosition) continue;
+        // Joint side through the ratio r (motor rad per joint rad): τ_j = r·τ_m, kd_j = r²·kd_m.
+        const double r = drivers.legs[leg].serial[k].ratio_motor_per_joint;
+        s.limit_Nm[leg][k] = std::abs(r) * e.config.torque_limit_Nm;
+        s.velocity_gain_Nm_s_per_rad[leg][k] = r * r * e.config.csp_kd_Nm_s_per_rad;
+        ++found;
+      }
+    }
+  }
+  s.active = found == 2 * hal::kSerialLegJoints;
+}
+
 void limit_references_rt(const model::Model& m, double slack_rad, hal::CommandFrame& out,
                          std::uint64_t& limited) noexcept {
   for (int j = 0; j < model::kNumJoints; ++j) {
@@ -272,6 +292,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
   }
   const hal::TimeNs t_ns = now_ns - d.start_ns;
   if (d.ankle_motors.active) map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
+  d.stack.wbc.serial_drive_limits = d.serial_drives;
   d.last_wbc = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, t_ns, stack::StateOverride{}, out);
   if (d.last_wbc != wbc::WbcStatus::kOk) ++d.counters.wbc_not_ok_ticks;
   // Finishing, the gains fade and the robot sags under the controller, which answers with

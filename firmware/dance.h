@@ -128,6 +128,7 @@ struct AnkleMotors {
 // The control task's state. ~0.4 MB (the stack's control workspace): static storage.
 struct DanceControl {
   AnkleMotors ankle_motors;
+  hal::SerialLegDriveLimits serial_drives;  // copied into the WBC's workspace each tick
   const model::Model* model = nullptr;
   stack::StackConfig config{};
   const planner::MotionPlan* motion = nullptr;
@@ -164,6 +165,10 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
 // sampled ankle angles, into the WBC's QP (controllers/wbc/wbc.h). Start-up; without it the
 // WBC limits joint torques only (as in the simulator, whose plant drives joints).
 void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers);
+// Binds the CSP hip and knee drives' clamps, joint side, and their velocity feed-forward
+// (the torque offset carries kd·v_ref) into the WBC's QP (hal/serial_drive_limits.h).
+// Start-up; inactive unless all eight are CSP drives.
+void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers);
 
 // Makes the standing controller stand at the motion's first frame: its joint pose, and
 // its CoM target where that pose puts the CoM over the feet. Start-up; after firmware_init.

@@ -13,7 +13,8 @@ constexpr int kNv = model::kNv;
 constexpr int kNj = model::kNumJoints;
 constexpr int kForce0 = kNumAccelerations;  // index of the first force variable
 constexpr int kMotorRow0 = kNumFrictionRows;
-constexpr int kTorqueRow0 = kNumFrictionRows + kNumAnkleMotorRows;
+constexpr int kSerialRow0 = kNumFrictionRows + kNumAnkleMotorRows;
+constexpr int kTorqueRow0 = kSerialRow0 + kNumSerialDriveRows;
 constexpr int kAnklePitch = 4;  // within a leg; roll follows
 constexpr int kPointsPerFoot = kNumPoints / 2;  // points [0, 4) left foot, [4, 8) right
 // Torque bounds are planned this far inside the limit. A solution on a bound meets it only to
@@ -221,6 +222,29 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
       qp.C(r, 6 + jp + 1) += kv * cfg.dt_s * velocity_map(k, 1);
       const double offset = gp * bias(6 + jp) + gr * bias(6 + jp + 1) + kv * velocity_map.row(k).dot(v_ref);
       const double limit = cfg.ankle_motor_torque_share * motors.limit_Nm[leg](k) - kTorqueBoundRoundoff_Nm;
+      qp.c_lower(r) = -limit - offset;
+      qp.c_upper(r) = limit - offset;
+    }
+  }
+
+  // Serial leg drives: the command τ + kv·v_ref (v_ref = reference + q̈·dt) within the drive's
+  // clamp, as the ankle motors' (the torque row plus kv·dt on the joint's q̈).
+  const SerialLegDriveLimits& serial = ws.serial_drive_limits;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+    for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+      const int r = kSerialRow0 + hal::kSerialLegJoints * leg + k, j = first + k;
+      if (!serial.active) {
+        qp.C.row(r).setZero();
+        qp.c_lower(r) = -qp::kInfinity;
+        qp.c_upper(r) = qp::kInfinity;
+        continue;
+      }
+      const double kv = serial.velocity_gain_Nm_s_per_rad[leg][k];
+      qp.C.row(r) = qp.C.row(kTorqueRow0 + j);
+      qp.C(r, 6 + j) += kv * cfg.dt_s;
+      const double offset = bias(6 + j) + kv * ref.joint_velocity_rad_s[j];
+      const double limit = serial.limit_Nm[leg][k] - kTorqueBoundRoundoff_Nm;
       qp.c_lower(r) = -limit - offset;
       qp.c_upper(r) = limit - offset;
     }

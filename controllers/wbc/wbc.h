@@ -8,7 +8,9 @@
 //                 ankle motor limits: each ankle pair's two motor commands, J⁻ᵀ (τ_pitch, τ_roll)
 //                 through the linkage plus the binding's velocity feed-forward, within
 //                 ankle_motor_torque_share of the motors' limits, 4 rows (off: ±∞) -- a joint-space
-//                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B))
+//                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B));
+//                 serial leg drives: hip roll/yaw/pitch and knee commands τ + kv·v_ref within
+//                 the drives' clamps, 8 rows (off: ±∞; hal/serial_drive_limits.h)
 //                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
 //                 joint q̈ within the joint-limit-aware window
@@ -27,6 +29,7 @@
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/hal/ankle_motor_limits.h"
+#include "controllers/hal/serial_drive_limits.h"
 #include "controllers/qp/dense_qp_solver.h"
 #include "controllers/wbc/wbc_config.h"
 #include "controllers/wbc/wbc_reference.h"
@@ -40,7 +43,9 @@ inline constexpr int kNumEqualities = 6;                           // floating b
 inline constexpr int kFrictionRowsPerPoint = 4;
 inline constexpr int kNumFrictionRows = kFrictionRowsPerPoint * kNumPoints;  // rows [0, 32)
 inline constexpr int kNumAnkleMotorRows = 4;  // [left A, left B, right A, right B], rows [32, 36)
-inline constexpr int kNumInequalities = kNumFrictionRows + kNumAnkleMotorRows + model::kNumJoints;  // torque rows last
+inline constexpr int kNumSerialDriveRows = 2 * hal::kSerialLegJoints;  // left, right, rows [36, 44)
+inline constexpr int kNumInequalities =
+    kNumFrictionRows + kNumAnkleMotorRows + kNumSerialDriveRows + model::kNumJoints;  // torque rows last
 
 using Qp = qp::DenseQp<kNumVars, kNumEqualities, kNumInequalities>;
 using QpWorkspace = qp::DenseQpWorkspace<kNumVars, kNumEqualities, kNumInequalities>;
@@ -63,10 +68,12 @@ struct WbcDiagnostics {
 // The ankle pairs in motor space (controllers/hal/ankle_motor_limits.h), set by the binding
 // before each tick. Inactive: no rows.
 using AnkleMotorLimits = hal::AnkleMotorLimits;
+using SerialLegDriveLimits = hal::SerialLegDriveLimits;
 
 // ~190 KB with the QP: static storage only.
 struct WbcWorkspace {
   AnkleMotorLimits ankle_motor_limits;
+  SerialLegDriveLimits serial_drive_limits;  // set by the binding, like ankle_motor_limits
   dynamics::Data data;
   dynamics::FrameJacobian frame_jacobian = dynamics::FrameJacobian::Zero();
   ContactJacobian contact_jacobian = ContactJacobian::Zero();

@@ -105,6 +105,7 @@ bool FirmwareLoop::enable_dance(const planner::MotionPlan& motion, const stack::
     return false;
   }
   dance_set_ankle_motors(dance(), config_);
+  dance_set_serial_leg_drives(dance(), config_);
   dance_standing_pose(fw(), motion);
   controller_.inner.dance = &dance();
   control_.dance = &dance();

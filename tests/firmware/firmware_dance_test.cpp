@@ -241,8 +241,12 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
               static_cast<unsigned long long>(loop.csp_holds()), static_cast<unsigned long long>(loop.binding_failures()));
   EXPECT_EQ(refused, 0u);
   // The WBC plans the ankle motors' commands (τ through the linkage plus the CSP offset's
-  // velocity feed-forward) inside their limits: the drivers never clamp them.
+  // velocity feed-forward) inside their limits, and on CSP the hips' and knees' too: the
+  // drivers never clamp them.
   EXPECT_EQ(clamps[4] + clamps[5], 0u);
+  if (legs == test_support::LegBinding::kCsp) {
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(clamps[static_cast<std::size_t>(k)], 0u) << "leg slot " << k;
+  }
   EXPECT_EQ(loop.csp_holds(), 0u);
   EXPECT_EQ(loop.binding_failures(), 0u);
   if (legs == test_support::LegBinding::kCsp) {

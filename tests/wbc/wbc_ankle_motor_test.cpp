@@ -91,5 +91,66 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
   EXPECT_LE(worst_with_rows, 0.0);  // inside by the rows' roundoff margin
 }
 
+// The serial leg drives' rows: with the CSP hips' and knees' clamps and velocity feed-forward
+// set, every solved tick's command τ_ff + kv·v_ref stays within the clamp (checked on the
+// returned command); without the rows the same states exceed it.
+TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  // Clamps that bind in single support with the hips and knees moving (the knee carries ~40 N·m).
+  constexpr std::array<double, hal::kSerialLegJoints> kClamp_Nm{20.0, 6.0, 20.0, 40.0};
+  constexpr double kGain_Nm_s_per_rad = 3.0;  // the WBC's leg kd, as the CSP drives hold it
+  auto worst_excess = [&](const hal::CommandFrame& c) {
+    double worst = -1e9;
+    for (int leg = 0; leg < 2; ++leg) {
+      for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+        const hal::JointCommand& j = c.joints[(leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + k];
+        worst = std::max(worst, std::abs(j.torque_ff_Nm + kGain_Nm_s_per_rad * j.velocity_ref_rad_s) - kClamp_Nm[k]);
+      }
+    }
+    return worst;
+  };
+  int binding = 0, solved_with_rows = 0;
+  double worst_with_rows = -1e9;
+  for (int trial = 0; trial < 60; ++trial) {
+    std::mt19937_64 rng(300 + trial);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    wbc::wbc_init(m, cfg, ws);
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    const int mode = trial % 3;  // 0 both feet, 1 left swing, 2 right swing
+    for (int c = 0; c < wbc::kNumPoints; ++c) ref.in_contact[c] = mode == 0 || (mode == 1 ? c >= 4 : c < 4);
+    for (int j = 0; j < 2 * model::kLegJoints; ++j) ref.joint_velocity_rad_s[j] = 2.0 * u(rng);
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    for (int k = 0; k < model::kNv; ++k) v[k] = 0.2 * u(rng);
+    ASSERT_FALSE(ws.serial_drive_limits.active);
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    if (ws.diagnostics.qp_status == qp::QpStatus::kSolved && worst_excess(command) > 0.0) ++binding;
+    wbc::wbc_init(m, cfg, ws);
+    ws.serial_drive_limits.active = true;
+    for (int leg = 0; leg < 2; ++leg) {
+      for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+        ws.serial_drive_limits.limit_Nm[leg][k] = kClamp_Nm[k];
+        ws.serial_drive_limits.velocity_gain_Nm_s_per_rad[leg][k] = kGain_Nm_s_per_rad;
+      }
+    }
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    ws.serial_drive_limits.active = false;
+    if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
+    ++solved_with_rows;
+    worst_with_rows = std::max(worst_with_rows, worst_excess(command));
+  }
+  std::printf("[ figures  ] hip and knee commands: %d of 60 free answers exceed the clamps; %d solved with the rows, "
+              "worst excess %.2e N m\n",
+              binding, solved_with_rows, worst_with_rows);
+  EXPECT_GT(binding, 10);
+  EXPECT_GT(solved_with_rows, 30);
+  EXPECT_LE(worst_with_rows, 0.0);
+}
+
 }  // namespace
 }  // namespace kuavo::test
