@@ -135,6 +135,12 @@ void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversCo
     }
   }
   s.active = found == 2 * hal::kSerialLegJoints;
+  control.torque_cap_Nm.setConstant(qp::kInfinity);
+  for (const drivers::ruiwo::MotorConfig& m : drivers.ruiwo_motors) {
+    if (m.joint >= 0 && m.joint < model::kNumJoints) {
+      control.torque_cap_Nm[m.joint] = std::min(control.torque_cap_Nm[m.joint], m.torque_max_Nm);
+    }
+  }
 }
 
 void limit_references_rt(const model::Model& m, double slack_rad, hal::CommandFrame& out,
@@ -293,6 +299,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
   const hal::TimeNs t_ns = now_ns - d.start_ns;
   if (d.ankle_motors.active) map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
   d.stack.wbc.serial_drive_limits = d.serial_drives;
+  d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
   d.last_wbc = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, t_ns, stack::StateOverride{}, out);
   if (d.last_wbc != wbc::WbcStatus::kOk) ++d.counters.wbc_not_ok_ticks;
   // Finishing, the gains fade and the robot sags under the controller, which answers with

@@ -129,6 +129,7 @@ struct AnkleMotors {
 struct DanceControl {
   AnkleMotors ankle_motors;
   hal::SerialLegDriveLimits serial_drives;  // copied into the WBC's workspace each tick
+  dynamics::JointVector torque_cap_Nm = dynamics::JointVector::Constant(qp::kInfinity);  // likewise
   const model::Model* model = nullptr;
   stack::StackConfig config{};
   const planner::MotionPlan* motion = nullptr;
@@ -167,7 +168,8 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
 void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers);
 // Binds the CSP hip and knee drives' clamps, joint side, and their velocity feed-forward
 // (the torque offset carries kd·v_ref) into the WBC's QP (hal/serial_drive_limits.h).
-// Start-up; inactive unless all eight are CSP drives.
+// Start-up; inactive unless all eight are CSP drives. Also caps each Ruiwo joint's planned
+// torque at what its MIT frame carries (MotorConfig::torque_max_Nm, joint side).
 void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers);
 
 // Makes the standing controller stand at the motion's first frame: its joint pose, and

@@ -162,8 +162,10 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
   // Torque rows: τ = M_j q̈ + b_j − J_jᵀ f within ±limit.
   qp.C.block<kNj, kNv>(kTorqueRow0, 0) = mass_matrix.bottomRows<kNj>();
   qp.C.block<kNj, kNumForces>(kTorqueRow0, kForce0) = -ws.contact_jacobian.rightCols<kNj>().transpose();
-  qp.c_lower.segment<kNj>(kTorqueRow0) = -(model.limits.torque_Nm.array() - kTorqueBoundRoundoff_Nm).matrix() - bias.tail<kNj>();
-  qp.c_upper.segment<kNj>(kTorqueRow0) = (model.limits.torque_Nm.array() - kTorqueBoundRoundoff_Nm).matrix() - bias.tail<kNj>();
+  const dynamics::JointVector torque_limit =
+      (model.limits.torque_Nm.cwiseMin(ws.torque_cap_Nm).array() - kTorqueBoundRoundoff_Nm).matrix();
+  qp.c_lower.segment<kNj>(kTorqueRow0) = -torque_limit - bias.tail<kNj>();
+  qp.c_upper.segment<kNj>(kTorqueRow0) = torque_limit - bias.tail<kNj>();
 
   // Contacts: the pyramid rows (fixed in wbc_init) are switched on for stance points only.
   // A swing point's force is cut out of every row (zero columns in A and C) and from the
@@ -303,7 +305,8 @@ void fallback_command(const model::Model& model, const WbcConfig& cfg, WbcWorksp
   for (int j = 0; j < kNj; ++j) {
     hal::JointCommand& c = command.joints[j];
     c.mode = hal::JointMode::kPdTorque;
-    c.torque_ff_Nm = std::clamp(ws.diagnostics.torque_Nm[j], -model.limits.torque_Nm[j], model.limits.torque_Nm[j]);
+    const double limit = std::min(model.limits.torque_Nm[j], ws.torque_cap_Nm[j]);
+    c.torque_ff_Nm = std::clamp(ws.diagnostics.torque_Nm[j], -limit, limit);
     c.position_ref_rad = ws.hold_position_rad[j];
     c.velocity_ref_rad_s = 0.0;
     set_gains(cfg, true, j, c);

@@ -11,7 +11,7 @@
 //                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B));
 //                 serial leg drives: hip roll/yaw/pitch and knee commands τ + kv·v_ref within
 //                 the drives' clamps, 8 rows (off: ±∞; hal/serial_drive_limits.h)
-//                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows (last)
+//                 torque limits |τ| ≤ min(model.limits.torque_Nm, the binding's cap), 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
 //                 joint q̈ within the joint-limit-aware window
 //   cost:         Σ weights · task errors² (stance points still, swing points tracking, base
@@ -74,6 +74,10 @@ using SerialLegDriveLimits = hal::SerialLegDriveLimits;
 struct WbcWorkspace {
   AnkleMotorLimits ankle_motor_limits;
   SerialLegDriveLimits serial_drive_limits;  // set by the binding, like ankle_motor_limits
+  // Per joint, the largest feed-forward torque the binding can send, joint side (the Ruiwo arm
+  // motors' MIT torque field spans ±50 N·m, under the model's 60 N·m shoulder limits): the
+  // torque rows bound τ by the smaller of it and the model's limit. +∞: no cap (the simulator).
+  dynamics::JointVector torque_cap_Nm = dynamics::JointVector::Constant(qp::kInfinity);
   dynamics::Data data;
   dynamics::FrameJacobian frame_jacobian = dynamics::FrameJacobian::Zero();
   ContactJacobian contact_jacobian = ContactJacobian::Zero();

@@ -152,5 +152,43 @@ TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
   EXPECT_LE(worst_with_rows, 0.0);
 }
 
+// The binding's per-joint torque caps (the Ruiwo arm motors' MIT torque range): a capped joint's
+// planned torque stays within the cap; uncapped, the same ticks ask for more.
+TEST(WbcTorqueCaps, CappedJointsPlanWithinTheirCap) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  constexpr int kCapped[] = {model::kLeftArmFirst + 1, model::kLeftArmFirst + 3};  // shoulder roll, elbow
+  constexpr double kCap_Nm = 0.2;
+  int binding = 0, solved = 0;
+  double worst = -1e9;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::mt19937_64 rng(500 + trial);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
+    wbc::wbc_init(m, cfg, ws);
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    for (int j : kCapped) binding += std::abs(command.joints[j].torque_ff_Nm) > kCap_Nm ? 1 : 0;
+    wbc::wbc_init(m, cfg, ws);
+    for (int j : kCapped) ws.torque_cap_Nm[j] = kCap_Nm;
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    ws.torque_cap_Nm.setConstant(qp::kInfinity);
+    if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
+    ++solved;
+    for (int j : kCapped) worst = std::max(worst, std::abs(command.joints[j].torque_ff_Nm) - kCap_Nm);
+  }
+  std::printf("[ figures  ] torque caps %.1f N m: %d of 40 uncapped torques exceed them; %d of 20 solved with the caps, "
+              "worst excess %.2e N m\n",
+              kCap_Nm, binding, solved, worst);
+  EXPECT_GT(binding, 10);
+  EXPECT_GT(solved, 15);
+  EXPECT_LE(worst, 0.0);
+}
+
 }  // namespace
 }  // namespace kuavo::test
