@@ -37,6 +37,7 @@ void publish_request_rt(DanceControl& d, std::uint32_t epoch, hal::TimeNs t_ns) 
   r.t_state_ns = t_ns;
   r.q = d.stack.estimate.q;
   r.v = d.stack.estimate.v;
+  r.ankle_motors = d.stack.wbc.ankle_motor_limits;
   d.channels->request.publish_rt();
 }
 
@@ -86,6 +87,7 @@ void map_ankle_motors_rt(AnkleMotors& a, const hal::SensorFrame& sensors, wbc::A
       out.joint_to_motor[leg](1, c) = motor[5];
     }
     out.limit_Nm[leg] = a.limit_Nm[leg];
+    out.velocity_gain_Nm_s_per_rad[leg] = a.velocity_gain_Nm_s_per_rad[leg];
     if (!ok) out.active = false;
   }
   if (!out.active) ++a.unmapped_ticks;
@@ -101,10 +103,42 @@ void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig&
     const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
     for (int k = 0; k < 2; ++k) {
       a.limit_Nm[leg](k) = 0.0;
+      a.velocity_gain_Nm_s_per_rad[leg](k) = 0.0;
       for (const drivers::DriveEntry& e : drivers.drives) {
-        if (e.slot == first + 4 + k) a.limit_Nm[leg](k) = e.config.torque_limit_Nm;
+        if (e.slot != first + 4 + k) continue;
+        a.limit_Nm[leg](k) = e.config.torque_limit_Nm;
+        // CSP: the torque offset carries csp_kd·(motor velocity of v_ref) (robot_io.cpp).
+        if (e.config.mode == drivers::canopen::kModeCyclicSyncPosition) {
+          a.velocity_gain_Nm_s_per_rad[leg](k) = e.config.csp_kd_Nm_s_per_rad;
+        }
       }
       if (!(a.limit_Nm[leg](k) > 0.0)) a.active = false;  // no drive on that slot: not a CiA 402 ankle
+    }
+  }
+}
+
+void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers) {
+  hal::SerialLegDriveLimits& s = control.serial_drives;
+  s = hal::SerialLegDriveLimits{};
+  int found = 0;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+    for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+      for (const drivers::DriveEntry& e : drivers.drives) {
+        if (e.slot != first + k || e.config.mode != drivers::canopen::kModeCyclicSyncPosition) continue;
+        // Joint side through the ratio r (motor rad per joint rad): τ_j = r·τ_m, kd_j = r²·kd_m.
+        const double r = drivers.legs[leg].serial[k].ratio_motor_per_joint;
+        s.limit_Nm[leg][k] = std::abs(r) * e.config.torque_limit_Nm;
+        s.velocity_gain_Nm_s_per_rad[leg][k] = r * r * e.config.csp_kd_Nm_s_per_rad;
+        ++found;
+      }
+    }
+  }
+  s.active = found == 2 * hal::kSerialLegJoints;
+  control.torque_cap_Nm.setConstant(qp::kInfinity);
+  for (const drivers::ruiwo::MotorConfig& m : drivers.ruiwo_motors) {
+    if (m.joint >= 0 && m.joint < model::kNumJoints) {
+      control.torque_cap_Nm[m.joint] = std::min(control.torque_cap_Nm[m.joint], m.torque_max_Nm);
     }
   }
 }
@@ -264,6 +298,8 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
   }
   const hal::TimeNs t_ns = now_ns - d.start_ns;
   if (d.ankle_motors.active) map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
+  d.stack.wbc.serial_drive_limits = d.serial_drives;
+  d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
   d.last_wbc = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, t_ns, stack::StateOverride{}, out);
   if (d.last_wbc != wbc::WbcStatus::kOk) ++d.counters.wbc_not_ok_ticks;
   // Finishing, the gains fade and the robot sags under the controller, which answers with
@@ -297,6 +333,7 @@ bool dance_plan_rt(DancePlanner& p, DanceChannels& channels) noexcept {
     p.epoch = r.epoch;
   }
   p.last_sequence = r.sequence;
+  p.ws.mpc.ankle_motor_limits = r.ankle_motors;
   PlanMessage& m = channels.plan.back_rt();
   m.epoch = r.epoch;
   stack::stack_plan_rt(*p.model, *p.config, p.ws, *p.motion, r.q, r.v, r.t_state_ns, m.plan);

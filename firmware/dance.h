@@ -57,11 +57,13 @@ struct PlanRequest {
   hal::TimeNs t_state_ns = 0;  // motion time of the estimate
   dynamics::ConfigVector q = dynamics::ConfigVector::Zero();
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  hal::AnkleMotorLimits ankle_motors;  // at the same sample, as the WBC bounds them
 
   PlanRequest() noexcept {}
   PlanRequest(const PlanRequest& o) noexcept { *this = o; }
   PlanRequest& operator=(const PlanRequest& o) noexcept {
     epoch = o.epoch, sequence = o.sequence, t_state_ns = o.t_state_ns, q = o.q, v = o.v;
+    ankle_motors = o.ankle_motors;
     return *this;
   }
 };
@@ -110,19 +112,24 @@ struct DanceCounters {
   double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
 };
 
-// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps). The WBC
-// plans ankle torques up to each motor's clamp: a smaller share, leaving the CSP drive's own
-// feedback room on top, fell sooner in the firmware-in-the-loop dance (firmware/README.md).
+// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps), mapped at
+// each tick's sampled ankle angles for the WBC (WbcConfig::ankle_motor_torque_share of the
+// clamp, the rest left to the CSP drive's own feedback) and handed with each plan request
+// to the MPC (its stance-leg torque barrier).
 struct AnkleMotors {
   bool active = false;
   std::array<drivers::LegTransmission, 2> legs{};
   std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // per motor (A, B)
+  // The binding's velocity feed-forward per motor (CSP: the drive's kd), hal::AnkleMotorLimits.
+  std::array<Eigen::Vector2d, 2> velocity_gain_Nm_s_per_rad{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::uint64_t unmapped_ticks = 0;  // ticks an ankle could not be mapped (joint-space limits only)
 };
 
 // The control task's state. ~0.4 MB (the stack's control workspace): static storage.
 struct DanceControl {
   AnkleMotors ankle_motors;
+  hal::SerialLegDriveLimits serial_drives;  // copied into the WBC's workspace each tick
+  dynamics::JointVector torque_cap_Nm = dynamics::JointVector::Constant(qp::kInfinity);  // likewise
   const model::Model* model = nullptr;
   stack::StackConfig config{};
   const planner::MotionPlan* motion = nullptr;
@@ -159,6 +166,11 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
 // sampled ankle angles, into the WBC's QP (controllers/wbc/wbc.h). Start-up; without it the
 // WBC limits joint torques only (as in the simulator, whose plant drives joints).
 void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers);
+// Binds the CSP hip and knee drives' clamps, joint side, and their velocity feed-forward
+// (the torque offset carries kd·v_ref) into the WBC's QP (hal/serial_drive_limits.h).
+// Start-up; inactive unless all eight are CSP drives. Also caps each Ruiwo joint's planned
+// torque at what its MIT frame carries (MotorConfig::torque_max_Nm, joint side).
+void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers);
 
 // Makes the standing controller stand at the motion's first frame: its joint pose, and
 // its CoM target where that pose puts the CoM over the feet. Start-up; after firmware_init.

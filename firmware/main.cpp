@@ -252,6 +252,7 @@ int run(int argc, char** argv) {
       return 2;
     }
     fw::dance_set_ankle_motors(memory->dance, drivers);  // the WBC plans what the ankle motors can deliver
+    fw::dance_set_serial_leg_drives(memory->dance, drivers);  // ... and the CSP hip and knee drives
     std::printf("dance: %s, %d frames at %.0f Hz (%.2f s)", dance_path.c_str(), motion.frame_count, motion.rate_hz,
                 kuavo::planner::motion_plan_duration_s(motion));
     if (balance_filter) std::printf("; balance filter moved the CoM by up to %.3f m", report.max_correction_m);

@@ -54,7 +54,7 @@ struct TimingReport {
   std::string error;           // set if the run could not be set up
 };
 
-// Runs the dance (already loaded and checked: load_dance_motion) through static firmware
+// Runs the dance (already loaded and checked: motion::load_motion) through static firmware
 // state the caller owns (kuavo_fw's). Start-up allocates; the timed loop does not.
 bool run_timing(const model::Model& model, const drivers::DriversConfig& drivers, const FirmwareConfig& fw_config,
                 const planner::MotionPlan& motion, const TimingConfig& config, Firmware& firmware, DanceControl& dance,

@@ -14,6 +14,9 @@ constexpr double kDtTolerance_s = 1e-9;
 // Tikhonov term on the force-distribution Gram matrix [m², relative to O(0.01–1) entries].
 constexpr double kReferenceForceRegularization = 1e-6;
 
+// Ankle pitch within a leg (roll follows): the ankle pair the motor map covers.
+constexpr int kAnklePitch = 4;
+
 Mat3 skew_of(const Vec3& a) { return dynamics::skew(a); }
 
 double wrap_angle(double a) { return std::remainder(a, kTwoPi); }
@@ -327,7 +330,9 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
 // Leg joint torques of the stance feet (MpcConfig::stance_leg_torque_share): the moment
 // Σ (p_c − o_j) × f_c of the foot's corner forces about joint j's axis is g·f with
 // g_c = axis × (p_c − o_j), world axes; a relaxed barrier on both sides of the limit,
-// Gauss-Newton on the forces only (the leg geometry of the iterate). Writes R's off-diagonal
+// Gauss-Newton on the forces only (the leg geometry of the iterate). With the ankle motors
+// known (MpcWorkspace::ankle_motor_limits) the ankle pair's two motor torques, the map of
+// (pitch, roll), get the same barrier against the motors' limits. Writes R's off-diagonal
 // corner blocks: build_stage_cost clears the whole force block when this is on.
 void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& cfg, MpcWorkspace& ws,
                               const planner::PlanKnot& knot, int k) {
@@ -335,19 +340,32 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
   auto& st = ws.qp.stages[k];
   const CentroidalPoint& p = ws.point;
   constexpr int kFootForces = 3 * kPointsPerFoot;
+  using FootRow = Eigen::Matrix<double, kFootForces, 1>;
+  const hal::AnkleMotorLimits& motors = ws.ankle_motor_limits;
   for (int foot = 0; foot < 2; ++foot) {
     const int first = foot * kPointsPerFoot;
+    const int col = kUForces + 3 * first;
     bool any = false;
     for (int c = first; c < first + kPointsPerFoot; ++c) any = any || knot.in_contact[c];
     if (!any) continue;
+    auto barrier = [&](const FootRow& g, double tau, double limit) {
+      for (const double sign : {1.0, -1.0}) {
+        double d1, d2;
+        relaxed_barrier(limit - sign * tau, cfg.leg_torque_barrier_mu, cfg.leg_torque_barrier_delta_Nm, d1, d2);
+        st.R.template block<kFootForces, kFootForces>(col, col).noalias() += (cfg.dt_s * d2) * g * g.transpose();
+        st.r.template segment<kFootForces>(col) -= (cfg.dt_s * d1 * sign) * g;
+      }
+    };
     std::array<Vec3, kPointsPerFoot> corner;  // base axes, once per foot (not per joint)
     for (int c = first; c < first + kPointsPerFoot; ++c) corner[c - first] = dynamics::frame_position(model, p.data, c);
+    std::array<FootRow, 2> ankle_g;  // pitch, roll
+    std::array<double, 2> ankle_tau{};
     for (int joint = 0; joint < model::kLegJoints; ++joint) {  // hip roll … ankle roll
       const int j = foot * model::kLegJoints + joint;
       const int body = j + 1;
       const Vec3 axis = p.rotation * (p.data.rotation[body] * model.bodies[body].axis);
       const Vec3 origin = p.data.position_m[body];
-      Eigen::Matrix<double, kFootForces, 1> g = Eigen::Matrix<double, kFootForces, 1>::Zero();
+      FootRow g = FootRow::Zero();
       double tau = 0.0;
       for (int c = first; c < first + kPointsPerFoot; ++c) {
         if (!knot.in_contact[c]) continue;
@@ -356,14 +374,18 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
         g.segment<3>(3 * (c - first)) = gc;
         tau += gc.dot(ws.u[k].segment<3>(kUForces + 3 * c));
       }
-      const double limit = cfg.stance_leg_torque_share * model.limits.torque_Nm[j];
-      for (const double sign : {1.0, -1.0}) {
-        double d1, d2;
-        relaxed_barrier(limit - sign * tau, cfg.leg_torque_barrier_mu, cfg.leg_torque_barrier_delta_Nm, d1, d2);
-        const int col = kUForces + 3 * first;
-        st.R.template block<kFootForces, kFootForces>(col, col).noalias() += (cfg.dt_s * d2) * g * g.transpose();
-        st.r.template segment<kFootForces>(col) -= (cfg.dt_s * d1 * sign) * g;
+      barrier(g, tau, cfg.stance_leg_torque_share * model.limits.torque_Nm[j]);
+      if (joint >= kAnklePitch) {
+        ankle_g[joint - kAnklePitch] = g;
+        ankle_tau[joint - kAnklePitch] = tau;
       }
+    }
+    if (!motors.active) continue;
+    // The joint torque holding the moment is its negative; the bounds are symmetric.
+    for (int m = 0; m < 2; ++m) {
+      const double a = motors.joint_to_motor[foot](m, 0), b = motors.joint_to_motor[foot](m, 1);
+      barrier(a * ankle_g[0] + b * ankle_g[1], a * ankle_tau[0] + b * ankle_tau[1],
+              cfg.stance_leg_torque_share * motors.limit_Nm[foot](m));
     }
   }
 }

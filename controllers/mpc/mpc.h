@@ -59,6 +59,7 @@
 #include <array>
 #include <cstdint>
 
+#include "controllers/hal/ankle_motor_limits.h"
 #include "controllers/hal/types.h"
 #include "controllers/mpc/centroidal_model.h"
 #include "controllers/planner/plan_knot.h"
@@ -125,7 +126,10 @@ struct MpcConfig {
   // legs' own weight and inertia are left out (a few N·m at the hip). μ small enough that
   // standing (≈ 8 N·m per ankle) feels no pull (the barrier's gradient at rest, 2μτ/L², moved
   // the standing CoM 1.3 mm/s with μ = 0.1), δ small so that a violation costs as much as
-  // with μ = 0.1, δ = 1. 0 = off.
+  // with μ = 0.1, δ = 1. With MpcWorkspace::ankle_motor_limits active (the firmware) the
+  // ankle pair's two motor torques are held to the same share of the motors' limits too: the
+  // joint-space box on pitch and roll allows combinations the two motors cannot hold together
+  // (pitch ≈ τ_A + τ_B, roll ≈ 0.46 (τ_A − τ_B)). 0 = off.
   double stance_leg_torque_share = 0.9;
   double leg_torque_barrier_mu = 0.01;
   double leg_torque_barrier_delta_Nm = 0.2;
@@ -212,6 +216,11 @@ struct MpcWorkspace {
   std::array<Vec6, kMpcPlanKnots + 1> twist{};
   std::array<MotionRowsX, kMpcPlanKnots + 1> twist_dx{};
   std::array<MotionRowsU, kMpcPlanKnots + 1> twist_du{};
+
+  // The ankle motors (controllers/hal/ankle_motor_limits.h), set by the binding before a step:
+  // active, the stance ankles' motor torques join the leg-torque barrier. The map at the
+  // sampled ankle angles serves the whole horizon (a stance ankle moves little in it).
+  hal::AnkleMotorLimits ankle_motor_limits;
 
   CentroidalPoint point;
   dynamics::Data world_data;

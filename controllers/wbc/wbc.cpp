@@ -1,6 +1,7 @@
 #include "controllers/wbc/wbc.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -12,9 +13,16 @@ constexpr int kNv = model::kNv;
 constexpr int kNj = model::kNumJoints;
 constexpr int kForce0 = kNumAccelerations;  // index of the first force variable
 constexpr int kMotorRow0 = kNumFrictionRows;
-constexpr int kTorqueRow0 = kNumFrictionRows + kNumAnkleMotorRows;
+constexpr int kSerialRow0 = kNumFrictionRows + kNumAnkleMotorRows;
+constexpr int kTorqueRow0 = kSerialRow0 + kNumSerialDriveRows;
 constexpr int kAnklePitch = 4;  // within a leg; roll follows
 constexpr int kPointsPerFoot = kNumPoints / 2;  // points [0, 4) left foot, [4, 8) right
+// Torque bounds are planned this far inside the limit. A solution on a bound meets it only to
+// roundoff, and the firmware recomputes the motor torques from the same numbers in another
+// order: 1e-13 N·m over the ankle motors' 27 N·m in the built-in dance, which the drivers
+// count as clamps and the output stage as torques clipped at the peak (= the WBC limit for
+// ankles and hip pitch). The limit itself is then left to real saturation.
+constexpr double kTorqueBoundRoundoff_Nm = 1e-6;
 static_assert(model::kRightLegFirst == model::kLeftLegFirst + model::kLegJoints);
 
 bool finite_reference(const WbcReference& r) {
@@ -154,8 +162,10 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
   // Torque rows: τ = M_j q̈ + b_j − J_jᵀ f within ±limit.
   qp.C.block<kNj, kNv>(kTorqueRow0, 0) = mass_matrix.bottomRows<kNj>();
   qp.C.block<kNj, kNumForces>(kTorqueRow0, kForce0) = -ws.contact_jacobian.rightCols<kNj>().transpose();
-  qp.c_lower.segment<kNj>(kTorqueRow0) = -model.limits.torque_Nm - bias.tail<kNj>();
-  qp.c_upper.segment<kNj>(kTorqueRow0) = model.limits.torque_Nm - bias.tail<kNj>();
+  const dynamics::JointVector torque_limit =
+      (model.limits.torque_Nm.cwiseMin(ws.torque_cap_Nm).array() - kTorqueBoundRoundoff_Nm).matrix();
+  qp.c_lower.segment<kNj>(kTorqueRow0) = -torque_limit - bias.tail<kNj>();
+  qp.c_upper.segment<kNj>(kTorqueRow0) = torque_limit - bias.tail<kNj>();
 
   // Contacts: the pyramid rows (fixed in wbc_init) are switched on for stance points only.
   // A swing point's force is cut out of every row (zero columns in A and C) and from the
@@ -191,10 +201,14 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
   }
 
   // Ankle motors: the two ankle torque rows of each leg (swing forces already cut out) mapped
-  // through the linkage; bounds on the motor torque, less the mapped bias.
+  // through the linkage; bounds on the motor torque, less the mapped bias. The binding's
+  // velocity feed-forward gain·J·v_ref (v_ref = reference + q̈·dt, as the command is written
+  // below) is part of the motor's command: its q̈ part joins the row, the rest the bounds.
   const AnkleMotorLimits& motors = ws.ankle_motor_limits;
   for (int leg = 0; leg < 2; ++leg) {
     const int jp = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + kAnklePitch;
+    const Eigen::Matrix2d velocity_map = motors.joint_to_motor[leg].transpose().inverse();
+    const Eigen::Vector2d v_ref(ref.joint_velocity_rad_s[jp], ref.joint_velocity_rad_s[jp + 1]);
     for (int k = 0; k < 2; ++k) {
       const int r = kMotorRow0 + 2 * leg + k;
       if (!motors.active) {
@@ -205,9 +219,36 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
       }
       const double gp = motors.joint_to_motor[leg](k, 0), gr = motors.joint_to_motor[leg](k, 1);
       qp.C.row(r) = gp * qp.C.row(kTorqueRow0 + jp) + gr * qp.C.row(kTorqueRow0 + jp + 1);
-      const double mapped_bias = gp * bias(6 + jp) + gr * bias(6 + jp + 1);
-      qp.c_lower(r) = -motors.limit_Nm[leg](k) - mapped_bias;
-      qp.c_upper(r) = motors.limit_Nm[leg](k) - mapped_bias;
+      const double kv = motors.velocity_gain_Nm_s_per_rad[leg](k);
+      qp.C(r, 6 + jp) += kv * cfg.dt_s * velocity_map(k, 0);
+      qp.C(r, 6 + jp + 1) += kv * cfg.dt_s * velocity_map(k, 1);
+      const double offset = gp * bias(6 + jp) + gr * bias(6 + jp + 1) + kv * velocity_map.row(k).dot(v_ref);
+      const double limit = cfg.ankle_motor_torque_share * motors.limit_Nm[leg](k) - kTorqueBoundRoundoff_Nm;
+      qp.c_lower(r) = -limit - offset;
+      qp.c_upper(r) = limit - offset;
+    }
+  }
+
+  // Serial leg drives: the command τ + kv·v_ref (v_ref = reference + q̈·dt) within the drive's
+  // clamp, as the ankle motors' (the torque row plus kv·dt on the joint's q̈).
+  const SerialLegDriveLimits& serial = ws.serial_drive_limits;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+    for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+      const int r = kSerialRow0 + hal::kSerialLegJoints * leg + k, j = first + k;
+      if (!serial.active) {
+        qp.C.row(r).setZero();
+        qp.c_lower(r) = -qp::kInfinity;
+        qp.c_upper(r) = qp::kInfinity;
+        continue;
+      }
+      const double kv = serial.velocity_gain_Nm_s_per_rad[leg][k];
+      qp.C.row(r) = qp.C.row(kTorqueRow0 + j);
+      qp.C(r, 6 + j) += kv * cfg.dt_s;
+      const double offset = bias(6 + j) + kv * ref.joint_velocity_rad_s[j];
+      const double limit = serial.limit_Nm[leg][k] - kTorqueBoundRoundoff_Nm;
+      qp.c_lower(r) = -limit - offset;
+      qp.c_upper(r) = limit - offset;
     }
   }
 
@@ -264,7 +305,8 @@ void fallback_command(const model::Model& model, const WbcConfig& cfg, WbcWorksp
   for (int j = 0; j < kNj; ++j) {
     hal::JointCommand& c = command.joints[j];
     c.mode = hal::JointMode::kPdTorque;
-    c.torque_ff_Nm = std::clamp(ws.diagnostics.torque_Nm[j], -model.limits.torque_Nm[j], model.limits.torque_Nm[j]);
+    const double limit = std::min(model.limits.torque_Nm[j], ws.torque_cap_Nm[j]);
+    c.torque_ff_Nm = std::clamp(ws.diagnostics.torque_Nm[j], -limit, limit);
     c.position_ref_rad = ws.hold_position_rad[j];
     c.velocity_ref_rad_s = 0.0;
     set_gains(cfg, true, j, c);

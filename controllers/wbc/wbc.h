@@ -5,10 +5,13 @@
 //   torques eliminated: τ = M_j q̈ + b_j − J_jᵀ f is recovered afterwards (rows 6.. of the EoM)
 //   equalities:   the 6 floating-base rows  M_b q̈ + b_b = J_bᵀ f
 //   inequalities: friction pyramid, 4 rows per stance point (|f_x|, |f_y| ≤ μ f_z);
-//                 ankle motor limits: each ankle pair's two motor torques, J⁻ᵀ (τ_pitch, τ_roll)
-//                 through the linkage, within the motors' limits, 4 rows (off: ±∞) -- a joint-space
-//                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B))
-//                 torque limits |τ| ≤ model.limits.torque_Nm, 28 rows (last)
+//                 ankle motor limits: each ankle pair's two motor commands, J⁻ᵀ (τ_pitch, τ_roll)
+//                 through the linkage plus the binding's velocity feed-forward, within
+//                 ankle_motor_torque_share of the motors' limits, 4 rows (off: ±∞) -- a joint-space
+//                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B));
+//                 serial leg drives: hip roll/yaw/pitch and knee commands τ + kv·v_ref within
+//                 the drives' clamps, 8 rows (off: ±∞; hal/serial_drive_limits.h)
+//                 torque limits |τ| ≤ min(model.limits.torque_Nm, the binding's cap), 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
 //                 joint q̈ within the joint-limit-aware window
 //   cost:         Σ weights · task errors² (stance points still, swing points tracking, base
@@ -25,6 +28,8 @@
 #pragma once
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/hal/ankle_motor_limits.h"
+#include "controllers/hal/serial_drive_limits.h"
 #include "controllers/qp/dense_qp_solver.h"
 #include "controllers/wbc/wbc_config.h"
 #include "controllers/wbc/wbc_reference.h"
@@ -38,7 +43,9 @@ inline constexpr int kNumEqualities = 6;                           // floating b
 inline constexpr int kFrictionRowsPerPoint = 4;
 inline constexpr int kNumFrictionRows = kFrictionRowsPerPoint * kNumPoints;  // rows [0, 32)
 inline constexpr int kNumAnkleMotorRows = 4;  // [left A, left B, right A, right B], rows [32, 36)
-inline constexpr int kNumInequalities = kNumFrictionRows + kNumAnkleMotorRows + model::kNumJoints;  // torque rows last
+inline constexpr int kNumSerialDriveRows = 2 * hal::kSerialLegJoints;  // left, right, rows [36, 44)
+inline constexpr int kNumInequalities =
+    kNumFrictionRows + kNumAnkleMotorRows + kNumSerialDriveRows + model::kNumJoints;  // torque rows last
 
 using Qp = qp::DenseQp<kNumVars, kNumEqualities, kNumInequalities>;
 using QpWorkspace = qp::DenseQpWorkspace<kNumVars, kNumEqualities, kNumInequalities>;
@@ -58,19 +65,19 @@ struct WbcDiagnostics {
   dynamics::JointVector torque_Nm = dynamics::JointVector::Zero();
 };
 
-// The ankle pairs in motor space, set by the hardware binding before each tick (the firmware:
-// firmware/dance.cpp, from the drivers' leg transmissions at the sampled ankle angles).
-// motor torques (A, B) = joint_to_motor[leg] · (τ_pitch, τ_roll); |motor k| ≤ limit_Nm[leg][k].
-// Inactive (the simulator's plant drives joints directly): no rows.
-struct AnkleMotorLimits {
-  bool active = false;
-  std::array<Eigen::Matrix2d, 2> joint_to_motor{Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()};
-  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-};
+// The ankle pairs in motor space (controllers/hal/ankle_motor_limits.h), set by the binding
+// before each tick. Inactive: no rows.
+using AnkleMotorLimits = hal::AnkleMotorLimits;
+using SerialLegDriveLimits = hal::SerialLegDriveLimits;
 
 // ~190 KB with the QP: static storage only.
 struct WbcWorkspace {
   AnkleMotorLimits ankle_motor_limits;
+  SerialLegDriveLimits serial_drive_limits;  // set by the binding, like ankle_motor_limits
+  // Per joint, the largest feed-forward torque the binding can send, joint side (the Ruiwo arm
+  // motors' MIT torque field spans ±50 N·m, under the model's 60 N·m shoulder limits): the
+  // torque rows bound τ by the smaller of it and the model's limit. +∞: no cap (the simulator).
+  dynamics::JointVector torque_cap_Nm = dynamics::JointVector::Constant(qp::kInfinity);
   dynamics::Data data;
   dynamics::FrameJacobian frame_jacobian = dynamics::FrameJacobian::Zero();
   ContactJacobian contact_jacobian = ContactJacobian::Zero();

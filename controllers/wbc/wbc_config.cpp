@@ -19,6 +19,9 @@ const char* wbc_validate_config(const WbcConfig& c) {
   if (!positive(c.weight_acceleration_regularization)) return "weight_acceleration_regularization must be > 0";
   if (!positive(c.max_joint_acceleration_rad_s2)) return "max_joint_acceleration_rad_s2 must be > 0";
   if (!positive(c.joint_limit_lookahead_s)) return "joint_limit_lookahead_s must be > 0";
+  if (!(c.ankle_motor_torque_share > 0.0 && c.ankle_motor_torque_share <= 1.0)) {
+    return "ankle_motor_torque_share must be in (0, 1]";
+  }
   if (c.hold_ticks < 0) return "hold_ticks must be >= 0";
   if (c.max_reference_age_ns <= 0) return "max_reference_age_ns must be > 0";
   if (c.qp_max_iterations < 1) return "qp_max_iterations must be >= 1";

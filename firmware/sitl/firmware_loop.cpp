@@ -105,6 +105,7 @@ bool FirmwareLoop::enable_dance(const planner::MotionPlan& motion, const stack::
     return false;
   }
   dance_set_ankle_motors(dance(), config_);
+  dance_set_serial_leg_drives(dance(), config_);
   dance_standing_pose(fw(), motion);
   controller_.inner.dance = &dance();
   control_.dance = &dance();
@@ -203,6 +204,12 @@ hal::TimeNs FirmwareLoop::ticks_to_damping(hal::TimeNs max_ns, CycleInputs in) {
     if (damping) return now_ - kTick_ns - start;
   }
   return -1;
+}
+
+void FirmwareLoop::hang_on_gantry() {
+  gantry_ = true;
+  const dynamics::ConfigVector q = plant_->truth().q;
+  plant_->reset(q, dynamics::VelocityVector::Zero(), plant_->time_s());
 }
 
 double FirmwareLoop::tilt_deg() const {

@@ -42,9 +42,6 @@ enum class LegBinding { kCst, kCsp };
 bool parse_leg_binding(const char* text, LegBinding& out);  // "cst" | "csp"
 const char* to_string(LegBinding b);
 
-// The CK ankle motor's electrical maximum: 18 A x 2.1 N m/A (FACTS.md §5.1).
-inline constexpr double kAnkleMotorMax_Nm = 18.0 * 2.1;
-
 struct LoopConfig {
   FirmwareConfig firmware{};
   LegBinding legs = LegBinding::kCst;
@@ -162,6 +159,9 @@ class FirmwareLoop {
     gantry_ = false;
     ready_at_ns_ = now_;
   }
+  // The gantry takes the robot again where it stands, at rest (the plant holds still from
+  // now on): the end of a show, before finish fades the gains out.
+  void hang_on_gantry();
   std::size_t allocations_in_cycle() const { return allocations_; }
   std::size_t planner_allocations() const { return planner_allocations_; }
   bool plant_failed() const { return plant_failed_; }

@@ -36,7 +36,7 @@ constexpr const char* kUsage =
     "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
-    "                       finish, damping\n"
+    "                       back on the gantry, finish, damping\n"
     "  --stand SECONDS      no motion: stand up and stand this long (default 5)\n"
     "  --config FILE        drivers configuration (kuavo_fw's JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the leg drives' CiA 402 mode (default csp; firmware/README.md)\n"

@@ -99,8 +99,8 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     const double t_s = 1e-9 * static_cast<double>(loop->now_ns());
     const sim::PlantTruth& truth = loop->plant().truth();
     ++run.control_ticks;
-    // Once the dance has ended in damping the robot sinks as damping lets it (kuavo_fw
-    // exits 0.5 s later): that is not the dance's, and neither is a reading it causes.
+    // Once the dance has ended in damping (on the gantry since finish) the run waits out
+    // kuavo_fw's 0.5 s of damping: nothing after that is the dance's.
     const bool dance_over = loop->control_task().danced_until_ns >= 0;
     if (!loop->on_gantry() && !dance_over) sim::record_plant_state(truth, t_s, run);
     if (!dance_over && f.mode.latched != Fault::kNone && (out.faults.empty() || out.faults.back() != f.mode.latched)) {
@@ -160,6 +160,11 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
         planner_allocs_before = loop->planner_allocations();
       }
       step(in);
+      // A show ends as it began, on the gantry: finish fades every gain and the feed-forward
+      // to damping, which no free-standing robot survives (left standing, the built-in
+      // dance's finish folded the robot into a squat, ankles 0.2 rad past their stops at
+      // 0.93 s of the 1 s fade: fault 21).
+      if (motion != nullptr && f.mode.mode == Mode::kFinish && !loop->on_gantry()) loop->hang_on_gantry();
       if (end_at_ns < 0 && (f.mode.latched != Fault::kNone || run.fell)) end_at_ns = loop->now_ns() + kAfterEnd_ns;
       if (loop->control_task().done || (end_at_ns >= 0 && loop->now_ns() >= end_at_ns)) break;
     }

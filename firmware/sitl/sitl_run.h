@@ -1,8 +1,10 @@
 // One firmware-in-the-loop run, as kuavo_fw_sim makes it: the robot hangs on its gantry
 // while the firmware boots, self-checks and stands up (to the motion's first frame), is
-// released in ready, stands 0.2 s, is asked to dance (as an operator would), dances,
-// finishes, and is in damping 0.5 s later -- or a fault latches (damping) or it falls, and
-// the run ends 0.5 s after. Without a motion it stands for stand_s.
+// released in ready, stands 0.2 s, is asked to dance (as an operator would), dances, is
+// taken back on the gantry as the firmware enters finish (which fades every gain to
+// damping: no free-standing robot survives that), finishes, and is in damping 0.5 s later
+// -- or a fault latches (damping) or it falls, and the run ends 0.5 s after. Without a
+// motion it stands for stand_s.
 //
 // The CSV log (one row per 2 ms tick) holds only virtual-time quantities: same
 // configuration and seed, same bytes (its sha256 is in the summary). The summary carries

@@ -32,6 +32,7 @@
 
 #include "controllers/motion/load_motion.h"
 #include "controllers/planner/balance_filter.h"
+#include "firmware/sitl/sitl_run.h"
 #include "tests/firmware/firmware_loop.h"
 #include "tools/mocap/motion_plan_io.h"
 
@@ -236,6 +237,13 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
               static_cast<unsigned long long>(loop.drive_loop_saturations()), static_cast<unsigned long long>(refused),
               static_cast<unsigned long long>(loop.csp_holds()), static_cast<unsigned long long>(loop.binding_failures()));
   EXPECT_EQ(refused, 0u);
+  // The WBC plans the ankle motors' commands (τ through the linkage plus the CSP offset's
+  // velocity feed-forward) inside their limits, and on CSP the hips' and knees' too: the
+  // drivers never clamp them.
+  EXPECT_EQ(clamps[4] + clamps[5], 0u);
+  if (legs == test_support::LegBinding::kCsp) {
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(clamps[static_cast<std::size_t>(k)], 0u) << "leg slot " << k;
+  }
   EXPECT_EQ(loop.csp_holds(), 0u);
   EXPECT_EQ(loop.binding_failures(), 0u);
   if (legs == test_support::LegBinding::kCsp) {
@@ -277,6 +285,33 @@ TEST(FirmwareDance, DancesTheSideStepsThroughTheCspLegDrives) {
 // as the record of the finding.
 TEST(FirmwareDance, DISABLED_DancesTheSideStepsThroughTheCstLegDrives) {
   dance_end_to_end("FIL dance, 5.95 s, CST legs", with_side_steps(), false);
+}
+
+// kuavo_fw_sim's whole run (stand-up, dance, finish, damping): the robot goes back on its
+// gantry as finish begins, so the fade to damping ends with it where the dance left it. Left
+// standing it folds as the gains fade: 0.5 s into damping its base has sunk (oracle: the
+// log's last row, the plant's truth).
+TEST(FirmwareDance, KuavoFwSimEndsTheDanceOnTheGantry) {
+  sitl::SitlConfig c;
+  c.loop.legs = test_support::LegBinding::kCsp;
+  c.loop.seed = 1;
+  c.log_path = ::testing::TempDir() + "firmware_dance_end.csv";
+  const sitl::SitlSummary s = sitl::run_firmware_sim(test_support::test_model(), &before_steps(), c);
+  ASSERT_TRUE(s.motion.run.ok) << s.motion.run.error;
+  EXPECT_TRUE(s.danced_to_end);
+  EXPECT_TRUE(s.faults.empty());
+  EXPECT_EQ(s.final_mode, std::string(to_string(Mode::kDamping)));
+  std::FILE* f = std::fopen(c.log_path.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  char line[16384], last[16384] = "";
+  while (std::fgets(line, sizeof line, f) != nullptr) std::snprintf(last, sizeof last, "%s", line);
+  std::fclose(f);
+  double t_s = 0.0, x = 0.0, y = 0.0, z = 0.0;
+  int mode = -1, fault = -1;
+  ASSERT_EQ(std::sscanf(last, "%lf,%d,%d,%lf,%lf,%lf", &t_s, &mode, &fault, &x, &y, &z), 6) << last;
+  std::printf("[ figures  ] kuavo_fw_sim, 1.95 s: ends at %.3f s in mode %d, fault %d, base z %.3f m\n", t_s, mode, fault, z);
+  EXPECT_EQ(mode, static_cast<int>(Mode::kDamping));
+  EXPECT_GT(z, 0.75);  // dances at ~0.78 m
 }
 
 // The planner stops delivering mid-dance: the control task bridges on the motion's own

@@ -18,10 +18,7 @@ inline constexpr hal::TimeNs kDampingBudget_ns = 20'000'000;  // issue 7
 inline sitl::LoopConfig loop_config(const FirmwareConfig& fw_config, LegBinding legs) {
   sitl::LoopConfig c;
   c.firmware = fw_config;
-  c.legs = legs;
-  // CSP: the ankle motors clamp at the CK motor's electrical maximum instead of the default
-  // 27 N m (firmware/README.md, known limits).
-  if (legs == LegBinding::kCsp) c.ankle_motor_limit_Nm = sitl::kAnkleMotorMax_Nm;
+  c.legs = legs;  // the ankle motors at the drivers configuration's 27 N m, as kuavo_fw runs them
   return c;
 }
 

@@ -304,6 +304,7 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
       bool down = false;
       for (int p = 4 * foot; p < 4 * foot + 4; ++p) down = down || knot.in_contact[p];
       if (!down) continue;
+      Eigen::Vector2d ankle = Eigen::Vector2d::Zero();
       for (int joint = 0; joint < 6; ++joint) {
         const int body = 1 + 6 * foot + joint;
         const dynamics::Vec3 axis = data.rotation[body] * f.model.bodies[body].axis;
@@ -314,6 +315,15 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
           tau += axis.dot(r.cross(dynamics::Vec3(u.segment<3>(3 * p))));
         }
         const double limit = c.stance_leg_torque_share * f.model.limits.torque_Nm[6 * foot + joint];
+        cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
+                          barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
+        if (joint >= 4) ankle[joint - 4] = tau;  // pitch, roll
+      }
+      // The ankle motors: (A, B) = joint_to_motor · (pitch, roll), each within its share.
+      const hal::AnkleMotorLimits& m = f.ws.ankle_motor_limits;
+      for (int k2 = 0; m.active && k2 < 2; ++k2) {
+        const double tau = m.joint_to_motor[foot].row(k2).dot(ankle);
+        const double limit = c.stance_leg_torque_share * m.limit_Nm[foot](k2);
         cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
                           barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
       }
@@ -345,8 +355,7 @@ dynamics::VelocityVector warm_stepping(MpcFixture& f, double vy) {
   return v0;
 }
 
-TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
-  MpcFixture& f = mpc_fixture();
+void expect_stage_cost_gradient(MpcFixture& f) {
   const dynamics::VelocityVector v0 = warm_stepping(f, 0.15);
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
   static dynamics::Data data;
@@ -383,6 +392,24 @@ TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) {
     EXPECT_LT(ex, 1e-5) << k;
     EXPECT_LT(eu, 1e-5) << k;
   }
+}
+
+TEST(MpcStepping, StageCostGradientMatchesFiniteDifferencesOfItsDefinition) { expect_stage_cost_gradient(mpc_fixture()); }
+
+// The same with the ankle motors known (the firmware's binding): the linkage's map near the
+// zero pose (drivers/transmission: A ≈ 0.5 τ_pitch + 1.1 τ_roll, B ≈ 0.5 τ_pitch − 1.1 τ_roll)
+// and 6 N·m limits, so the stance ankles' motor torques (~4 N·m standing) press on the barrier
+// well beyond the joint-space terms: without the motor rows r differs by their gradient.
+TEST(MpcStepping, StageCostGradientWithTheAnkleMotorsMatchesFiniteDifferences) {
+  MpcFixture& f = mpc_fixture();
+  hal::AnkleMotorLimits& m = f.ws.ankle_motor_limits;
+  m.active = true;
+  for (int leg = 0; leg < 2; ++leg) {
+    m.joint_to_motor[leg] << 0.497, 1.100, 0.503, -1.100;
+    m.limit_Nm[leg] = Eigen::Vector2d(6.0, 6.0);
+  }
+  expect_stage_cost_gradient(f);
+  m = hal::AnkleMotorLimits{};  // the fixture is shared
 }
 
 // The swing corners' zero force as fixed inputs: in the QP their B columns are zero (folded into

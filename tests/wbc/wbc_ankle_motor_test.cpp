@@ -1,8 +1,9 @@
 // The ankle motor rows (wbc.h): with the ankle pairs' joint -> motor torque maps set, every
-// solved tick's ankle torques map to motor torques within the motors' limits -- checked on
-// the returned joint torques through the map given, apart from the QP's rows -- while the
-// answer still satisfies the equations of motion. The same states without the rows ask the
-// motors for more (the scenario binds).
+// solved tick's motor commands -- the ankle torques through the map plus the binding's
+// velocity feed-forward on the command's v_ref, as the CSP drives' torque offset carries it --
+// stay within the planned share of the motors' limits, checked on the returned command apart
+// from the QP's rows. The same states without the rows ask the motors for more (the scenario
+// binds).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -14,6 +15,7 @@ namespace {
 
 constexpr int kNj = model::kNumJoints;
 constexpr double kMotorLimit_Nm = 8.0;  // tight enough to bind in single support
+constexpr double kVelocityGain_Nm_s_per_rad = 1.25;  // the CSP ankle drives' kd, motor side
 
 // A 4Pro-like linkage map: pitch = τA + τB, roll = 0.46 (τA − τB) (firmware/README.md),
 // inverted: motor (A, B) = G · (τ_pitch, τ_roll).
@@ -23,11 +25,14 @@ Eigen::Matrix2d linkage_map() {
   return joint_from_motor.inverse();
 }
 
-double worst_motor_excess_Nm(const dynamics::JointVector& tau, const Eigen::Matrix2d& g) {
+// Motor commands of both ankle pairs beyond `limit`: G τ_ff + kv J v_ref, J = Gᵀ⁻¹.
+double worst_motor_excess_Nm(const hal::CommandFrame& cmd, const Eigen::Matrix2d& g, double kv, double limit) {
   double worst = -1e9;
   for (int leg : {model::kLeftLegFirst, model::kRightLegFirst}) {
-    const Eigen::Vector2d motor = g * Eigen::Vector2d(tau[leg + 4], tau[leg + 5]);
-    worst = std::max(worst, motor.cwiseAbs().maxCoeff() - kMotorLimit_Nm);
+    const Eigen::Vector2d tau(cmd.joints[leg + 4].torque_ff_Nm, cmd.joints[leg + 5].torque_ff_Nm);
+    const Eigen::Vector2d v_ref(cmd.joints[leg + 4].velocity_ref_rad_s, cmd.joints[leg + 5].velocity_ref_rad_s);
+    const Eigen::Vector2d motor = g * tau + kv * g.transpose().inverse() * v_ref;
+    worst = std::max(worst, motor.cwiseAbs().maxCoeff() - limit);
   }
   return worst;
 }
@@ -39,6 +44,7 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
   static wbc::WbcReference ref;
   static hal::CommandFrame command;
   const Eigen::Matrix2d g = linkage_map();
+  const double limit = cfg.ankle_motor_torque_share * kMotorLimit_Nm;  // what the QP may plan
   int binding = 0, solved_with_rows = 0;
   double worst_with_rows = -1e9;
   for (int trial = 0; trial < 60; ++trial) {
@@ -49,6 +55,10 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
     wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
     const int mode = trial % 3;  // 0 both feet, 1 left swing, 2 right swing
     for (int c = 0; c < wbc::kNumPoints; ++c) ref.in_contact[c] = mode == 0 || (mode == 1 ? c >= 4 : c < 4);
+    for (int leg : {model::kLeftLegFirst, model::kRightLegFirst}) {
+      ref.joint_velocity_rad_s[leg + 4] = 2.0 * u(rng);
+      ref.joint_velocity_rad_s[leg + 5] = 1.0 * u(rng);
+    }
     for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
     dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
     for (int k = 0; k < model::kNv; ++k) v[k] = 0.2 * u(rng);
@@ -56,29 +66,128 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
     ASSERT_FALSE(ws.ankle_motor_limits.active);
     wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
     const bool free_solved = ws.diagnostics.qp_status == qp::QpStatus::kSolved;
-    const dynamics::JointVector free_tau = ws.diagnostics.torque_Nm;
-    if (free_solved && worst_motor_excess_Nm(free_tau, g) > 0.0) ++binding;
+    if (free_solved && worst_motor_excess_Nm(command, g, kVelocityGain_Nm_s_per_rad, limit) > 0.0) ++binding;
     // With the rows.
     wbc::wbc_init(m, cfg, ws);
     ws.ankle_motor_limits.active = true;
     for (int leg = 0; leg < 2; ++leg) {
       ws.ankle_motor_limits.joint_to_motor[leg] = g;
       ws.ankle_motor_limits.limit_Nm[leg].setConstant(kMotorLimit_Nm);
+      ws.ankle_motor_limits.velocity_gain_Nm_s_per_rad[leg].setConstant(kVelocityGain_Nm_s_per_rad);
     }
     wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
     ws.ankle_motor_limits.active = false;
     if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
     ++solved_with_rows;
-    worst_with_rows = std::max(worst_with_rows, worst_motor_excess_Nm(ws.diagnostics.torque_Nm, g));
+    worst_with_rows = std::max(worst_with_rows, worst_motor_excess_Nm(command, g, kVelocityGain_Nm_s_per_rad, limit));
     // The command carries the QP's torque.
     for (int j = 0; j < kNj; ++j) EXPECT_EQ(command.joints[j].torque_ff_Nm, ws.diagnostics.torque_Nm[j]);
   }
-  std::printf("[ figures  ] ankle motors at %.0f N m: %d of 60 free answers exceed it; %d solved with the rows, worst "
-              "motor excess %.2e N m\n",
-              kMotorLimit_Nm, binding, solved_with_rows, worst_with_rows);
+  std::printf("[ figures  ] ankle motors planned within %.1f N m: %d of 60 free answers exceed it; %d solved with the "
+              "rows, worst motor excess %.2e N m\n",
+              limit, binding, solved_with_rows, worst_with_rows);
   EXPECT_GT(binding, 10);          // the limit binds: the rows have work to do
   EXPECT_GT(solved_with_rows, 30);
-  EXPECT_LE(worst_with_rows, 1e-6);
+  EXPECT_LE(worst_with_rows, 0.0);  // inside by the rows' roundoff margin
+}
+
+// The serial leg drives' rows: with the CSP hips' and knees' clamps and velocity feed-forward
+// set, every solved tick's command τ_ff + kv·v_ref stays within the clamp (checked on the
+// returned command); without the rows the same states exceed it.
+TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  // Clamps that bind in single support with the hips and knees moving (the knee carries ~40 N·m).
+  constexpr std::array<double, hal::kSerialLegJoints> kClamp_Nm{20.0, 6.0, 20.0, 40.0};
+  constexpr double kGain_Nm_s_per_rad = 3.0;  // the WBC's leg kd, as the CSP drives hold it
+  auto worst_excess = [&](const hal::CommandFrame& c) {
+    double worst = -1e9;
+    for (int leg = 0; leg < 2; ++leg) {
+      for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+        const hal::JointCommand& j = c.joints[(leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + k];
+        worst = std::max(worst, std::abs(j.torque_ff_Nm + kGain_Nm_s_per_rad * j.velocity_ref_rad_s) - kClamp_Nm[k]);
+      }
+    }
+    return worst;
+  };
+  int binding = 0, solved_with_rows = 0;
+  double worst_with_rows = -1e9;
+  for (int trial = 0; trial < 60; ++trial) {
+    std::mt19937_64 rng(300 + trial);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    wbc::wbc_init(m, cfg, ws);
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    const int mode = trial % 3;  // 0 both feet, 1 left swing, 2 right swing
+    for (int c = 0; c < wbc::kNumPoints; ++c) ref.in_contact[c] = mode == 0 || (mode == 1 ? c >= 4 : c < 4);
+    for (int j = 0; j < 2 * model::kLegJoints; ++j) ref.joint_velocity_rad_s[j] = 2.0 * u(rng);
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    for (int k = 0; k < model::kNv; ++k) v[k] = 0.2 * u(rng);
+    ASSERT_FALSE(ws.serial_drive_limits.active);
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    if (ws.diagnostics.qp_status == qp::QpStatus::kSolved && worst_excess(command) > 0.0) ++binding;
+    wbc::wbc_init(m, cfg, ws);
+    ws.serial_drive_limits.active = true;
+    for (int leg = 0; leg < 2; ++leg) {
+      for (int k = 0; k < hal::kSerialLegJoints; ++k) {
+        ws.serial_drive_limits.limit_Nm[leg][k] = kClamp_Nm[k];
+        ws.serial_drive_limits.velocity_gain_Nm_s_per_rad[leg][k] = kGain_Nm_s_per_rad;
+      }
+    }
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    ws.serial_drive_limits.active = false;
+    if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
+    ++solved_with_rows;
+    worst_with_rows = std::max(worst_with_rows, worst_excess(command));
+  }
+  std::printf("[ figures  ] hip and knee commands: %d of 60 free answers exceed the clamps; %d solved with the rows, "
+              "worst excess %.2e N m\n",
+              binding, solved_with_rows, worst_with_rows);
+  EXPECT_GT(binding, 10);
+  EXPECT_GT(solved_with_rows, 30);
+  EXPECT_LE(worst_with_rows, 0.0);
+}
+
+// The binding's per-joint torque caps (the Ruiwo arm motors' MIT torque range): a capped joint's
+// planned torque stays within the cap; uncapped, the same ticks ask for more.
+TEST(WbcTorqueCaps, CappedJointsPlanWithinTheirCap) {
+  const model::Model& m = wbc_robot();
+  wbc::WbcWorkspace& ws = wbc_workspace();
+  const wbc::WbcConfig cfg;
+  static wbc::WbcReference ref;
+  static hal::CommandFrame command;
+  constexpr int kCapped[] = {model::kLeftArmFirst + 1, model::kLeftArmFirst + 3};  // shoulder roll, elbow
+  constexpr double kCap_Nm = 0.2;
+  int binding = 0, solved = 0;
+  double worst = -1e9;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::mt19937_64 rng(500 + trial);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    dynamics::ConfigVector q = bent_standing_configuration(0.3 + 0.1 * u(rng));
+    for (int j = 0; j < kNj; ++j) q[7 + j] += 0.05 * u(rng);
+    wbc::wbc_init(m, cfg, ws);
+    wbc::wbc_reference_hold_state(m, ws, q, 0, ref);
+    const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    for (int j : kCapped) binding += std::abs(command.joints[j].torque_ff_Nm) > kCap_Nm ? 1 : 0;
+    wbc::wbc_init(m, cfg, ws);
+    for (int j : kCapped) ws.torque_cap_Nm[j] = kCap_Nm;
+    wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
+    ws.torque_cap_Nm.setConstant(qp::kInfinity);
+    if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
+    ++solved;
+    for (int j : kCapped) worst = std::max(worst, std::abs(command.joints[j].torque_ff_Nm) - kCap_Nm);
+  }
+  std::printf("[ figures  ] torque caps %.1f N m: %d of 40 uncapped torques exceed them; %d of 20 solved with the caps, "
+              "worst excess %.2e N m\n",
+              kCap_Nm, binding, solved, worst);
+  EXPECT_GT(binding, 10);
+  EXPECT_GT(solved, 15);
+  EXPECT_LE(worst, 0.0);
 }
 
 }  // namespace

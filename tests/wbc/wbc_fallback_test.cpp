@@ -109,7 +109,7 @@ TEST(WbcFallback, InfeasibleQpIsReportedAndFallsBack) {
     half(i) = 0.5 * (ws.qp.c_upper(row) - ws.qp.c_lower(row));
     slack = std::max(slack, C.row(row).segment<kNj>(6).cwiseAbs().sum() * 1e-9);
   }
-  ASSERT_NEAR(half.maxCoeff(), 0.5, 1e-12);  // the rows found are the torque rows
+  ASSERT_NEAR(half.maxCoeff(), 0.5 - 1e-6, 1e-12);  // the torque rows (planned 1 µN·m inside the limit)
   const Eigen::Matrix<double, 6, 1> a_b = Cb.colPivHouseholderQr().solve(mid);
   const double residual = (Cb * a_b - mid).norm();
   std::printf("infeasible QP: certificate residual %.2f N·m > bound %.2f; solver status %s after %d iterations\n",

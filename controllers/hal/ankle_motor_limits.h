@@ -1,0 +1,28 @@
+// The ankle pairs in motor space, as the hardware binding sees them. On the 4Pro the two
+// ankle joints (pitch, roll) are driven by two motors (A, B) through a parallel linkage
+// (FACTS.md §2.4): motor torques (A, B) = joint_to_motor · (τ_pitch, τ_roll), about
+// 0.5·τ_pitch ± 1.1·τ_roll near the zero pose (1.45 at full dorsiflexion). Each motor's
+// 27 N·m bounds pitch and roll jointly, which no joint-space box can express. The binding
+// (the firmware, from the drivers' transmissions at the sampled ankle angles) fills this
+// each tick; the WBC bounds the motor torques with it, and the MPC the stance ankles' share
+// of them. Inactive (the simulator's plant drives the joints directly): joint-space limits.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+
+namespace kuavo::hal {
+
+struct AnkleMotorLimits {
+  bool active = false;
+  // Per leg (left, right): rows motor A, B; columns ankle pitch, roll.
+  std::array<Eigen::Matrix2d, 2> joint_to_motor{Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()};
+  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // |motor k| ≤
+  // What the binding adds to each motor's commanded torque per unit of the commanded motor
+  // velocity, J·v_ref with J = joint_to_motorᵀ⁻¹ (virtual work): the CSP drives' kd, since
+  // their torque offset carries kd·J·v_ref for the drive's −kd·q̇ to cancel. The command on
+  // the wire, not only τ_ff, must stay within the limit. 0: a binding that sends τ alone.
+  std::array<Eigen::Vector2d, 2> velocity_gain_Nm_s_per_rad{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+};
+
+}  // namespace kuavo::hal
