@@ -10,6 +10,7 @@
 #include <cstring>
 #include <exception>
 
+#include "sim/joint_stop.h"
 #include "sim/motor_model.h"
 #include "sim/newton_system.h"
 #include "sim/plant_dynamics.h"
@@ -58,6 +59,7 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
                                 m.limits.peak_torque_Nm[j], &saturated);
       if (in_->forces.actuation != nullptr) tau = actuated_torque(*in_->forces.actuation, j, tau, b.getOneU(s, 0));
       if (saturated && in_->count_saturations) ++in_->saturations;
+      tau += joint_stop_torque(b.getOneQ(s, 0), b.getOneU(s, 0), m.limits.position_min_rad[j], m.limits.position_max_rad[j]);
       b.applyOneMobilityForce(s, 0, tau, mobility_forces);
     }
     if (in_->forces.torque_source != nullptr) {

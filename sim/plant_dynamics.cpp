@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "sim/joint_stop.h"
 #include "sim/motor_model.h"
 #include "sim/perturbation.h"
 #include "sim/plant.h"
@@ -126,6 +127,9 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   if (in.torque_source != nullptr) {
     const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
     for (int j = 0; j < model::kNumJoints; ++j) w.rhs[6 + j] += extra[j];
+  }
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    w.rhs[6 + j] += joint_stop_torque(w.q[7 + j], w.v[6 + j], model_.limits.position_min_rad[j], model_.limits.position_max_rad[j]);
   }
 
   // External point forces as spatial forces at the reference point, summed per body.
