@@ -1,5 +1,6 @@
 #include "controllers/stack/online_stack.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace kuavo::stack {
@@ -94,7 +95,17 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
       out.stamp_ns = ws.mpc_plan.stamp_ns;
       out.dt_s = ws.mpc_plan.dt_s;
       out.count = ws.mpc_plan.count;
-      for (int k = 0; k < out.count; ++k) out.knots[k] = ws.mpc_plan.knots[k];
+      for (int k = 0; k < out.count; ++k) {
+        out.knots[k] = ws.mpc_plan.knots[k];
+        auto& q = out.knots[k].joint_position_rad;
+        for (int j = 0; j < model::kNumJoints; ++j) {
+          const double on_stop = std::clamp(q[j], model.limits.position_min_rad[j], model.limits.position_max_rad[j]);
+          if (on_stop != q[j]) {
+            q[j] = on_stop;
+            ++ws.plan_positions_on_a_stop;
+          }
+        }
+      }
       return;
     }
     ++ws.mpc_failures;
@@ -112,6 +123,7 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
   if (config.planner == PlannerKind::kMpc) {
     mpc::mpc_init(model, config.mpc, planner_ws.mpc);
     planner_ws.mpc_failures = 0;
+    planner_ws.plan_positions_on_a_stop = 0;
   }
   control.started = false;
   return true;

@@ -102,6 +102,11 @@ struct PlannerWorkspace {
   // MPC iterations that failed; each one hands the WBC the kinematic plan instead (the
   // robot keeps going on the motion, the failure is counted and the MPC restarts cold).
   std::uint64_t mpc_failures = 0;
+  // Joint positions of MPC knots put on their joint's stop (knots × joints). The MPC keeps
+  // joint limits by a relaxed barrier (mpc.h), so its prediction may pass a stop in a fast
+  // motion (perfume's kick: the swing ankle's knots > 0.05 rad past, which the firmware
+  // refuses as garbage); the plan handed to the WBC holds the hard limits.
+  std::uint64_t plan_positions_on_a_stop = 0;
 };
 
 // The state the control tick runs on: the estimator's, or (simulation only, for

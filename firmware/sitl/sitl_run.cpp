@@ -189,6 +189,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.plans_applied = dc.counters.plans_taken;
   ms.plans_skipped = dc.counters.plans_rejected + dc.counters.plans_old_epoch;
   ms.mpc_failures = FirmwareLoop::planner().ws.mpc_failures;
+  ms.plan_positions_on_a_stop = FirmwareLoop::planner().ws.plan_positions_on_a_stop;
 
   out.final_mode = to_string(f.mode.mode);
   out.danced_to_end = motion != nullptr && loop->control_task().danced_until_ns >= 0 && out.faults.empty() && !run.fell;

@@ -194,5 +194,39 @@ TEST(OnlineStack, RefusesABadConfiguration) {
   EXPECT_FALSE(parse_planner("magic", k));
 }
 
+// The MPC keeps joint limits by a relaxed barrier, so its knots may pass a stop; the plan
+// the stack hands to the WBC holds the model's hard limits, and counts what it put on a
+// stop. Here the left knee's upper limit is set below the standing knee (a robot whose
+// measured state is past a stop): every knee position handed over is on the limit, and
+// the real limits need nothing.
+TEST(OnlineStack, MpcKnotsPastAStopAreHandedOverOnTheStop) {
+  const model::Model& m = robot();
+  Rig& rig = the_rig();
+  auto& [plan, control, planner_ws, pending, data] = rig;
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
+  planner::StepInPlaceConfig gait;
+  gait.steps = 4;
+  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
+  StackConfig cfg;
+  cfg.planner = PlannerKind::kMpc;
+  const int knee = model::kLeftLegFirst + 3;
+  auto tight = std::make_unique<model::Model>(m);
+  tight->limits.position_max_rad[knee] = q0[7 + knee] - 0.1;
+  for (const model::Model* mm : {&m, static_cast<const model::Model*>(tight.get())}) {
+    ASSERT_TRUE(stack_prepare(*mm, cfg, *control, *planner_ws));
+    stack_plan_rt(*mm, cfg, *planner_ws, *plan, q0, dynamics::VelocityVector::Zero(), plan->start_ns, *pending);
+    ASSERT_EQ(planner_ws->last_mpc_status, mpc::MpcStatus::kOk);
+    ASSERT_GT(pending->count, 0);
+    if (mm == &m) {
+      EXPECT_EQ(planner_ws->plan_positions_on_a_stop, 0u);
+      continue;
+    }
+    EXPECT_GE(planner_ws->plan_positions_on_a_stop, static_cast<std::uint64_t>(pending->count));
+    for (int k = 0; k < pending->count; ++k) {
+      EXPECT_LE(pending->knots[k].joint_position_rad[knee], tight->limits.position_max_rad[knee]) << "knot " << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace kuavo::stack
