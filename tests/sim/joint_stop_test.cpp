@@ -8,15 +8,10 @@
 #include "controllers/dynamics/rigid_body.h"
 #include "sim/joint_stop.h"
 #include "sim/plant.h"
+#include "tests/support/test_robot.h"
 
 namespace kuavo::test {
 namespace {
-
-model::Model robot() {
-  model::Model m;
-  model::build_model(model::Variant::kS45, 55.0, m);
-  return m;
-}
 
 constexpr int kWristPitch = model::kLeftArmFirst + 6;  // zarm_l7_joint: a light distal joint
 
@@ -51,7 +46,7 @@ double rest_position(const model::Model& m, double torque_Nm) {
 }
 
 TEST(JointStop, DriveAgainstTheStopDeflectsItByTorqueOverStiffness) {
-  const model::Model m = robot();
+  const model::Model& m = s45_robot();
   const double tau = 0.5 * m.limits.peak_torque_Nm[kWristPitch];  // within the drive's clip
   const double deflection = tau / sim::kJointStopStiffness_Nm_per_rad;
   const double upper = rest_position(m, tau) - m.limits.position_max_rad[kWristPitch];

@@ -95,6 +95,24 @@ TEST(MujocoModel, KinematicsAndMassDistributionMatchOurModel) {
   }
 }
 
+// The standing controller's pose with the soles on the floor; ctl initialised.
+dynamics::ConfigVector standing_on_floor(const model::Model& m, control::StandingState& ctl) {
+  control::standing_init(m, control::StandingConfig{}, ctl);
+  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
+  q.tail<model::kNumJoints>() = ctl.pose_rad;
+  control::place_on_ground(m, ctl.data, q);
+  return q;
+}
+
+// That pose (MuJoCo: on its sole spheres) raised by gap_m, at rest.
+template <class PlantT>
+void reset_raised(PlantT& plant, control::StandingState& ctl, double gap_m) {
+  dynamics::ConfigVector q = standing_on_floor(robot(), ctl);
+  if constexpr (std::is_same_v<PlantT, sim::MujocoPlant>) sim::reset_on_floor(plant, q);
+  q[2] += gap_m;
+  plant.reset(q, dynamics::VelocityVector::Zero());
+}
+
 // A passive drop: the standing pose released 5 cm above the floor, drives disabled. In
 // uniform gravity an unactuated robot at rest falls without changing shape, so until its
 // soles touch, both CoM paths are z0 - g·t²/2 (the independent expectation), and both
@@ -104,15 +122,8 @@ TEST(MujocoModel, KinematicsAndMassDistributionMatchOurModel) {
 // robot folds up, differently in each world: not compared.
 template <class PlantT>
 void passive_drop(PlantT& plant, double gap_m, std::vector<double>& com_z, std::vector<double>& fz) {
-  const model::Model& m = robot();
   auto ctl = std::make_unique<control::StandingState>();
-  control::standing_init(m, control::StandingConfig{}, *ctl);
-  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
-  q.tail<model::kNumJoints>() = ctl->pose_rad;
-  control::place_on_ground(m, ctl->data, q);
-  if constexpr (std::is_same_v<PlantT, sim::MujocoPlant>) sim::reset_on_floor(plant, q);
-  q[2] += gap_m;
-  plant.reset(q, dynamics::VelocityVector::Zero());
+  reset_raised(plant, *ctl, gap_m);
   plant.set_command(hal::CommandFrame{});  // every joint kDisabled
   com_z.push_back(plant.truth().com_m.z());
   fz.push_back(0.0);
@@ -168,13 +179,7 @@ template <class PlantT>
 std::vector<Vec3> drop(PlantT& plant, double drop_m, double seconds, sim::PlantTruth& end, std::vector<double>* fz) {
   const model::Model& m = robot();
   auto ctl = std::make_unique<control::StandingState>();
-  control::standing_init(m, control::StandingConfig{}, *ctl);
-  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
-  q.tail<model::kNumJoints>() = ctl->pose_rad;
-  control::place_on_ground(m, ctl->data, q);
-  if constexpr (std::is_same_v<PlantT, sim::MujocoPlant>) sim::reset_on_floor(plant, q);
-  q[2] += drop_m;
-  plant.reset(q, dynamics::VelocityVector::Zero());
+  reset_raised(plant, *ctl, drop_m);
   hal::SensorFrame frame;
   hal::CommandFrame command;
   sim::SensorModel sensors(1, sim::SensorNoise{0, 0, 0, 0, 0, 0, 0, 0});
@@ -196,10 +201,7 @@ std::vector<Vec3> drop(PlantT& plant, double drop_m, double seconds, sim::PlantT
 // Our model's sole corners in the pose the drop starts from (before it falls).
 sim::PlantTruth drop_start(const model::Model& m) {
   auto ctl = std::make_unique<control::StandingState>();
-  control::standing_init(m, control::StandingConfig{}, *ctl);
-  dynamics::ConfigVector q = dynamics::neutral_configuration(m);
-  q.tail<model::kNumJoints>() = ctl->pose_rad;
-  control::place_on_ground(m, ctl->data, q);
+  const dynamics::ConfigVector q = standing_on_floor(m, *ctl);
   dynamics::forward_kinematics(m, ctl->data, q);
   sim::PlantTruth t;
   for (int c = 0; c < model::kNumContactPoints; ++c) t.contact_point_m[c] = dynamics::frame_position(m, ctl->data, c);
