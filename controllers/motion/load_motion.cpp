@@ -128,8 +128,15 @@ bool prepare_motion(const model::Model& robot, const MotionOptions& options, con
 bool load_motion(const std::string& path, const model::Model& robot, const MotionOptions& options,
                  planner::MotionPlan& plan, planner::BalanceFilterReport& report, std::string& error) {
   std::vector<std::uint8_t> bytes;
+  if (!read_motion_bytes(path, bytes, error)) return false;
+  return load_motion_bytes(bytes, path, robot, options, plan, report, error);
+}
+
+bool load_motion_bytes(const std::vector<std::uint8_t>& bytes, const std::string& path, const model::Model& robot,
+                       const MotionOptions& options, planner::MotionPlan& plan, planner::BalanceFilterReport& report,
+                       std::string& error) {
   MotionHeader header;
-  if (!read_motion_bytes(path, bytes, error) || !check_motion_header(bytes, robot, path, header, error)) return false;
+  if (!check_motion_header(bytes, robot, path, header, error)) return false;
   // The header bounds frame_count by kMotionMaxFrames = the plan's capacity.
   plan.rate_hz = header.rate_hz;
   plan.frame_count = static_cast<int>(header.frame_count);

@@ -64,4 +64,10 @@ bool prepare_motion(const model::Model& robot, const MotionOptions& options, con
 bool load_motion(const std::string& path, const model::Model& robot, const MotionOptions& options,
                  planner::MotionPlan& plan, planner::BalanceFilterReport& report, std::string& error);
 
+// The same from a motion file's bytes already in memory (`what` names them in messages):
+// `kuavo retarget` checks its own output in the closed-loop simulation this way.
+bool load_motion_bytes(const std::vector<std::uint8_t>& bytes, const std::string& what, const model::Model& robot,
+                       const MotionOptions& options, planner::MotionPlan& plan, planner::BalanceFilterReport& report,
+                       std::string& error);
+
 }  // namespace kuavo::motion

@@ -66,6 +66,28 @@ TEST(LoadMotion, HoldsExactlyWhatTheWriterWrote) {
   EXPECT_FALSE(r.plan->foot_contact[100][planner::kRightFoot]);
 }
 
+// From bytes in memory (`kuavo retarget`'s closed-loop check) the same plan as from the file,
+// and the same refusal, named by the caller's `what`.
+TEST(LoadMotion, FromBytesHoldsWhatTheFileHolds) {
+  const std::vector<ConfigVector> q = swaying_stand(151);
+  const std::vector<ContactLabel> labels(q.size(), ContactLabel::kDoubleSupport);
+  const Loaded from_file = load(write("load_bytes.motion", q, labels));
+  ASSERT_TRUE(from_file.ok) << from_file.error;
+  const std::vector<std::uint8_t> bytes = mocap::encode_motion(test::s45_robot(), kRate_hz, q, labels);
+  auto plan = std::make_unique<planner::MotionPlan>();
+  planner::BalanceFilterReport report;
+  std::string error;
+  ASSERT_TRUE(load_motion_bytes(bytes, "in memory", test::s45_robot(), {}, *plan, report, error)) << error;
+  ASSERT_EQ(plan->frame_count, from_file.plan->frame_count);
+  for (int i = 0; i < plan->frame_count; ++i) {
+    ASSERT_EQ(plan->q[i], from_file.plan->q[i]) << "frame " << i;
+    ASSERT_EQ(plan->foot_contact[i], from_file.plan->foot_contact[i]) << "frame " << i;
+  }
+  std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1);
+  EXPECT_FALSE(load_motion_bytes(cut, "in memory", test::s45_robot(), {}, *plan, report, error));
+  EXPECT_EQ(error.rfind("in memory", 0), 0u) << error;
+}
+
 // The robot dances from standing: a first frame with the soles 2 cm up is refused, by the
 // one loader the firmware and `kuavo simulate` share (tests/cli: both binaries refuse it).
 TEST(LoadMotion, RefusesAMotionThatDoesNotStartStanding) {
