@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tools/mocap/bvh.h"
 #include "tools/mocap/motion_file.h"
@@ -77,6 +80,11 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   const auto report = nlohmann::json::parse(slurp(kOut + "_dyn.json"));
   ASSERT_TRUE(report.contains("dynamic"));
   const auto& d = report["dynamic"];
+  // The built-in dance dances in the closed-loop check on both grounds: no round of repair.
+  ASSERT_TRUE(d.contains("verification"));
+  EXPECT_EQ(d["verification"]["rounds"], 0);
+  EXPECT_EQ(d["verification"]["runs"].size(), 2u);
+  EXPECT_TRUE(d["verification"]["danced"].get<bool>()) << d["verification"].dump();
   for (const char* key : {"solve_s", "frames", "windows", "sqp_iterations", "torque_violations", "friction_violations",
                           "zmp_outside_m_max", "max_torque_ratio", "repairs", "geometric", "dynamic"})
     EXPECT_TRUE(d.contains(key)) << key;
@@ -153,6 +161,81 @@ TEST(mocap_cli, BuiltInDanceTakesADuration) {
   EXPECT_EQ(run(clip + " --duration 60 -o " + kOut + "_dclip.motion", "_dclip"), 2);
   EXPECT_NE(slurp(kOut + "_dclip.stderr").find("does not apply with INPUT.bvh"), std::string::npos)
       << slurp(kOut + "_dclip.stderr");
+}
+
+// The closed-loop check: cmu_05_20 as retargeted falls in `kuavo simulate`; with one round
+// the report lists the fall, the range of gestures scaled for it ([fall − 2 s, fall + 0.3 s],
+// the output clock) and the run after the repair. The in-process check must be what
+// `kuavo simulate` does: the last run's outcome is compared with `kuavo simulate` of the
+// written file on the same ground and seed, in its own process (bit-deterministic: equal).
+TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string clip = std::string(KUAVO_SHARED_DIR) + "/mocap/cmu_05_20_mb.bvh";
+  ASSERT_EQ(run(clip + " --verify 1 --figures none -o " + kOut + "_ver.motion --report " + kOut + "_ver.json", "_ver"),
+            0)
+      << slurp(kOut + "_ver.stderr");
+  const auto report = nlohmann::json::parse(slurp(kOut + "_ver.json"));
+  const auto& v = report["dynamic"]["verification"];
+  ASSERT_GE(v["runs"].size(), 2u) << v.dump();
+  const auto& first = v["runs"][0];
+  ASSERT_TRUE(first["fell"].get<bool>()) << "cmu_05_20 no longer falls unrepaired: pick a clip that does";
+  EXPECT_EQ(first["ground"], "floor");  // the grounds in order: floor first
+  EXPECT_EQ(first["round"], 0);
+  EXPECT_EQ(v["rounds"], 1);
+  const double fall = first["fell_at_s"].get<double>();
+  // The motion written is the best round's: more grounds danced, then the later fall.
+  const int kept = v["kept_round"].get<int>();
+  std::vector<nlohmann::json> runs[2];
+  for (const auto& r : v["runs"]) runs[r["round"].get<int>()].push_back(r);
+  const auto score = [&](int round) {
+    int passed = 0;
+    double reached = 1e9;
+    for (const auto& r : runs[round]) {
+      if (r["fell"].get<bool>()) {
+        reached = r["fell_at_s"].get<double>();
+      } else {
+        ++passed;
+      }
+    }
+    return std::make_pair(passed, reached);
+  };
+  EXPECT_EQ(kept, score(1) > score(0) ? 1 : 0) << v.dump();
+  // Round 0's fall asked for the repair; it is listed if its round was kept.
+  int listed = 0;
+  for (const auto& r : report["dynamic"]["repairs"]) {
+    if (r["kind"] != "attenuate") continue;
+    ++listed;
+    EXPECT_NEAR(r["start_s"].get<double>(), fall - 2.0, 0.011) << r.dump();
+    EXPECT_NEAR(r["end_s"].get<double>(), fall + 0.3, 0.011) << r.dump();
+    char at[32];
+    std::snprintf(at, sizeof at, "at %.2f s", fall);
+    EXPECT_NE(r["reason"].get<std::string>().find(at), std::string::npos) << r.dump();
+    EXPECT_NE(r["reason"].get<std::string>().find("scaled to 50 %"), std::string::npos) << r.dump();
+  }
+  EXPECT_EQ(listed, kept) << report["dynamic"]["repairs"].dump();
+  // The kept round's last run is replayed by `kuavo simulate` on the written file.
+  const auto& last = runs[kept].back();
+  EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
+  const std::string sim = kBin + " simulate " + kOut + "_ver.motion --quiet --ground " +
+                          last["ground"].get<std::string>() + " --seed 1 --summary " + kOut + "_ver_sim.json >" +
+                          kOut + "_ver_sim.stdout 2>&1";
+  ASSERT_EQ(std::system(sim.c_str()), 0) << slurp(kOut + "_ver_sim.stdout");
+  const auto summary = nlohmann::json::parse(slurp(kOut + "_ver_sim.json"));
+  EXPECT_EQ(summary["fell"].get<bool>(), last["fell"].get<bool>());
+  if (last["fell"].get<bool>()) {
+    EXPECT_NEAR(summary["fell_at_s"].get<double>(), last["fell_at_s"].get<double>(), 1e-9);
+  }
+  // Still falling: the user is told where.
+  if (!v["danced"].get<bool>()) {
+    EXPECT_NE(slurp(kOut + "_ver.stderr").find("still falls in the closed-loop simulation"), std::string::npos);
+  }
+  // --verify 0: no check, and the report says so.
+  ASSERT_EQ(run(clip + " --verify 0 --figures none -o " + kOut + "_nover.motion --report " + kOut + "_nover.json",
+                "_nover"),
+            0);
+  const auto off = nlohmann::json::parse(slurp(kOut + "_nover.json"))["dynamic"]["verification"];
+  EXPECT_TRUE(off["runs"].empty());
+  EXPECT_TRUE(off["danced"].is_null());
 }
 
 // Side inputs must be regular files (a directory read as empty text and was accepted), and the

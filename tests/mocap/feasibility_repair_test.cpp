@@ -147,10 +147,15 @@ TEST(mocap_feasibility_repair, ParsesTheDocumentedOverrideLines) {
                                      "3 4 forbid stride\n"
                                      "4 5.5 forbid turn\n"
                                      "6 7 forbid all\n"
-                                     "0 0.1 force double\n",
+                                     "0 0.1 force double\n"
+                                     "8 9 calm steps\n",
                                      o, error))
       << error;
-  ASSERT_EQ(o.size(), 6u);
+  ASSERT_EQ(o.size(), 7u);
+  EXPECT_TRUE(o[6].calm_steps);
+  EXPECT_FALSE(o[6].force_double);
+  EXPECT_FALSE(o[6].forbid_all);
+  EXPECT_FALSE(o[0].calm_steps);
   EXPECT_EQ(o[0].start_s, 0.5);
   EXPECT_EQ(o[0].end_s, 1.25);
   EXPECT_FALSE(o[0].force_double);
@@ -815,6 +820,37 @@ TEST(mocap_feasibility_repair, FastTravelIsSlowedToTheRobotsPace) {
     return 0.5 * (f[0].centre.x() + f[1].centre.x());
   };
   EXPECT_GT((mid_kept(w1) - mid_kept(w0)) / ((w1 - w0) / kRate_hz), 0.5);
+
+  // Calm steps over the walk: the calm pace (0.35 m/s) instead, the same slack; and a calm
+  // range is no forbid (the walk is still slowed where it asks for nothing else).
+  RepairOverride calm;
+  calm.start_s = 0.0, calm.end_s = 100.0, calm.calm_steps = true;
+  const RepairedMotion slow = repair(m, {calm});
+  ASSERT_TRUE(has(slow, RepairKind::kTravel));
+  const auto mid_slow = [&](int i) {
+    const auto f = feet_of(slow.q[i]);
+    return 0.5 * (f[0].centre.x() + f[1].centre.x());
+  };
+  // The rule itself: each touchdown within the calm pace × the time since that foot's last one
+  // from its last foothold (1 cm: what the repair does not report as a move), and a touchdown
+  // at most calm_step_forward_m ahead of the other foot.
+  for (int f = 0; f < 2; ++f) {
+    const auto down = [&](int i) { return f == 0 ? left_in_contact(slow.contacts[i]) : right_in_contact(slow.contacts[i]); };
+    int last = -1;
+    for (int i = 1; i < static_cast<int>(slow.q.size()); ++i) {
+      if (!down(i) || down(i - 1)) continue;
+      if (last >= 0) {
+        const double step = (feet_of(slow.q[i])[f].centre - feet_of(slow.q[last])[f].centre).head<2>().norm();
+        EXPECT_LE(step, cfg.calm_travel_speed_m_s * (i - last) / kRate_hz + 0.01) << "foot " << f << " frame " << i;
+      }
+      EXPECT_LE(feet_of(slow.q[i])[f].centre.x() - feet_of(slow.q[i])[1 - f].centre.x(), cfg.calm_step_forward_m + 1e-3);  // the leg IK: 0.1 mm
+      last = i;
+    }
+  }
+  // Slower than the normal pace over the walk (the window's edges add the same slack).
+  const double calm_speed = (mid_slow(w1) - mid_slow(w0)) / ((w1 - w0) / kRate_hz);
+  EXPECT_LT(calm_speed, speed - 0.05);
+  RecordProperty("calm_walk_speed_m_s", number(calm_speed));
 }
 
 // A shoulder snap (0.5 rad in 50 ms, ~1200 rad/s² peaks): the RNEA oracle prices it beyond
@@ -931,7 +967,7 @@ TEST(mocap_feasibility_repair, AttenuationScalesGesturesInsideItsRangeOnly) {
   for (int i = 0; i < n; ++i) q[i][joint] += 0.4 * std::sin(2.0 * M_PI * i / kRate_hz);
   std::vector<ConfigVector> att = q;
   std::vector<Repair> log;
-  ASSERT_TRUE(attenuate_gestures(att, kRate_hz, {{200, 300, 1.7}}, 0.5, 0.5, 1.8, {}, log));
+  ASSERT_TRUE(attenuate_gestures(att, kRate_hz, {{200, 300, 1.7, {}}}, 0.5, 0.5, 1.8, {}, log));
   ASSERT_EQ(log.size(), 1u);
   EXPECT_EQ(log[0].kind, RepairKind::kAttenuate);
   EXPECT_NEAR(log[0].start_s, 2.0 + 1.8, 1e-12);
@@ -950,9 +986,21 @@ TEST(mocap_feasibility_repair, AttenuationScalesGesturesInsideItsRangeOnly) {
   std::vector<Repair> none;
   RepairOverride o;
   o.start_s = 0.0, o.end_s = 10.0, o.forbid = RepairKind::kAttenuate;
-  EXPECT_FALSE(attenuate_gestures(kept, kRate_hz, {{200, 300, 1.7}}, 0.5, 0.5, 1.8, {o}, none));
+  EXPECT_FALSE(attenuate_gestures(kept, kRate_hz, {{200, 300, 1.7, {}}}, 0.5, 0.5, 1.8, {o}, none));
   EXPECT_TRUE(none.empty());
   for (int i = 0; i < n; ++i) ASSERT_EQ(kept[i], q[i]);
+
+  // The closed-loop check's range carries its own reason; gain 0 leaves the 1 s average.
+  std::vector<ConfigVector> flat = q;
+  std::vector<Repair> why_log;
+  ASSERT_TRUE(attenuate_gestures(flat, kRate_hz, {{200, 300, 0.0, "it fell here"}}, 0.0, 0.5, 1.8, {}, why_log));
+  ASSERT_EQ(why_log.size(), 1u);
+  EXPECT_EQ(why_log[0].reason.rfind("it fell here: the gestures are scaled to 0 %", 0), 0u) << why_log[0].reason;
+  double left = 0.0;
+  for (int i = 200; i < 300; ++i) left = std::max(left, std::abs(flat[i][joint] - centre));
+  // The 101-frame average of the 1 Hz sine at 100 Hz: a whole period (0) plus the one frame
+  // half a period away, −sin/101: what is left is 0.4/101 at most.
+  EXPECT_NEAR(left, 0.4 / 101.0, 1e-6);
 }
 
 }  // namespace

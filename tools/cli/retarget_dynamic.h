@@ -7,8 +7,10 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "sim/ground_contact.h"
 #include "tools/mocap/dynamic_retarget.h"
 #include "tools/mocap/feasibility_repair.h"
 #include "tools/mocap/human_targets.h"
@@ -29,6 +31,20 @@ struct DynamicStageOptions {
   int attenuation_rounds = 0;
   double attenuation_torque_ratio = 1.5;
   double attenuation_gain = 0.5;
+  // Closed-loop verification (on by default; kuavo retarget --verify ROUNDS): the output is
+  // danced in the simulator by the online stack on each of verify_grounds (seed verify_seed),
+  // as `kuavo simulate MOTION` dances it. Where it falls, the gestures over [fall −
+  // verify_before_s, fall + verify_after_s] are scaled by verify_gain about their 1 s average
+  // and the motion optimized again; a second fall in a scaled range takes the gestures there
+  // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*). Up to
+  // verify_rounds rounds. A motion that dances is left as it is. The report's "verification"
+  // lists every run. cmu_05_20 needed 6 rounds to dance the floor to the end.
+  int verify_rounds = 12;
+  std::vector<sim::GroundParams> verify_grounds = {sim::kFloor, sim::kCarpet};
+  std::uint64_t verify_seed = 1;
+  double verify_gain = 0.5;
+  double verify_before_s = 2.0;
+  double verify_after_s = 0.3;
   std::string csv_path;   // the dynamic trajectory, "" = none
   std::string plots_dir;  // Fig. 4 / 5 SVGs (retarget_figures.h), "" = none; the directory must exist
 };
@@ -39,6 +55,18 @@ struct DynamicStageResult {
   mocap::RepairedMotion repaired;
   mocap::DynamicResult dynamic;
 };
+
+// The closed-loop check's repair after a fall at fell_at_s (the output motion's clock): the
+// dance-clock frames [a, b) = [fall − verify_before_s, fall + verify_after_s) within the dance,
+// scaled by verify_gain, or by 0 and with calm steps (mocap::RepairConfig::calm_*) where a
+// range in `scaled` (the earlier rounds', appended to) overlaps. false if nothing of the dance lies there (a fall in the lead-in).
+struct VerifyRange {
+  int a = 0, b = 0;
+  double gain = 1.0;
+  bool calm_steps = false;  // a second fall there: calm steps over the range too
+};
+bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
+                        const DynamicStageOptions& options, std::vector<std::pair<int, int>>& scaled, VerifyRange& out);
 
 // 0 done, 1 the optimization failed, 2 the motion is bad input (the message says why).
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,

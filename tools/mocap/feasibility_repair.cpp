@@ -135,7 +135,9 @@ bool limit_acceleration(std::vector<V>& x, int j, double a_max, double rate_hz, 
 // An override forbids `kind` at dance time t [s].
 bool forbids(const std::vector<RepairOverride>& overrides, RepairKind kind, double t) {
   for (const RepairOverride& o : overrides) {
-    if (t >= o.start_s && t < o.end_s && !o.force_double && (o.forbid_all || o.forbid == kind)) return true;
+    if (t >= o.start_s && t < o.end_s && !o.force_double && !o.calm_steps && (o.forbid_all || o.forbid == kind)) {
+      return true;
+    }
   }
   return false;
 }
@@ -185,6 +187,9 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
     if (ok && verb == "force") {
       ok = what == "double";
       o.force_double = true;
+    } else if (ok && verb == "calm") {
+      ok = what == "steps";
+      o.calm_steps = true;
     } else if (ok && verb == "forbid") {
       if (what == "all") o.forbid_all = true;
       else if (what == "flight") o.forbid = RepairKind::kFlight;
@@ -202,8 +207,8 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all' or 'START_S END_S force double' "
-              "(0 <= START_S < END_S)";
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all' , 'START_S END_S force double' "
+              "or 'START_S END_S calm steps' (0 <= START_S < END_S)";
       return false;
     }
     out.push_back(o);
@@ -254,6 +259,16 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     const double t = dance_time(i);
     for (const RepairOverride& o : overrides) {
       if (o.force_double && t >= o.start_s && t < o.end_s) return true;
+    }
+    return false;
+  };
+
+  // A touchdown in the lead-in or the tail counts as the dance's first or last frame (the tail
+  // takes the human's last step: cmu_05_07's landed 0.40 m ahead, 0.45 m beside the other foot).
+  const auto calm = [&](int i) {
+    const double t = dance_time(std::clamp(i, lead, lead + n_dance - 1));
+    for (const RepairOverride& o : overrides) {
+      if (o.calm_steps && t >= o.start_s && t < o.end_s) return true;
     }
     return false;
   };
@@ -440,24 +455,32 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     if (other == nullptr) continue;  // an allowed flight: nothing to place against
     // Travel speed: from this foot's previous foothold, no farther than the speed limit over
     // the time since that touchdown (the stride check below may move it again).
-    if (cfg.max_travel_speed_m_s > 0.0 && td.index > 0 && !forbidden(RepairKind::kTravel, td.frame)) {
+    const bool calm_here = calm(td.frame);
+    const double travel_speed = calm_here && cfg.max_travel_speed_m_s > 0.0
+                                    ? std::min(cfg.max_travel_speed_m_s, cfg.calm_travel_speed_m_s)
+                                    : cfg.max_travel_speed_m_s;
+    const char* calm_note = calm_here ? ", calm steps" : "";
+    if (travel_speed > 0.0 && td.index > 0 && !forbidden(RepairKind::kTravel, td.frame)) {
       const Interval& prev = stance[td.foot][td.index - 1];
       Vec3 step = iv.pose.centre - prev.pose.centre;
       step.z() = 0.0;
-      const double most = cfg.max_travel_speed_m_s * (iv.a - prev.a) / rate_hz;
+      const double most = travel_speed * (iv.a - prev.a) / rate_hz;
       if (step.norm() > most + kReportMove_m) {
         iv.pose.centre.head<2>() = prev.pose.centre.head<2>() + (most / step.norm()) * step.head<2>();
         log.add(RepairKind::kTravel, td.frame, iv.b,
-                fmt("step of %.2f m in %.2f s shortened to %.2f m (travel at most %.2f m/s)", step.norm(),
-                    (iv.a - prev.a) / rate_hz, most, cfg.max_travel_speed_m_s));
+                fmt("step of %.2f m in %.2f s shortened to %.2f m (travel at most %.2f m/s", step.norm(),
+                    (iv.a - prev.a) / rate_hz, most, travel_speed) + calm_note + ")");
       }
     }
     const double side = td.foot == 0 ? 1.0 : -1.0;
     const Mat3 r = rot_z(other->pose.yaw);
     Vec3 d = r.transpose() * (iv.pose.centre - other->pose.centre);
     const Vec3 d0 = d;
-    d.x() = std::clamp(d.x(), -cfg.max_step_backward_m, cfg.max_step_forward_m);
-    d.y() = side * std::clamp(side * d.y(), cfg.min_step_width_m, cfg.max_step_width_m);
+    const double forward = calm_here ? std::min(cfg.max_step_forward_m, cfg.calm_step_forward_m) : cfg.max_step_forward_m;
+    const double backward = calm_here ? std::min(cfg.max_step_backward_m, cfg.calm_step_backward_m) : cfg.max_step_backward_m;
+    const double widest = calm_here ? std::min(cfg.max_step_width_m, cfg.calm_step_width_m) : cfg.max_step_width_m;
+    d.x() = std::clamp(d.x(), -backward, forward);
+    d.y() = side * std::clamp(side * d.y(), cfg.min_step_width_m, widest);
     d.z() = 0.0;
     double rel = wrap(iv.pose.yaw - other->pose.yaw);
     const double rel0 = rel;
@@ -468,8 +491,8 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       iv.pose.centre = other->pose.centre + r * d;
       log.add(RepairKind::kStride, td.frame, iv.b,
               fmt("touchdown %.2f m from the human's, to a spot the legs reach (%.2f m ahead, %.2f m beside the "
-                  "stance foot)",
-                  (d - Vec3(d0.x(), d0.y(), 0.0)).norm(), d.x(), side * d.y()));
+                  "stance foot",
+                  (d - Vec3(d0.x(), d0.y(), 0.0)).norm(), d.x(), side * d.y()) + calm_note + ")");
     }
     if (turned && !forbidden(RepairKind::kTurn, td.frame)) {
       iv.pose.yaw = other->pose.yaw + rel;
@@ -847,9 +870,11 @@ bool attenuate_gestures(std::vector<ConfigVector>& geometric, double rate_hz, co
     x.start_s = r.a / rate_hz + lead_s;
     x.end_s = r.b / rate_hz + lead_s;
     x.kind = RepairKind::kAttenuate;
-    x.reason = fmt("the dynamic stage's result asked %.1fx a leg joint's torque limit here: the gestures are scaled "
-                   "to %.0f %% about their %.1f s average and the motion optimized again",
-                   r.torque_ratio, 100.0 * gain, 2.0 * window_s);
+    const std::string why = r.why.empty() ? fmt("the dynamic stage's result asked %.1fx a leg joint's torque limit here",
+                                                r.torque_ratio)
+                                          : r.why;
+    x.reason = why + fmt(": the gestures are scaled to %.0f %% about their %.1f s average and the motion optimized again",
+                         100.0 * gain, 2.0 * window_s);
     log.push_back(x);
   }
   return changed;

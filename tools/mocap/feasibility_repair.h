@@ -31,6 +31,7 @@
 //   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, bounce, travel,
 //                                  attenuate, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
+//   start_s end_s calm steps      (shorter strides and slower travel: RepairConfig::calm_*)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
 // with a message naming the time (the robot cannot fly). Offline; allocates.
@@ -109,6 +110,16 @@ struct RepairConfig {
   // feet carrying 19 N of the 540 N weight and asked 414 N·m of a hip pitch (limit 72) at the
   // top. 0 turns it off.
   double max_vertical_acceleration_m_s2 = 0.5 * 9.81;
+  // Calm steps, where an override asks for them ("START END calm steps"; the closed-loop check
+  // of `kuavo retarget` adds them where the online stack fell twice): touchdowns within these
+  // of the stance foot and travel no faster than this. cmu_05_20 and cmu_05_07 with them
+  // everywhere (and the closed-loop check) danced to the end on the floor, where with the
+  // limits above they fell at 9.2–9.8 s and 11.8–12.2 s; everywhere they would also shorten
+  // the built-in dance's travel, which it dances as it is.
+  double calm_step_forward_m = 0.30;
+  double calm_step_backward_m = 0.20;
+  double calm_step_width_m = 0.35;
+  double calm_travel_speed_m_s = 0.35;
 };
 
 enum class RepairKind : int {
@@ -140,6 +151,7 @@ struct RepairOverride {
   bool force_double = false;
   bool forbid_all = false;
   RepairKind forbid = RepairKind::kFlight;
+  bool calm_steps = false;  // "calm steps": RepairConfig's calm_* limits over the range
 };
 // Parses the override text; false with a message naming the line.
 bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>& out, std::string& error);
@@ -174,6 +186,7 @@ bool repair_motion(const model::Model& robot, const std::vector<dynamics::Config
 struct AttenuationRange {
   int a = 0, b = 0;
   double torque_ratio = 0.0;  // the worst |τ|/limit that asked for it, for the reason
+  std::string why;            // else this is the reason (the closed-loop check's fall)
 };
 bool attenuate_gestures(std::vector<dynamics::ConfigVector>& geometric, double rate_hz,
                         const std::vector<AttenuationRange>& ranges, double gain, double window_s, double lead_s,
