@@ -15,8 +15,8 @@
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
 // 12): the result is danced in the closed-loop simulation on floor and carpet; where it falls,
-// the gestures before the fall are scaled down (a second fall there: taken out, and calm steps)
-// and the motion optimized again (0: no check).
+// the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
+// a third: both feet held down there) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
 // into the report's directory, or into --figures DIR (none: no figures).
 // --contacts FILE: lines "start_s end_s flight|left|right|double" replace the automatic labels

@@ -36,7 +36,8 @@ struct DynamicStageOptions {
   // as `kuavo simulate MOTION` dances it. Where it falls, the gestures over [fall −
   // verify_before_s, fall + verify_after_s] are scaled by verify_gain about their 1 s average
   // and the motion optimized again; a second fall in a scaled range takes the gestures there
-  // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*). Up to
+  // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*); a third
+  // holds both feet down over the range (the steps there are given up, and listed). Up to
   // verify_rounds rounds. A motion that dances is left as it is. The report's "verification"
   // lists every run. cmu_05_20 needed 6 rounds to dance the floor to the end.
   int verify_rounds = 12;
@@ -59,11 +60,13 @@ struct DynamicStageResult {
 // The closed-loop check's repair after a fall at fell_at_s (the output motion's clock): the
 // dance-clock frames [a, b) = [fall − verify_before_s, fall + verify_after_s) within the dance,
 // scaled by verify_gain, or by 0 and with calm steps (mocap::RepairConfig::calm_*) where a
-// range in `scaled` (the earlier rounds', appended to) overlaps. false if nothing of the dance lies there (a fall in the lead-in).
+// range in `scaled` (the earlier rounds', appended to) overlaps, and with both feet held down
+// over it where two do. false if nothing of the dance lies there (a fall in the lead-in).
 struct VerifyRange {
   int a = 0, b = 0;
   double gain = 1.0;
   bool calm_steps = false;  // a second fall there: calm steps over the range too
+  bool hold = false;        // a third: both feet down over the range
 };
 bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
                         const DynamicStageOptions& options, std::vector<std::pair<int, int>>& scaled, VerifyRange& out);
