@@ -15,7 +15,10 @@ EmulatedDrive* find(Cia402Emulator& emu, std::uint8_t node) {
 }
 
 void send(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d, const can_frame& f) {
-  if (d.silent || roll(emu.faults, emu.faults.drop_probability)) return;
+  if (d.silent || roll(emu.faults, emu.faults.drop_probability)) {
+    ++emu.frames_dropped;
+    return;
+  }
   if (send_rt(port, f) == DriverError::kOk) ++emu.frames_out;
 }
 

@@ -48,6 +48,7 @@ struct Cia402Emulator {
   int count = 0;
   FaultInjection faults{};
   std::uint32_t frames_in = 0, frames_out = 0, syncs = 0;
+  std::uint32_t frames_dropped = 0;  // not sent: lost (fault injection) or from a silent drive
 };
 
 // Adds a drive (start-up). It boots (sends its boot-up message) on the first

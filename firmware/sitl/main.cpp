@@ -34,6 +34,7 @@ constexpr const char* kUsage =
     "usage: kuavo_fw_sim [--dance MOTION_FILE | --stand SECONDS] [--config FILE] [--legs csp|cst]\n"
     "                    [--ground floor|carpet] [--seed N] [--push T:FX,FY,FZ:DURATION]\n"
     "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
+    "                    [--inject KIND@SECONDS]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
     "                       back on the gantry, finish, damping\n"
@@ -44,6 +45,11 @@ constexpr const char* kUsage =
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
     "  --plan-latency-ms MS the planning task's plan applied this long after its state, 0..18 ms (default 4)\n"
+    "  --inject KIND@SECONDS  a fault drill, armed SECONDS (virtual time) after the dance began, at most\n"
+    "                       the motion's length; KIND: silent-leg-drive (left knee), silent-arm-motor (left\n"
+    "                       elbow), bus-off (the left knee's bus), frame-loss-1pct (every bus), imu-dropout,\n"
+    "                       starved-planner (no planning task from then on). The summary's \"injection\"\n"
+    "                       says when it was armed, the fault latched and the time to damping\n"
     "  --stand applies without --dance, --balance-filter with it; in the other mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
@@ -67,6 +73,8 @@ int run(int argc, char** argv) {
   args.number("--plan-latency-ms", "MS", 0.0, 18.0, "ms", &plan_latency_ms);
   args.output_file("--log", "CSV", &cfg.log_path);
   args.output_file("--summary", "JSON", &summary_path);
+  args.custom("--inject", sitl::kInjectValueName, [&](const char* v) { return sitl::parse_injection(v, cfg.inject); }).modes =
+      kDanceMode;
   switch (args.parse(argc, argv)) {
     case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
@@ -87,6 +95,7 @@ int run(int argc, char** argv) {
     return 2;  // unreachable: the parser allowed only their names
   }
   cfg.plan_latency_ns = static_cast<kuavo::hal::TimeNs>(std::llround(plan_latency_ms * 1e6));
+  cfg.inject_fault = args.given("--inject");
 
   static kuavo::model::Model model;
   if (kuavo::model::build_model(kuavo::model::Variant::kS45, kuavo::model::kDefaultTotalMass_kg, model) !=
@@ -117,6 +126,11 @@ int run(int argc, char** argv) {
                  motion->rate_hz, kuavo::planner::motion_plan_duration_s(*motion));
     if (balance_filter) std::fprintf(stderr, "; balance filter moved the CoM by up to %.3f m", report.max_correction_m);
     std::fprintf(stderr, "\n");
+    const double motion_s = kuavo::planner::motion_plan_duration_s(*motion);
+    if (cfg.inject_fault && cfg.inject.at_s > motion_s) {
+      std::fprintf(stderr, "kuavo_fw_sim: --inject at %.3f s: the dance is %.3f s long\n", cfg.inject.at_s, motion_s);
+      return 2;
+    }
   }
   cfg.count_allocations = &kuavo::test::thread_allocation_count;
 
@@ -131,6 +145,22 @@ int run(int argc, char** argv) {
     }
   }
   std::fputs(json.c_str(), stdout);
+  if (s.injected) {
+    const sitl::InjectionReport& r = s.injection;
+    if (!r.armed && r.error.empty()) {
+      std::fprintf(stderr, "inject: %s not armed: the dance ended (finish, a fault or a fall) before %.3f s into it\n",
+                   sitl::to_string(r.requested.kind), r.requested.at_s);
+    } else if (r.armed) {
+      std::fprintf(stderr, "inject: %s (%s) at %.3f s (%.3f s into the dance): ", sitl::to_string(r.requested.kind), r.target.c_str(),
+                   r.armed_at_s, r.requested.at_s);
+      if (r.fault == fw::Fault::kNone) {
+        std::fprintf(stderr, "no fault, final mode %s\n", s.final_mode.c_str());
+      } else {
+        std::fprintf(stderr, "fault %d (%s), damping after %.1f ms\n", static_cast<int>(r.fault), fw::to_string(r.fault),
+                     r.latency_to_damping_ms);
+      }
+    }
+  }
   if (!s.motion.run.ok) {
     std::fprintf(stderr, "kuavo_fw_sim: %s\n", s.motion.run.error.c_str());
     return 1;

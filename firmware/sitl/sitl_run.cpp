@@ -33,6 +33,22 @@ std::string log_header(const model::Model& m) {
   return h;
 }
 
+bool all_damping(const hal::CommandFrame& c) {
+  for (const hal::JointCommand& j : c.joints) {
+    if (j.mode != hal::JointMode::kDamping) return false;
+  }
+  return true;
+}
+
+// Reply frames the emulators have not sent so far (lost or silenced).
+std::uint64_t frames_not_sent(const FirmwareLoop& loop) {
+  std::uint64_t n = 0;
+  for (std::size_t b = 0; b < loop.buses(); ++b) {
+    n += loop.ruiwo(b) != nullptr ? loop.ruiwo(b)->replies_dropped : loop.drives(b)->frames_dropped;
+  }
+  return n;
+}
+
 // One row per tick: virtual time, the firmware's mode and latched fault, the plant's truth,
 // the command's position references (what went to the output stage) and the joint torques.
 void write_row(double t_s, const Firmware& f, const sim::PlantTruth& truth, const hal::CommandFrame& cmd, sim::RunLog& log) {
@@ -91,6 +107,12 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   std::size_t allocs_before = 0, planner_allocs_before = 0;
   bool dance_requested = false;
   hal::TimeNs end_at_ns = -1;  // the run ends at this time (fault, fall, done)
+  InjectionReport& injection = out.injection;
+  out.injected = config.inject_fault && motion != nullptr;
+  injection.requested = config.inject;
+  const hal::TimeNs inject_after_ns = static_cast<hal::TimeNs>(std::llround(config.inject.at_s * 1e9));
+  hal::TimeNs armed_ns = -1;
+  std::uint64_t not_sent_before = 0;
   const hal::TimeNs t0_ns = loop->now_ns();
   const rtos::TimeNs wall_start = rtos::now_ns();
 
@@ -128,6 +150,15 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
         ms.estimator_position_drift_m = pos_err;
       }
     }
+    // The drill's outcome: the first fault latched from the tick it was armed before, and the
+    // first tick from then whose command damps every joint under that fault (a dance that
+    // ends in finish also reaches damping, with no fault: not the drill's).
+    if (armed_ns >= 0) {
+      if (injection.fault == Fault::kNone) injection.fault = f.mode.latched;
+      if (injection.latency_to_damping_ms < 0.0 && injection.fault != Fault::kNone && all_damping(loop->command())) {
+        injection.latency_to_damping_ms = 1e-6 * static_cast<double>(loop->now_ns() - kTick_ns - armed_ns);
+      }
+    }
     write_row(t_s, f, truth, loop->command(), log);
     if (loop->plant_failed()) {
       run.ok = false;
@@ -158,6 +189,18 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
         dance_requested = true;
         allocs_before = loop->allocations_in_cycle();
         planner_allocs_before = loop->planner_allocations();
+      }
+      if (out.injected && armed_ns < 0 && injection.error.empty() && f.mode.mode == Mode::kDance &&
+          loop->now_ns() - dc.start_ns >= inject_after_ns) {
+        injection.armed = arm_fault_drill(*loop, config.inject.kind, injection.target, injection.error);
+        if (!injection.armed) {
+          run.ok = false;
+          run.error = std::string("inject ") + to_string(config.inject.kind) + ": " + injection.error;
+          break;
+        }
+        armed_ns = loop->now_ns();
+        not_sent_before = frames_not_sent(*loop);
+        injection.armed_at_s = 1e-9 * static_cast<double>(armed_ns);
       }
       step(in);
       // A show ends as it began, on the gantry: finish fades every gain and the feed-forward
@@ -203,6 +246,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   for (const auto& r : loop->io().ruiwo) {
     for (int i = 0; i < r.count; ++i) out.ruiwo_clamp_events += r.state[i].clamp_events;
   }
+  if (armed_ns >= 0) injection.frames_lost = frames_not_sent(*loop) - not_sent_before;
   out.csp_holds = loop->csp_holds();
   out.drive_loop_saturations = loop->drive_loop_saturations();
   out.binding_failures = loop->binding_failures();
@@ -252,6 +296,22 @@ std::string sitl_summary_json(const SitlSummary& s) {
       u(s.drive_loop_saturations), u(s.ruiwo_clamp_events), u(s.binding_failures));
   add("  \"wire\": {\"frames_inspected\": %llu, \"bad_values\": %llu, \"nonfinite_repairs\": %llu},\n",
       u(s.wire.frames_inspected), u(s.wire.bad_values), u(s.wire.nonfinite_clamps));
+  if (s.injected) {
+    const InjectionReport& r = s.injection;
+    add("  \"injection\": {\"kind\": \"%s\", \"at_dance_s\": %.3f, \"armed\": %s, \"target\": \"%s\", \"armed_at_s\": %.3f, ",
+        to_string(r.requested.kind), r.requested.at_s, r.armed ? "true" : "false", r.target.c_str(), r.armed_at_s);
+    if (r.fault != Fault::kNone) {
+      add("\"fault\": {\"number\": %d, \"name\": \"%s\"}, ", static_cast<int>(r.fault), to_string(r.fault));
+    } else {
+      j += "\"fault\": null, ";
+    }
+    if (r.latency_to_damping_ms >= 0.0) {
+      add("\"latency_to_damping_ms\": %.1f, ", r.latency_to_damping_ms);
+    } else {
+      j += "\"latency_to_damping_ms\": null, ";
+    }
+    add("\"frames_lost\": %llu},\n", u(r.frames_lost));
+  }
   if (s.allocations_counted) {
     add("  \"allocations_while_dancing\": {\"control\": %zu, \"planner\": %zu},\n", s.allocations_control, s.allocations_planner);
   }

@@ -8,7 +8,9 @@
 //
 // The CSV log (one row per 2 ms tick) holds only virtual-time quantities: same
 // configuration and seed, same bytes (its sha256 is in the summary). The summary carries
-// `kuavo simulate`'s figures for the dance plus the firmware's own.
+// `kuavo simulate`'s figures for the dance plus the firmware's own, and, with a fault drill
+// armed mid-dance (fault_drill.h), when it was armed, the fault that latched and how long
+// the command took to reach damping.
 #pragma once
 
 #include <array>
@@ -16,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/sitl/fault_drill.h"
 #include "firmware/sitl/firmware_loop.h"
 #include "sim/motion_loop.h"
 
@@ -28,6 +31,24 @@ struct SitlConfig {
   hal::TimeNs plan_latency_ns = 4'000'000;  // the planning task's result, applied this much later
   hal::TimeNs settle_ns = 200'000'000;      // standing in ready off the gantry before the dance
   AllocationCounter count_allocations = nullptr;
+  // A fault drill (fault_drill.h), armed at the first tick in dance mode at least
+  // inject.at_s after the cycle that entered dance; off unless `inject_fault`.
+  bool inject_fault = false;
+  Injection inject{};
+};
+
+// What the drill did: when it was armed, the first fault latched from then on, and the
+// virtual time from the tick it was armed before to the first tick whose command is damping
+// on every joint (0: that same tick).
+struct InjectionReport {
+  Injection requested{};
+  bool armed = false;
+  std::string target, error;  // what was hit; why arming failed (empty: it did not)
+  double armed_at_s = -1.0;   // virtual time of the run
+  Fault fault = Fault::kNone;
+  double latency_to_damping_ms = -1.0;  // -1: no damping after the injection
+  // Reply frames the emulators did not send from then on (lost, or a silent device's).
+  std::uint64_t frames_lost = 0;
 };
 
 struct BusFigures {
@@ -52,6 +73,8 @@ struct SitlSummary {
   bool allocations_counted = false;
   std::vector<BusFigures> buses;
   std::string legs;
+  bool injected = false;  // config.inject_fault: `injection` holds the report
+  InjectionReport injection{};
 };
 
 SitlSummary run_firmware_sim(const model::Model& model, const planner::MotionPlan* motion, const SitlConfig& config);
