@@ -17,10 +17,10 @@ struct FirmwareConfig {
   int ruiwo_divider = 2;
 
   // --- Watchdogs (all must trip inside the 20 ms budget of issue 7) ---
-  // Joint samples: Ruiwo replies come every 4 ms; 3 missed replies (12 ms,
-  // ruiwo::kMaxConsecutiveMisses) make the drivers call a motor silent. 14 ms is
-  // one tick past that, so frame loss alone (3 in a row ~1e-6 at 1 %) does not trip it.
-  hal::TimeNs sensor_max_age_ns = 14'000'000;
+  // Joint samples: Ruiwo replies come every 4 ms; 4 missed replies (16 ms,
+  // ruiwo::kMaxConsecutiveMisses) make the drivers call a motor silent. 18 ms is
+  // one tick past that, so frame loss alone does not trip it first.
+  hal::TimeNs sensor_max_age_ns = 18'000'000;
   // MTi streams at 400 Hz (2.5 ms); 4 missed packets.
   hal::TimeNs imu_max_age_ns = 10'000'000;
   // MPC at 50 Hz: a plan's state is at most one period plus the iteration's latency old

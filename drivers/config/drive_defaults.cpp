@@ -43,8 +43,8 @@ canopen::DriveConfig default_drive_config(int slot, std::uint8_t node_id, double
   c.torque_limit_Nm = t.peak_Nm;
   if (cycle_rate_hz > 0) {
     c.cycle_period_us = static_cast<std::uint32_t>(std::lround(1e6 / cycle_rate_hz));
-    // 3 missing TPDO cycles make the drive silent.
-    c.tpdo_timeout_ns = static_cast<hal::TimeNs>(std::llround(3e9 / cycle_rate_hz));
+    // 4 missing TPDO cycles make the drive silent (cia402_drive.h).
+    c.tpdo_timeout_ns = static_cast<hal::TimeNs>(std::llround(4e9 / cycle_rate_hz));
   }
   if (heartbeat_rate_hz > 0) {
     c.heartbeat_period_ms = static_cast<std::uint16_t>(std::lround(1000.0 / heartbeat_rate_hz));

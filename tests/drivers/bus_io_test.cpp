@@ -112,9 +112,10 @@ TEST_F(RuiwoIo, PersistentlyFullQueueMakesMotorsSilent) {
     silent = ruiwo_receive_rt(host, bus, now, 0, sensors).silent;  // nobody answers
   }
   EXPECT_EQ(silent, 2);
-  // Once the queue is full nothing blocks: the loop reached silence in 3 cycles.
-  EXPECT_EQ(now, 3 * 4'000'000);
-  EXPECT_EQ(dropped, 6);
+  // Once the queue is full nothing blocks: the loop reached silence in kMaxConsecutiveMisses
+  // cycles, 2 motors dropped in each.
+  EXPECT_EQ(now, static_cast<hal::TimeNs>(ruiwo::kMaxConsecutiveMisses) * 4'000'000);
+  EXPECT_EQ(dropped, 2 * static_cast<int>(ruiwo::kMaxConsecutiveMisses));
 }
 
 TEST(CanopenIo, UnclaimedFramesAndSyncLast) {

@@ -45,7 +45,7 @@ TEST_F(DriversConfigTest, DriveDefaultsFollowKuavoJson) {
   EXPECT_EQ(knee.cycle_period_us, 2000u);
   EXPECT_EQ(knee.heartbeat_period_ms, 20);
   EXPECT_EQ(knee.heartbeat_timeout_ns, 60'000'000);
-  EXPECT_EQ(knee.tpdo_timeout_ns, 6'000'000);
+  EXPECT_EQ(knee.tpdo_timeout_ns, 8'000'000);  // 4 cycles at 500 Hz
   // Right ankle motor B (slot 11): CK, 2^17 x 36.
   EXPECT_DOUBLE_EQ(default_drive_config(11, 12, 500.0, 50.0).counts_per_rev, 131072.0 * 36);
   EXPECT_DOUBLE_EQ(default_drive_config(model::kRightArmFirst, 14, 500.0, 50.0).torque_limit_Nm, 66.67);

@@ -163,7 +163,7 @@ TEST(RuiwoBus, DampingAndDisabledModesSendNoStiffness) {
   EXPECT_EQ(wire.kd_Nm_s_per_rad, 0.0);
 }
 
-TEST(RuiwoBus, ReplyTimeoutMakesAMotorSilentAfterThreeMisses) {
+TEST(RuiwoBus, ReplyTimeoutMakesAMotorSilentAfterFourMisses) {
   Bus bus;
   std::string msg;
   ASSERT_EQ(build_bus({motor(1, 13, 1), motor(2, 14, 1)}, bus, msg), DriverError::kOk);
@@ -171,7 +171,8 @@ TEST(RuiwoBus, ReplyTimeoutMakesAMotorSilentAfterThreeMisses) {
   sensors.joints[13].valid = sensors.joints[14].valid = true;
   const hal::TimeNs cycle = 4'000'000;
   can_frame reply;
-  for (int k = 0; k < 3; ++k) {
+  const int n = static_cast<int>(kMaxConsecutiveMisses);
+  for (int k = 0; k < n; ++k) {
     const hal::TimeNs t = k * cycle;
     note_sent_rt(bus, 0, t);
     note_sent_rt(bus, 1, t);
@@ -179,12 +180,12 @@ TEST(RuiwoBus, ReplyTimeoutMakesAMotorSilentAfterThreeMisses) {
     ASSERT_EQ(handle_reply_rt(bus, reply, t + 200'000, sensors), DriverError::kOk);
     EXPECT_EQ(check_timeouts_rt(bus, t + 2'000'000, sensors), 0) << "not yet due";
     const int silent = check_timeouts_rt(bus, t + kReplyTimeout_ns + 1, sensors);
-    EXPECT_EQ(silent, k == 2 ? 1 : 0);
+    EXPECT_EQ(silent, k == n - 1 ? 1 : 0);
   }
   EXPECT_TRUE(bus.state[0].silent);
   EXPECT_FALSE(sensors.joints[13].valid);
   EXPECT_TRUE(sensors.joints[14].valid);
-  EXPECT_EQ(bus.state[0].total_misses, 3u);
+  EXPECT_EQ(bus.state[0].total_misses, kMaxConsecutiveMisses);
   // One good reply clears the silence.
   encode_status_rt(Status{1, 0, 0, 0, 0, 0}, reply);
   ASSERT_EQ(handle_reply_rt(bus, reply, 13 * cycle, sensors), DriverError::kOk);

@@ -103,13 +103,14 @@ TEST_F(RuiwoLoop, FaultInjectionIsRefusedWhileDisarmed) {
   EXPECT_EQ(emu.replies_dropped, 0u);
 }
 
-TEST_F(RuiwoLoop, SilentMotorIsDetectedWithinThreeCycles) {
+TEST_F(RuiwoLoop, SilentMotorIsDetectedWithinFourCycles) {
   emulator::arm_fault_injection(emu.faults, 1);
   ASSERT_TRUE(emulator::set_silent(emu, 0x05, true));
   const int joint = bus.motors[bus.index_of_id[0x05]].joint;
   int cycles = 0;
   while (cycle() == 0 && cycles < 10) ++cycles;
-  EXPECT_EQ(cycles, 2);  // the third cycle reports it: 12 ms < 20 ms budget
+  EXPECT_EQ(cycles, static_cast<int>(ruiwo::kMaxConsecutiveMisses) - 1);  // the fourth reports it: 16 ms < 20 ms
+  EXPECT_EQ(ruiwo::kMaxConsecutiveMisses, 4u);
   EXPECT_FALSE(sensors.joints[joint].valid);
   for (int i = 0; i < bus.count; ++i) {
     EXPECT_EQ(bus.state[i].silent, bus.motors[i].motor_id == 0x05) << i;
@@ -153,7 +154,7 @@ TEST_F(RuiwoLoop, BusOffStopsTransmissionUntilCleared) {
   EXPECT_EQ(send_rt(wire.host, f), DriverError::kBusOff);
   // No command reaches the motors, so every motor goes silent on schedule.
   int silent = 0;
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < static_cast<int>(ruiwo::kMaxConsecutiveMisses); ++k) {
     for (int i = 0; i < bus.count; ++i) {
       ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], f);
       if (send_rt(wire.host, f) == DriverError::kOk) ADD_FAILURE() << "sent while bus-off";

@@ -195,7 +195,7 @@ TEST(FirmwareInLoop, EstimatorDivergenceAndStalePlan) {
 }
 
 // 1 % of the reply frames lost on every bus: below every watchdog's threshold
-// (3 consecutive misses at 1 % ~ 1e-6), so the robot keeps standing.
+// (4 consecutive misses at 1 % ~ 1e-8), so the robot keeps standing.
 TEST(FirmwareInLoop, OnePercentFrameLossIsTolerated) {
   FirmwareLoop loop;
   ASSERT_TRUE(loop.bring_up());
