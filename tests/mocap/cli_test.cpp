@@ -80,10 +80,14 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   const auto report = nlohmann::json::parse(slurp(kOut + "_dyn.json"));
   ASSERT_TRUE(report.contains("dynamic"));
   const auto& d = report["dynamic"];
-  // The built-in dance dances in the closed-loop check on both grounds: no round of repair.
+  // The built-in dance dances in the closed-loop check on both grounds and in MuJoCo: no round
+  // of repair.
   ASSERT_TRUE(d.contains("verification"));
   EXPECT_EQ(d["verification"]["rounds"], 0);
-  EXPECT_EQ(d["verification"]["runs"].size(), 2u);
+  ASSERT_EQ(d["verification"]["runs"].size(), 3u);
+  EXPECT_EQ(d["verification"]["runs"][0]["engine"], "simbody");
+  EXPECT_EQ(d["verification"]["runs"][1]["ground"], "carpet");
+  EXPECT_EQ(d["verification"]["runs"][2]["engine"], "mujoco");
   EXPECT_TRUE(d["verification"]["danced"].get<bool>()) << d["verification"].dump();
   for (const char* key : {"solve_s", "frames", "windows", "sqp_iterations", "torque_violations", "friction_violations",
                           "zmp_outside_m_max", "max_torque_ratio", "repairs", "geometric", "dynamic"})
@@ -216,9 +220,9 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   // The kept round's last run is replayed by `kuavo simulate` on the written file.
   const auto& last = runs[kept].back();
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
-  const std::string sim = kBin + " simulate " + kOut + "_ver.motion --quiet --ground " +
-                          last["ground"].get<std::string>() + " --seed 1 --summary " + kOut + "_ver_sim.json >" +
-                          kOut + "_ver_sim.stdout 2>&1";
+  const std::string sim = kBin + " simulate " + kOut + "_ver.motion --quiet --engine " +
+                          last["engine"].get<std::string>() + " --ground " + last["ground"].get<std::string>() +
+                          " --seed 1 --summary " + kOut + "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   ASSERT_EQ(std::system(sim.c_str()), 0) << slurp(kOut + "_ver_sim.stdout");
   const auto summary = nlohmann::json::parse(slurp(kOut + "_ver_sim.json"));
   EXPECT_EQ(summary["fell"].get<bool>(), last["fell"].get<bool>());

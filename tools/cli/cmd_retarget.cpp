@@ -14,7 +14,8 @@
 // dynamic_retarget.h). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
-// 12): the result is danced in the closed-loop simulation on floor and carpet; where it falls,
+// 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
+// the floor in MuJoCo (--verify-mujoco on|off, default on); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
@@ -111,6 +112,7 @@ int run(int argc, char** argv) {
   bool quiet = false;
   double horizon_s = 0.0, torque_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, verify_rounds = DynamicStageOptions{}.verify_rounds;
+  std::string verify_mujoco = "on";
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   args::Parser p("kuavo retarget");
@@ -129,6 +131,7 @@ int run(int argc, char** argv) {
   p.number("--torque-weight", "W", 0.0, 1e4, "", &torque_weight).modes = kDynamic;
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.integer("--verify", "ROUNDS", 0, 16, "rounds", &verify_rounds).modes = kDynamic;
+  p.choice("--verify-mujoco", {"on", "off"}, &verify_mujoco).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
   p.number("--duration", "SECONDS", mocap::kDefaultDanceDuration_s,
@@ -167,6 +170,7 @@ int run(int argc, char** argv) {
   if (p.given("--torque-weight")) dyn_options.dynamic.torque_penalty_weight = torque_weight;
   dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);
   dyn_options.verify_rounds = static_cast<int>(verify_rounds);
+  dyn_options.verify_mujoco = verify_mujoco == "on";
   // Figures next to the report unless told otherwise (none without a report).
   if (figures_dir.empty() && !report_path.empty()) {
     figures_dir = std::filesystem::path(report_path).parent_path().string();
@@ -323,7 +327,7 @@ int run(int argc, char** argv) {
     if (v["danced"].is_boolean() && !v["danced"].get<bool>()) {
       nlohmann::ordered_json last = v["runs"].back();  // the kept round's fall
       for (const auto& run : v["runs"]) {
-        if (run["round"] == v["kept_round"] && run["fell"].get<bool>()) last = run;
+        if (run["round"] == v["kept_round"] && run.value("fell", false)) last = run;
       }
       std::fprintf(stderr,
                    "kuavo retarget: warning: the motion still falls in the closed-loop simulation after %d round(s) "

@@ -33,7 +33,7 @@ struct DynamicStageOptions {
   double attenuation_gain = 0.5;
   // Closed-loop verification (on by default; kuavo retarget --verify ROUNDS): the output is
   // danced in the simulator by the online stack on each of verify_grounds (seed verify_seed),
-  // as `kuavo simulate MOTION` dances it. Where it falls, the gestures over [fall −
+  // as `kuavo simulate MOTION` dances it, then in MuJoCo on the floor (verify_mujoco). Where it falls, the gestures over [fall −
   // verify_before_s, fall + verify_after_s] are scaled by verify_gain about their 1 s average
   // and the motion optimized again; a second fall in a scaled range takes the gestures there
   // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*); a third
@@ -43,6 +43,9 @@ struct DynamicStageOptions {
   int verify_rounds = 12;
   std::vector<sim::GroundParams> verify_grounds = {sim::kFloor, sim::kCarpet};
   std::uint64_t verify_seed = 1;
+  // Then MuJoCo on the floor (Leju's own MJCF and MuJoCo's contact, independent of our
+  // tables): perfume fell there at 32.8 s, where Simbody danced it on both grounds.
+  bool verify_mujoco = true;
   double verify_gain = 0.5;
   double verify_before_s = 2.0;
   double verify_after_s = 0.3;
