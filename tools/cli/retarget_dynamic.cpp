@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 #include "controllers/motion/load_motion.h"
 #include "sim/motion_loop.h"
@@ -86,8 +87,17 @@ bool write_csv(const std::string& path, const model::Model& robot, const std::ve
   return static_cast<bool>(out);
 }
 
-}  // namespace
-
+// The closed-loop check's repair after a fall at fell_at_s (the output motion's clock): the
+// dance-clock frames [a, b) = [fall − verify_before_s, fall + verify_after_s) within the dance,
+// scaled by verify_gain, or by 0 and with calm steps (mocap::RepairConfig::calm_*) where a
+// range in `scaled` (the earlier rounds', appended to) overlaps, and with both feet held down
+// over it where two do. false if nothing of the dance lies there (a fall in the lead-in).
+struct VerifyRange {
+  int a = 0, b = 0;
+  double gain = 1.0;
+  bool calm_steps = false;  // a second fall there: calm steps too
+  bool hold = false;        // a third: both feet down over the range
+};
 bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
                         const DynamicStageOptions& options, std::vector<std::pair<int, int>>& scaled, VerifyRange& out) {
   const int fall = static_cast<int>(std::lround(fell_at_s * rate_hz)) - lead_frames;  // dance clock
@@ -108,6 +118,8 @@ bool verification_range(double fell_at_s, int lead_frames, int dance_frames, dou
   out = {a, b, again ? 0.0 : options.verify_gain, again, before >= 2};
   return true;
 }
+
+}  // namespace
 
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
@@ -189,10 +201,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   take_output();
 
   // Closed-loop verification: the output danced by the online stack in the simulator, as
-  // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model), on each ground. Where it
-  // falls, the gestures of the seconds before the fall are scaled down (attenuate_gestures:
-  // the same steps, at a smaller amplitude and speed) and the motion optimized again, up to
-  // verify_rounds times; a second fall in the same place scales them again.
+  // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model), on each ground and then in
+  // MuJoCo. Where it falls, the seconds before the fall are repaired (verification_range's
+  // ladder) and the motion optimized again, up to verify_rounds times.
   ordered_json verification_runs = ordered_json::array();
   bool danced = true;
   int verify_round = 0;
@@ -218,6 +229,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     std::vector<std::pair<sim::GroundParams, sim::Engine>> checks;
     for (const sim::GroundParams& ground : options.verify_grounds) checks.emplace_back(ground, sim::Engine::kSimbody);
     if (options.verify_mujoco) checks.emplace_back(sim::kFloor, sim::Engine::kMujoco);
+    int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
     for (const auto& [ground, engine] : checks) {
       sim::MotionRunConfig cfg;
       cfg.stack.planner = stack::PlannerKind::kMpc;
@@ -227,41 +239,35 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       const auto t0 = std::chrono::steady_clock::now();
       const sim::MotionSummary summary = sim::run_motion(robot, *plan, cfg);
       verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      ordered_json entry = {{"round", verify_round},
+                            {"engine", sim::to_string(engine)},
+                            {"ground", ground.name},
+                            {"seed", options.verify_seed}};
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
         // without it, and says so.
-        verification_runs.push_back({{"round", verify_round},
-                                     {"engine", sim::to_string(engine)},
-                                     {"ground", ground.name},
-                                     {"seed", options.verify_seed},
-                                     {"error", summary.run.error}});
+        entry["error"] = summary.run.error;
+        verification_runs.push_back(entry);
         continue;
       }
       if (!summary.run.ok) {
         error = "the closed-loop check of the retargeted motion failed: " + summary.run.error;
         return 1;
       }
-      verification_runs.push_back({{"round", verify_round},
-                                   {"engine", sim::to_string(engine)},
-                                   {"ground", ground.name},
-                                   {"seed", options.verify_seed},
-                                   {"fell", summary.run.fell},
-                                   {"fell_at_s", summary.run.fell ? summary.run.fell_at_s : -1.0}});
+      entry["fell"] = summary.run.fell;
+      entry["fell_at_s"] = summary.run.fell ? summary.run.fell_at_s : -1.0;
+      verification_runs.push_back(entry);
       if (summary.run.fell) {
         fell_at_s = summary.run.fell_at_s;
         fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo" : std::string(ground.name);
         break;
       }
+      ++passed;
     }
     danced = fell_at_s < 0.0;
-    // The best round so far: more grounds danced (they run in order, each after the last
-    // danced), then the later fall. A later round's repair can make things worse elsewhere
-    // (cmu_05_07: a round that danced the floor, then carpet's repair fell on the floor at
-    // 8.5 s in every later round); the output is the best round's motion.
-    int passed = 0;
-    for (const auto& run : verification_runs) {
-      passed += run["round"] == verify_round && run.contains("fell") && !run["fell"].get<bool>();
-    }
+    // The best round so far: more runs danced, then the later fall. A later round's repair can
+    // make things worse elsewhere (cmu_05_07: a round that danced the floor, then carpet's
+    // repair fell on the floor at 8.5 s in every later round); the output is the best round's.
     const double reached = danced ? std::numeric_limits<double>::infinity() : fell_at_s;
     if (verify_round == 0 || passed > best_passed || (passed == best_passed && reached > best_reached)) {
       best_round = verify_round, best_passed = passed, best_reached = reached;
@@ -283,10 +289,6 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                                    options.overrides, attenuations)) {
       break;  // forbidden by an override
     }
-    // Calm steps over the whole dance, once: each touchdown is placed from the stance foot, so
-    // the steps before the fall decide where and how the robot arrives there (calm steps over
-    // the fall's range only left cmu_05_20 and cmu_05_07 falling on the floor after 8 rounds;
-    // over the whole dance both danced the floor to the end).
     if (range.hold) {
       mocap::RepairOverride hold;
       hold.start_s = range.a / rate;
@@ -295,6 +297,10 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       overrides.push_back(hold);
       attenuations.back().reason += "; both feet stay down here";
     }
+    // Calm steps over the whole dance, once: each touchdown is placed from the stance foot, so
+    // the steps before the fall decide where and how the robot arrives there (calm steps over
+    // the fall's range only left cmu_05_20 and cmu_05_07 falling on the floor after 8 rounds;
+    // over the whole dance both danced the floor to the end).
     if (range.calm_steps && !calm_everywhere) {
       mocap::RepairOverride calm;
       calm.start_s = 0.0;

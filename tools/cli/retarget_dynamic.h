@@ -7,7 +7,6 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "sim/ground_contact.h"
@@ -33,8 +32,9 @@ struct DynamicStageOptions {
   double attenuation_gain = 0.5;
   // Closed-loop verification (on by default; kuavo retarget --verify ROUNDS): the output is
   // danced in the simulator by the online stack on each of verify_grounds (seed verify_seed),
-  // as `kuavo simulate MOTION` dances it, then in MuJoCo on the floor (verify_mujoco). Where it falls, the gestures over [fall −
-  // verify_before_s, fall + verify_after_s] are scaled by verify_gain about their 1 s average
+  // as `kuavo simulate MOTION` dances it, then in MuJoCo on the floor (verify_mujoco). Where
+  // it falls, the gestures over [fall − verify_before_s, fall + verify_after_s] are scaled by
+  // verify_gain about their 1 s average
   // and the motion optimized again; a second fall in a scaled range takes the gestures there
   // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*); a third
   // holds both feet down over the range (the steps there are given up, and listed). Up to
@@ -59,20 +59,6 @@ struct DynamicStageResult {
   mocap::RepairedMotion repaired;
   mocap::DynamicResult dynamic;
 };
-
-// The closed-loop check's repair after a fall at fell_at_s (the output motion's clock): the
-// dance-clock frames [a, b) = [fall − verify_before_s, fall + verify_after_s) within the dance,
-// scaled by verify_gain, or by 0 and with calm steps (mocap::RepairConfig::calm_*) where a
-// range in `scaled` (the earlier rounds', appended to) overlaps, and with both feet held down
-// over it where two do. false if nothing of the dance lies there (a fall in the lead-in).
-struct VerifyRange {
-  int a = 0, b = 0;
-  double gain = 1.0;
-  bool calm_steps = false;  // a second fall there: calm steps over the range too
-  bool hold = false;        // a third: both feet down over the range
-};
-bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
-                        const DynamicStageOptions& options, std::vector<std::pair<int, int>>& scaled, VerifyRange& out);
 
 // 0 done, 1 the optimization failed, 2 the motion is bad input (the message says why).
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,

@@ -132,6 +132,14 @@ bool limit_acceleration(std::vector<V>& x, int j, double a_max, double rate_hz, 
   return any;
 }
 
+// An override with `flag` set (force_double, calm_steps) covers dance time t [s].
+bool covers(const std::vector<RepairOverride>& overrides, bool RepairOverride::*flag, double t) {
+  for (const RepairOverride& o : overrides) {
+    if (o.*flag && t >= o.start_s && t < o.end_s) return true;
+  }
+  return false;
+}
+
 // An override forbids `kind` at dance time t [s].
 bool forbids(const std::vector<RepairOverride>& overrides, RepairKind kind, double t) {
   for (const RepairOverride& o : overrides) {
@@ -207,7 +215,7 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all' , 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all', 'START_S END_S force double' "
               "or 'START_S END_S calm steps' (0 <= START_S < END_S)";
       return false;
     }
@@ -255,22 +263,13 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   const auto dance_time = [&](int i) { return (i - lead) / rate_hz; };
   const auto forbidden = [&](RepairKind kind, int i) { return in_dance(i) && forbids(overrides, kind, dance_time(i)); };
   const auto forced_double = [&](int i) {
-    if (!in_dance(i)) return false;
-    const double t = dance_time(i);
-    for (const RepairOverride& o : overrides) {
-      if (o.force_double && t >= o.start_s && t < o.end_s) return true;
-    }
-    return false;
+    return in_dance(i) && covers(overrides, &RepairOverride::force_double, dance_time(i));
   };
 
   // A touchdown in the lead-in or the tail counts as the dance's first or last frame (the tail
   // takes the human's last step: cmu_05_07's landed 0.40 m ahead, 0.45 m beside the other foot).
   const auto calm = [&](int i) {
-    const double t = dance_time(std::clamp(i, lead, lead + n_dance - 1));
-    for (const RepairOverride& o : overrides) {
-      if (o.calm_steps && t >= o.start_s && t < o.end_s) return true;
-    }
-    return false;
+    return covers(overrides, &RepairOverride::calm_steps, dance_time(std::clamp(i, lead, lead + n_dance - 1)));
   };
 
   RepairLog log(rate_hz);
