@@ -493,5 +493,31 @@ TEST(mocap_dynamic_retarget, BounceForcesAreTheOnesTheFramesNeed) {
   RecordProperty("residual_Nm_mean", number(a.check.base_moment_residual_Nm_mean));
 }
 
+// The base drop's envelope against its closed form: a single spike of height H comes out as
+// a triangle-smoothed plateau, H at the spike, 0 past w + 2·(w/2) frames, with second
+// differences within 2H/(2·(w/2) + 1)² (the first differences of one pass are within
+// ±H/(2·(w/2) + 1)); any input stays under the curve.
+TEST(mocap_dynamic_retarget, BaseDropEnvelopeCoversEveryFrameSmoothly) {
+  const int n = 300, w = 20, h = w / 2;
+  const double H = 0.02;
+  std::vector<double> spike(n, 0.0);
+  spike[100] = H;
+  const std::vector<double> s = smooth_envelope(spike, w);
+  ASSERT_EQ(static_cast<int>(s.size()), n);
+  EXPECT_DOUBLE_EQ(s[100], H);
+  EXPECT_EQ(s[100 + w + 2 * h + 1], 0.0);
+  EXPECT_EQ(s[100 - w - 2 * h - 1], 0.0);
+  EXPECT_GT(s[100 + w + 2 * h - 1], 0.0);
+  double worst = 0.0;
+  for (int i = 1; i + 1 < n; ++i) worst = std::max(worst, std::abs(s[i + 1] - 2.0 * s[i] + s[i - 1]));
+  EXPECT_LE(worst, 2.0 * H / ((2 * h + 1) * (2 * h + 1)) + 1e-15);
+  EXPECT_GT(worst, 0.5 * H / ((2 * h + 1) * (2 * h + 1)));
+  // Scattered drops of every size: each frame's own stays covered.
+  std::vector<double> v(n, 0.0);
+  for (int i = 0; i < n; i += 7) v[i] = 0.001 * ((i * 37) % 21);
+  const std::vector<double> e = smooth_envelope(v, w);
+  for (int i = 0; i < n; ++i) EXPECT_GE(e[i], v[i] - 1e-15) << i;
+}
+
 }  // namespace
 }  // namespace kuavo::mocap

@@ -33,6 +33,9 @@ constexpr double kTorqueFdStep_rad = 1e-6;
 // kMaxBaseDrop_m); what remains is counted and reported [m].
 constexpr double kFootholdTolerance_m = 2e-3;
 constexpr double kMaxBaseDrop_m = 0.02;
+// Half-width of the base drop's envelope [s]: a 2 cm drop comes in over 0.4 s (peak
+// vertical acceleration about 0.5 m/s², against 170 m/s² lowered frame by frame).
+constexpr double kBaseDropSmoothing_s = 0.2;
 // Step control of the SQP iterations: a step larger than this fraction of the previous one
 // counts as no progress (kMinStep: the smallest step fraction, below).
 constexpr double kContraction = 0.8;
@@ -468,7 +471,14 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
     }
   }
   // Stance feet exactly on their footholds (the reference's, which the repair placed).
-  std::array<Vec3, model::kNumContactPoints> targets;
+  // Pass 1 finds, frame by frame, how far the base must come down for the legs to reach
+  // (a leg at full stretch cannot reach a foothold the TO crept past); pass 2 lowers it by a
+  // smooth envelope of those drops. Lowered frame by frame, the base jumped by up to 1.7 cm
+  // between frames and the stance knee by 0.2 rad (perfume at 25.86 s): an inverse-dynamics
+  // torque 5.5× the hip-pitch limit that no motor could give.
+  std::vector<std::array<Vec3, model::kNumContactPoints>> targets(n);
+  std::vector<ConfigVector> start(n);
+  std::vector<double> need(n, 0.0);
   for (int i = 0; i < n; ++i) {
     dynamics::forward_kinematics(robot, *data, plan.q[i]);
     std::array<Vec3, model::kNumContactPoints> reference;
@@ -483,30 +493,31 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
       const int kb = std::min(ka + 1, S);
       const int kc = flags[ka][c] ? ka : kb;
       const Vec3 held = flags[kc][c] ? anchors[kc][c] : reference[c];
-      targets[c] = stance ? held : now;
-      if (stance) stats.foothold_correction_max_m = std::max(stats.foothold_correction_max_m, (now - targets[c]).norm());
+      targets[i][c] = stance ? held : now;
+      if (stance) stats.foothold_correction_max_m = std::max(stats.foothold_correction_max_m, (now - targets[i][c]).norm());
     }
-    double miss = leg_ik_lm(robot, *data, targets, out.q[i]);
-    // A leg at full stretch cannot reach a foothold the TO crept past: the base lowers by
-    // up to kMaxBaseDrop_m (counted in the stats), as the repair's IK does.
-    // The best attempt is kept (lowering hurts a leg held by a joint limit).
-    if (!(miss <= kFootholdTolerance_m)) {
-      const ConfigVector start = out.q[i];
-      ConfigVector best = out.q[i];
-      double best_drop = 0.0;
-      for (double drop = 1e-3; !(miss <= kFootholdTolerance_m) && drop <= kMaxBaseDrop_m + 1e-12; drop += 1e-3) {
-        ConfigVector q = start;
-        q[2] -= drop;
-        const double m = leg_ik_lm(robot, *data, targets, q);
-        if (m < miss) {
-          miss = m;
-          best = q;
-          best_drop = drop;
-        }
+    start[i] = out.q[i];
+    double miss = leg_ik_lm(robot, *data, targets[i], out.q[i]);
+    // The drop that reaches (or, out of reach even then, the one that comes nearest).
+    for (double drop = 1e-3; !(miss <= kFootholdTolerance_m) && drop <= kMaxBaseDrop_m + 1e-12; drop += 1e-3) {
+      ConfigVector q = start[i];
+      q[2] -= drop;
+      const double m = leg_ik_lm(robot, *data, targets[i], q);
+      if (m < miss) {
+        miss = m;
+        need[i] = drop;
       }
-      out.q[i] = best;
-      stats.base_drop_max_m = std::max(stats.base_drop_max_m, best_drop);
     }
+  }
+  const std::vector<double> drop = smooth_envelope(need, static_cast<int>(std::lround(kBaseDropSmoothing_s * plan.rate_hz)));
+  for (int i = 0; i < n; ++i) {
+    double miss = 0.0;
+    if (drop[i] > 0.0) {
+      out.q[i] = start[i];
+      out.q[i][2] -= drop[i];
+    }
+    miss = leg_ik_lm(robot, *data, targets[i], out.q[i]);
+    stats.base_drop_max_m = std::max(stats.base_drop_max_m, drop[i]);
     // Out of reach even then: the nearest pose is kept and the miss reported (the report's
     // foothold_miss_m_max; the simulator is the judge of whether the dance survives it).
     if (!(miss <= kFootholdTolerance_m)) ++stats.foothold_miss_frames;
@@ -514,6 +525,25 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
   }
   stats.solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return true;
+}
+
+std::vector<double> smooth_envelope(const std::vector<double>& v, int w) {
+  const int n = static_cast<int>(v.size());
+  std::vector<double> env(v), tmp(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j) env[i] = std::max(env[i], v[j]);
+  }
+  const int h = std::max(0, w / 2);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int i = 0; i < n; ++i) {
+      double sum = 0.0;
+      // Frames past the ends count as the end frame (the envelope holds its value there).
+      for (int j = i - h; j <= i + h; ++j) sum += env[std::clamp(j, 0, n - 1)];
+      tmp[i] = sum / (2 * h + 1);
+    }
+    env.swap(tmp);
+  }
+  return env;
 }
 
 }  // namespace kuavo::mocap

@@ -19,7 +19,8 @@
 // from the previous solution shifted. The committed stages (50 Hz) are interpolated to the
 // motion's frame rate, and the legs re-solved so stance feet sit exactly where they landed
 // in the TO (the linearized constraint lets them creep over a stance; a leg that cannot
-// reach lowers the base up to 2 cm, and a miss beyond that is reported, not hidden).
+// reach lowers the base up to 2 cm, along a smooth envelope of what each frame needs, and a
+// miss beyond that is reported, not hidden).
 // Offline: allocates (the MPC workspace, ~15 MB, on the heap), not real-time.
 #pragma once
 
@@ -103,5 +104,12 @@ struct StageTorque {
 void stage_torque(const model::Model& robot, dynamics::Data& data, const mpc::StateVector& x,
                   const mpc::InputVector& u, const mpc::HeadVector& head_rad, const planner::ContactFlags& contact,
                   bool with_derivatives, StageTorque& out);
+
+// A smooth curve at or above v (the base drop that lets stretched legs reach): the running
+// max over ±w frames, averaged twice over ±w/2 (a triangle of half-width ≤ w, so every
+// frame's average stays within the max's reach). A single spike of height H comes out as H
+// at the spike, 0 beyond w + 2·(w/2) frames, and second differences within 2H/(2·(w/2)+1)²
+// (each smoothing pass bounds a first difference by H/(2·(w/2)+1)).
+std::vector<double> smooth_envelope(const std::vector<double>& v, int w);
 
 }  // namespace kuavo::mocap
