@@ -54,4 +54,12 @@ struct CommandFrame {
   TimeNs stamp_ns = 0;  // control tick that produced it
 };
 
+// Every joint commanded to damping (the safe state a fault must reach).
+inline bool all_damping(const CommandFrame& c) {
+  for (const JointCommand& j : c.joints) {
+    if (j.mode != JointMode::kDamping) return false;
+  }
+  return true;
+}
+
 }  // namespace kuavo::hal

@@ -33,13 +33,6 @@ std::string log_header(const model::Model& m) {
   return h;
 }
 
-bool all_damping(const hal::CommandFrame& c) {
-  for (const hal::JointCommand& j : c.joints) {
-    if (j.mode != hal::JointMode::kDamping) return false;
-  }
-  return true;
-}
-
 // Reply frames the emulators have not sent so far (lost or silenced).
 std::uint64_t frames_not_sent(const FirmwareLoop& loop) {
   std::uint64_t n = 0;
@@ -155,7 +148,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     // ends in finish also reaches damping, with no fault: not the drill's).
     if (armed_ns >= 0) {
       if (injection.fault == Fault::kNone) injection.fault = f.mode.latched;
-      if (injection.latency_to_damping_ms < 0.0 && injection.fault != Fault::kNone && all_damping(loop->command())) {
+      if (injection.latency_to_damping_ms < 0.0 && injection.fault != Fault::kNone && hal::all_damping(loop->command())) {
         injection.latency_to_damping_ms = 1e-6 * static_cast<double>(loop->now_ns() - kTick_ns - armed_ns);
       }
     }

@@ -15,6 +15,7 @@
 
 #include "controllers/motion/load_motion.h"
 #include "firmware/sitl/sitl_run.h"
+#include "tests/firmware/dance_prefix.h"
 #include "tests/firmware/firmware_loop.h"
 #include "tools/mocap/motion_plan_io.h"
 
@@ -27,15 +28,7 @@ constexpr double kPrefix_s = 5.95;         // eight side steps; the next lifts a
 constexpr double kDoubleSupport_s = 1.0;   // both feet down until 2.0 s
 
 const planner::MotionPlan& dance_prefix() {
-  static const planner::MotionPlan* plan = [] {
-    auto* p = new planner::MotionPlan;  // 8.74 MB, kept for the process
-    const model::Model& robot = test_support::test_model();
-    std::string error;
-    EXPECT_TRUE(mocap::built_in_dance_plan(robot, *p, error, kPrefix_s)) << error;
-    planner::BalanceFilterReport report;
-    EXPECT_TRUE(motion::prepare_motion(robot, {.balance_filter = true}, "built-in dance", *p, report, error)) << error;
-    return p;
-  }();
+  static const planner::MotionPlan* plan = test_support::make_dance_prefix(kPrefix_s);
   return *plan;
 }
 

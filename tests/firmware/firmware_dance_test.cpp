@@ -33,6 +33,7 @@
 #include "controllers/motion/load_motion.h"
 #include "controllers/planner/balance_filter.h"
 #include "firmware/sitl/sitl_run.h"
+#include "tests/firmware/dance_prefix.h"
 #include "tests/firmware/firmware_loop.h"
 #include "tools/mocap/motion_plan_io.h"
 
@@ -40,23 +41,13 @@ namespace kuavo::firmware {
 namespace {
 
 using test_support::FirmwareLoop;
+using test_support::make_dance_prefix;
 using test_support::kTick_ns;
 
 // Both feet stay down until the first side step lifts at 2.0 s; the side steps end at
 // 5.9 s (the last swing: 5.5 s + 0.4 s) and the next step lifts at 6.0 s.
 constexpr double kBeforeSteps_s = 1.95;
 constexpr double kWithSideSteps_s = 5.95;
-
-// The built-in dance's first `seconds`, as kuavo_fw --dance loads a file.
-planner::MotionPlan* make_dance_prefix(double seconds) {
-  auto* plan = new planner::MotionPlan;  // 8.74 MB, kept for the process (static below)
-  const model::Model& robot = test_support::test_model();
-  std::string error;
-  EXPECT_TRUE(mocap::built_in_dance_plan(robot, *plan, error, seconds)) << error;
-  planner::BalanceFilterReport report;
-  EXPECT_TRUE(motion::prepare_motion(robot, {.balance_filter = true}, "built-in dance", *plan, report, error)) << error;
-  return plan;
-}
 
 const planner::MotionPlan& before_steps() {
   static const planner::MotionPlan* plan = make_dance_prefix(kBeforeSteps_s);

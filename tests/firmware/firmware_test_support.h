@@ -38,11 +38,6 @@ inline void restamp(hal::SensorFrame& s, hal::TimeNs now_ns) {
   s.imu.stamp_ns = now_ns;
 }
 
-inline bool all_damping(const hal::CommandFrame& c) {
-  for (const hal::JointCommand& j : c.joints) {
-    if (j.mode != hal::JointMode::kDamping) return false;
-  }
-  return true;
-}
+using hal::all_damping;
 
 }  // namespace kuavo::firmware::test_support

@@ -511,12 +511,11 @@ bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan
   }
   const std::vector<double> drop = smooth_envelope(need, static_cast<int>(std::lround(kBaseDropSmoothing_s * plan.rate_hz)));
   for (int i = 0; i < n; ++i) {
-    double miss = 0.0;
     if (drop[i] > 0.0) {
       out.q[i] = start[i];
       out.q[i][2] -= drop[i];
     }
-    miss = leg_ik_lm(robot, *data, targets[i], out.q[i]);
+    const double miss = leg_ik_lm(robot, *data, targets[i], out.q[i]);
     stats.base_drop_max_m = std::max(stats.base_drop_max_m, drop[i]);
     // Out of reach even then: the nearest pose is kept and the miss reported (the report's
     // foothold_miss_m_max; the simulator is the judge of whether the dance survives it).
