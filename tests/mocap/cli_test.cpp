@@ -80,14 +80,15 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   const auto report = nlohmann::json::parse(slurp(kOut + "_dyn.json"));
   ASSERT_TRUE(report.contains("dynamic"));
   const auto& d = report["dynamic"];
-  // The built-in dance dances in the closed-loop check on both grounds and in MuJoCo: no round
-  // of repair.
+  // The built-in dance dances in the closed-loop check on both grounds with each of the three
+  // noise seeds and in MuJoCo: no round of repair.
   ASSERT_TRUE(d.contains("verification"));
   EXPECT_EQ(d["verification"]["rounds"], 0);
-  ASSERT_EQ(d["verification"]["runs"].size(), 3u);
+  ASSERT_EQ(d["verification"]["runs"].size(), 7u);
   EXPECT_EQ(d["verification"]["runs"][0]["engine"], "simbody");
   EXPECT_EQ(d["verification"]["runs"][1]["ground"], "carpet");
-  EXPECT_EQ(d["verification"]["runs"][2]["engine"], "mujoco");
+  EXPECT_EQ(d["verification"]["runs"][5]["seed"], 3);
+  EXPECT_EQ(d["verification"]["runs"][6]["engine"], "mujoco");
   EXPECT_TRUE(d["verification"]["danced"].get<bool>()) << d["verification"].dump();
   for (const char* key : {"solve_s", "frames", "windows", "sqp_iterations", "torque_violations", "friction_violations",
                           "zmp_outside_m_max", "max_torque_ratio", "repairs", "geometric", "dynamic"})
@@ -204,6 +205,24 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
     return std::make_pair(passed, reached);
   };
   EXPECT_EQ(kept, score(1) > score(0) ? 1 : 0) << v.dump();
+  // Each round dances floor and carpet with noise seeds 1, 2, 3 in turn, then MuJoCo's floor,
+  // and stops at its first fall.
+  const std::vector<std::pair<std::string, std::uint64_t>> order = {{"floor", 1}, {"carpet", 1}, {"floor", 2},
+                                                                    {"carpet", 2}, {"floor", 3}, {"carpet", 3}};
+  for (const auto& round : runs) {
+    for (std::size_t i = 0; i < round.size(); ++i) {
+      if (i + 1 < round.size()) {
+        EXPECT_FALSE(round[i]["fell"].get<bool>()) << v.dump();
+      }
+      if (round[i]["engine"] == "mujoco") {
+        EXPECT_EQ(i, order.size()) << v.dump();
+        continue;
+      }
+      ASSERT_LT(i, order.size()) << v.dump();
+      EXPECT_EQ(round[i]["ground"], order[i].first) << v.dump();
+      EXPECT_EQ(round[i]["seed"].get<std::uint64_t>(), order[i].second) << v.dump();
+    }
+  }
   // Round 0's fall asked for the repair; it is listed if its round was kept.
   int listed = 0;
   for (const auto& r : report["dynamic"]["repairs"]) {
@@ -222,7 +241,8 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
   const std::string sim = kBin + " simulate " + kOut + "_ver.motion --quiet --engine " +
                           last["engine"].get<std::string>() + " --ground " + last["ground"].get<std::string>() +
-                          " --seed 1 --summary " + kOut + "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
+                          " --seed " + std::to_string(last["seed"].get<std::uint64_t>()) + " --summary " + kOut +
+                          "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   ASSERT_EQ(std::system(sim.c_str()), 0) << slurp(kOut + "_ver_sim.stdout");
   const auto summary = nlohmann::json::parse(slurp(kOut + "_ver_sim.json"));
   EXPECT_EQ(summary["fell"].get<bool>(), last["fell"].get<bool>());

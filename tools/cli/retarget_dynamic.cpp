@@ -226,23 +226,33 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     std::string fell_on;
     // The Simbody runs on each ground, then (verify_mujoco) MuJoCo on the floor: Leju's own
     // model and MuJoCo's contact, independent of our tables.
-    std::vector<std::pair<sim::GroundParams, sim::Engine>> checks;
-    for (const sim::GroundParams& ground : options.verify_grounds) checks.emplace_back(ground, sim::Engine::kSimbody);
-    if (options.verify_mujoco) checks.emplace_back(sim::kFloor, sim::Engine::kMujoco);
+    struct Check {
+      sim::GroundParams ground;
+      sim::Engine engine;
+      std::uint64_t seed;
+    };
+    std::vector<Check> checks;
+    for (const std::uint64_t seed : options.verify_seeds) {
+      for (const sim::GroundParams& ground : options.verify_grounds) checks.push_back({ground, sim::Engine::kSimbody, seed});
+    }
+    if (options.verify_mujoco && !options.verify_seeds.empty()) {
+      checks.push_back({sim::kFloor, sim::Engine::kMujoco, options.verify_seeds.front()});
+    }
+    std::uint64_t fell_seed = 0;
     int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
-    for (const auto& [ground, engine] : checks) {
+    for (const auto& [ground, engine, seed] : checks) {
       sim::MotionRunConfig cfg;
       cfg.stack.planner = stack::PlannerKind::kMpc;
       cfg.run.ground = ground;
       cfg.run.engine = engine;
-      cfg.run.seed = options.verify_seed;
+      cfg.run.seed = seed;
       const auto t0 = std::chrono::steady_clock::now();
       const sim::MotionSummary summary = sim::run_motion(robot, *plan, cfg);
       verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ordered_json entry = {{"round", verify_round},
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},
-                            {"seed", options.verify_seed}};
+                            {"seed", seed}};
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
         // without it, and says so.
@@ -260,6 +270,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       if (summary.run.fell) {
         fell_at_s = summary.run.fell_at_s;
         fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo" : std::string(ground.name);
+        fell_seed = seed;
         break;
       }
       ++passed;
@@ -283,7 +294,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     mocap::AttenuationRange scaled{range.a, range.b, 0.0, {}};
     char why[160];
     std::snprintf(why, sizeof why, "the online stack fell here in the closed-loop simulation (%s, seed %llu, at %.2f s)",
-                  fell_on.c_str(), static_cast<unsigned long long>(options.verify_seed), fell_at_s);
+                  fell_on.c_str(), static_cast<unsigned long long>(fell_seed), fell_at_s);
     scaled.why = why;
     if (!mocap::attenuate_gestures(reference, rate, {scaled}, range.gain, 0.5, result.repaired.lead_frames / rate,
                                    options.overrides, attenuations)) {
