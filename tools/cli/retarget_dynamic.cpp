@@ -224,8 +224,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     }
     double fell_at_s = -1.0;
     std::string fell_on;
-    // The Simbody runs on each ground, then (verify_mujoco) MuJoCo on the floor: Leju's own
-    // model and MuJoCo's contact, independent of our tables.
+    // The Simbody runs on each ground for each noise seed, then (verify_mujoco) MuJoCo on the
+    // floor: Leju's own model and MuJoCo's contact, independent of our tables.
     struct Check {
       sim::GroundParams ground;
       sim::Engine engine;
