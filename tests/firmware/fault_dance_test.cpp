@@ -13,11 +13,9 @@
 #include <string>
 #include <sys/wait.h>
 
-#include "controllers/motion/load_motion.h"
 #include "firmware/sitl/sitl_run.h"
 #include "tests/firmware/dance_prefix.h"
 #include "tests/firmware/firmware_loop.h"
-#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::firmware::sitl {
 namespace {

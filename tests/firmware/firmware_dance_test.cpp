@@ -30,12 +30,9 @@
 #include <memory>
 #include <vector>
 
-#include "controllers/motion/load_motion.h"
-#include "controllers/planner/balance_filter.h"
 #include "firmware/sitl/sitl_run.h"
 #include "tests/firmware/dance_prefix.h"
 #include "tests/firmware/firmware_loop.h"
-#include "tools/mocap/motion_plan_io.h"
 
 namespace kuavo::firmware {
 namespace {
