@@ -68,53 +68,10 @@ namespace {
 // one further out than this is garbage, left for the safety filter to refuse.
 constexpr double kReferenceLimitSlack_rad = 0.05;
 
-// Each leg's ankle (pitch, roll) -> (motor A, motor B) torque map at the sampled ankle
-// angles: the drivers' own joint -> motor torque mapping (leg_motor_torques_rt) applied to
-// the two unit joint torques. A leg whose ankle is invalid or unsolvable this tick leaves
-// the WBC with joint-space limits for the tick (counted).
-void map_ankle_motors_rt(AnkleMotors& a, const hal::SensorFrame& sensors, wbc::AnkleMotorLimits& out) noexcept {
-  out.active = true;
-  for (int leg = 0; leg < 2; ++leg) {
-    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
-    std::array<hal::JointSample, drivers::kLegActuators> joints;
-    for (int k = 0; k < drivers::kLegActuators; ++k) joints[k] = sensors.joints[first + k];
-    bool ok = joints[4].valid && joints[5].valid;
-    for (int c = 0; c < 2 && ok; ++c) {
-      std::array<double, drivers::kLegActuators> unit{}, motor{};
-      unit[4 + c] = 1.0;
-      ok = drivers::leg_motor_torques_rt(a.legs[leg], joints, unit, motor) == drivers::DriverError::kOk;
-      out.joint_to_motor[leg](0, c) = motor[4];
-      out.joint_to_motor[leg](1, c) = motor[5];
-    }
-    out.limit_Nm[leg] = a.limit_Nm[leg];
-    out.velocity_gain_Nm_s_per_rad[leg] = a.velocity_gain_Nm_s_per_rad[leg];
-    if (!ok) out.active = false;
-  }
-  if (!out.active) ++a.unmapped_ticks;
-}
-
 }  // namespace
 
 void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers) {
-  AnkleMotors& a = control.ankle_motors;
-  a.legs = drivers.legs;
-  a.active = true;
-  for (int leg = 0; leg < 2; ++leg) {
-    const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
-    for (int k = 0; k < 2; ++k) {
-      a.limit_Nm[leg](k) = 0.0;
-      a.velocity_gain_Nm_s_per_rad[leg](k) = 0.0;
-      for (const drivers::DriveEntry& e : drivers.drives) {
-        if (e.slot != first + 4 + k) continue;
-        a.limit_Nm[leg](k) = e.config.torque_limit_Nm;
-        // CSP: the torque offset carries csp_kd·(motor velocity of v_ref) (robot_io.cpp).
-        if (e.config.mode == drivers::canopen::kModeCyclicSyncPosition) {
-          a.velocity_gain_Nm_s_per_rad[leg](k) = e.config.csp_kd_Nm_s_per_rad;
-        }
-      }
-      if (!(a.limit_Nm[leg](k) > 0.0)) a.active = false;  // no drive on that slot: not a CiA 402 ankle
-    }
-  }
+  control.ankle_motors = drivers::ankle_motors_from_config(drivers);
 }
 
 void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers) {
@@ -297,7 +254,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
     d.on_kinematic_fallback = false;
   }
   const hal::TimeNs t_ns = now_ns - d.start_ns;
-  if (d.ankle_motors.active) map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
+  if (d.ankle_motors.active) drivers::map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
   d.stack.wbc.serial_drive_limits = d.serial_drives;
   d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
   d.last_wbc = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, t_ns, stack::StateOverride{}, out);

@@ -40,7 +40,7 @@
 #include "controllers/stack/online_stack.h"
 #include "controllers/standing/standing_controller.h"
 #include "drivers/config/drivers_config.h"
-#include "drivers/transmission/leg_transmission.h"
+#include "drivers/transmission/ankle_motors.h"
 #include "firmware/control_cycle.h"
 #include "rtos_shim/latest_value.h"
 
@@ -112,22 +112,9 @@ struct DanceCounters {
   double max_torque_demand_x = 0.0;      // largest |tau_ff| / peak the WBC asked for (> 1 only)
 };
 
-// The ankle pairs in motor space (the drivers' leg transmissions and motor clamps), mapped at
-// each tick's sampled ankle angles for the WBC (WbcConfig::ankle_motor_torque_share of the
-// clamp, the rest left to the CSP drive's own feedback) and handed with each plan request
-// to the MPC (its stance-leg torque barrier).
-struct AnkleMotors {
-  bool active = false;
-  std::array<drivers::LegTransmission, 2> legs{};
-  std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // per motor (A, B)
-  // The binding's velocity feed-forward per motor (CSP: the drive's kd), hal::AnkleMotorLimits.
-  std::array<Eigen::Vector2d, 2> velocity_gain_Nm_s_per_rad{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-  std::uint64_t unmapped_ticks = 0;  // ticks an ankle could not be mapped (joint-space limits only)
-};
-
 // The control task's state. ~0.4 MB (the stack's control workspace): static storage.
 struct DanceControl {
-  AnkleMotors ankle_motors;
+  drivers::AnkleMotors ankle_motors;  // mapped each tick for the WBC, handed to the MPC with each plan request
   hal::SerialLegDriveLimits serial_drives;  // copied into the WBC's workspace each tick
   dynamics::JointVector torque_cap_Nm = dynamics::JointVector::Constant(qp::kInfinity);  // likewise
   const model::Model* model = nullptr;
@@ -163,8 +150,9 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
                 const planner::MotionPlan& motion, const char*& error);
 
 // Binds the ankle motors' torque limits, mapped through the leg transmissions at each tick's
-// sampled ankle angles, into the WBC's QP (controllers/wbc/wbc.h). Start-up; without it the
-// WBC limits joint torques only (as in the simulator, whose plant drives joints).
+// sampled ankle angles, into the WBC's QP (controllers/wbc/wbc.h) and the MPC's stance-leg
+// torque barrier (drivers/transmission/ankle_motors.h). Start-up; without it the WBC limits
+// joint torques only.
 void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig& drivers);
 // Binds the CSP hip and knee drives' clamps, joint side, and their velocity feed-forward
 // (the torque offset carries kd·v_ref) into the WBC's QP (hal/serial_drive_limits.h).

@@ -9,6 +9,7 @@
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
+#include "drivers/config/drivers_config.h"
 #include "rtos_shim/clock.h"
 #include "rtos_shim/lockstep_scheduler.h"
 #include "sim/mujoco_plant.h"
@@ -130,10 +131,18 @@ bool parse_engine(const char* text, Engine& out) {
 
 const char* to_string(Engine e) { return e == Engine::kMujoco ? "mujoco" : "simbody"; }
 
+drivers::AnkleMotors run_ankle_motors(const model::Model& model, const RunConfig& config) {
+  return config.ankle_motors ? drivers::ankle_motors_from_config(drivers::default_drivers_config(model))
+                             : drivers::AnkleMotors{};
+}
+
 RunSummary run_standing(const model::Model& model, const RunConfig& config) {
+  const drivers::AnkleMotors ankle_motors = run_ankle_motors(model, config);
+  const drivers::AnkleMotors* plant_ankles = ankle_motors.active ? &ankle_motors : nullptr;
   if (config.engine == Engine::kMujoco) {
     MujocoPlantConfig plant_cfg;
     plant_cfg.ground = config.ground;
+    plant_cfg.ankle_motors = plant_ankles;
     MujocoPlant plant(model, plant_cfg);
     if (!plant.ok()) {
       RunSummary out;
@@ -149,6 +158,7 @@ RunSummary run_standing(const model::Model& model, const RunConfig& config) {
   plant_cfg.integrator = config.integrator;
   plant_cfg.relative_tolerance = config.relative_tolerance;
   plant_cfg.absolute_tolerance = 0.1 * config.relative_tolerance;
+  plant_cfg.ankle_motors = plant_ankles;
   Plant plant(model, plant_cfg);
   return standing_loop(model, config, plant);
 }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "controllers/model/model.h"
+#include "drivers/transmission/ankle_motors.h"
 #include "sim/plant.h"
 
 namespace kuavo::sim {
@@ -34,6 +35,10 @@ struct RunConfig {
   Engine engine = Engine::kSimbody;
   Integrator integrator = Integrator::kCvodeBdf;  // the Simbody engine's
   double relative_tolerance = PlantConfig{}.relative_tolerance;
+  // The plant's ankle pairs clip per motor through the linkage, and the online stack bounds
+  // the motors (sim/motor_model.h, drivers/transmission/ankle_motors.h); false: each ankle
+  // joint clips at its own peak and the stack bounds joint torques only.
+  bool ankle_motors = true;
 };
 
 struct RunSummary {
@@ -74,6 +79,10 @@ void finish_run_summary(const PlantT& plant, double wall_s, const std::string& l
   }
   s.log_sha256 = log_sha256;
 }
+
+// RunConfig::ankle_motors: the default drivers configuration's ankle motors (their clamps and
+// the leg transmissions), or inactive.
+drivers::AnkleMotors run_ankle_motors(const model::Model& model, const RunConfig& config);
 
 // Stands the robot in the standing pose under the standing controller.
 RunSummary run_standing(const model::Model& model, const RunConfig& config);

@@ -112,6 +112,11 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
     perturbed_model(model, perturb, *plant_model);
     out.perturbation_json = perturbation_json(perturb, *plant_model);
   }
+  // The ankle pairs as the robot has them (RunConfig::ankle_motors): the plant clips each
+  // pair's two motors at the default drivers configuration's clamps, and the controller is
+  // told each tick, as the firmware's binding tells it (drivers/transmission/ankle_motors.h).
+  drivers::AnkleMotors ankle_motors = run_ankle_motors(model, config.run);
+  const drivers::AnkleMotors* plant_ankles = ankle_motors.active ? &ankle_motors : nullptr;
   std::unique_ptr<PlantT> plant_owner;
   dynamics::ConfigVector q0 = motion.q[0];
   control::place_on_ground(model, *metrics_data, q0);
@@ -123,6 +128,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
     }
     MujocoPlantConfig plant_cfg;
     plant_cfg.ground = config.run.ground;
+    plant_cfg.ankle_motors = plant_ankles;
     plant_owner = std::make_unique<MujocoPlant>(model, plant_cfg);
     if (!plant_owner->ok()) {
       run.ok = false;
@@ -137,6 +143,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
     plant_cfg.relative_tolerance = config.run.relative_tolerance;
     plant_cfg.absolute_tolerance = 0.1 * config.run.relative_tolerance;
     if (perturb.active) plant_cfg.actuation = &perturb.actuation;
+    plant_cfg.ankle_motors = plant_ankles;
     plant_owner = std::make_unique<Plant>(*plant_model, plant_cfg);
     plant_owner->reset(q0, dynamics::VelocityVector::Zero());
   }
@@ -211,6 +218,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   bool have_com = false;
   Vec3 com_before = Vec3::Zero(), com_plan_before = Vec3::Zero();
   std::array<bool, 2> foot_loaded{true, true};
+  std::array<double, 2> foot_loaded_at_s{-1.0, -1.0};
   out.zmp_margin_m_min = 1e9;
   wbc::WbcStatus last_status = wbc::WbcStatus::kOk;
   run.min_base_height_m = plant.truth().q[2];
@@ -237,6 +245,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
       stack::StateOverride state;
       if (config.use_truth_state) state = {&truth.q, &truth.v};
       const rtos::TimeNs t0 = rtos::now_ns();
+      if (ankle_motors.active) drivers::map_ankle_motors_rt(ankle_motors, frame, control->wbc.ankle_motor_limits);
       last_status = stack::stack_control_tick_rt(model, config.stack, *control, frame, ev.time_ns, state, command);
       const double us = static_cast<double>(rtos::now_ns() - t0) * 1e-3;
       wbc_us.push_back(us);
@@ -257,6 +266,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
       const dynamics::ConfigVector& q = truth_state ? plant.truth().q : control->estimate.q;
       const dynamics::VelocityVector& v = truth_state ? plant.truth().v : control->estimate.v;
       const rtos::TimeNs t0 = rtos::now_ns();
+      planner_ws->mpc.ankle_motor_limits = control->wbc.ankle_motor_limits;  // the last tick's map
       stack::stack_plan_rt(model, config.stack, *planner_ws, motion, q, v, ev.time_ns, *pending);
       const rtos::TimeNs spent_ns = rtos::now_ns() - t0;
       plan_ms.push_back(static_cast<double>(spent_ns) * 1e-6);
@@ -306,12 +316,23 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
         for (int foot = 0; foot < 2; ++foot) {
           double fz = 0.0;
           for (int c = 4 * foot; c < 4 * foot + 4; ++c) fz += t.contact_force_N[c].z();
-          if (foot_loaded[foot] && fz < 5.0) ++out.steps, foot_loaded[foot] = false;
-          if (!foot_loaded[foot] && fz > 100.0) foot_loaded[foot] = true;
+          if (foot_loaded[foot] && fz < kUnloaded_N) {
+            out.steps += t_s - foot_loaded_at_s[foot] >= kMinStance_s;  // shorter: a bump before the lift
+            foot_loaded[foot] = false;
+          }
+          if (!foot_loaded[foot] && fz > kLoaded_N) foot_loaded[foot] = true, foot_loaded_at_s[foot] = t_s;
         }
         if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
         for (int j = 0; j < model::kNumJoints; ++j) {
           out.torque_ratio_max = std::max(out.torque_ratio_max, std::abs(t.joint_torque_Nm[j]) / model.limits.peak_torque_Nm[j]);
+        }
+        for (int leg = 0; leg < 2 && ankle_motors.active; ++leg) {  // the ankles' motors, as the plant clips them
+          const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
+          Eigen::Vector2d motor;
+          if (drivers::ankle_motor_torques_rt(ankle_motors, leg, Eigen::Vector2d(t.q[7 + j], t.q[8 + j]),
+                                              Eigen::Vector2d(t.joint_torque_Nm[j], t.joint_torque_Nm[j + 1]), motor)) {
+            out.torque_ratio_max = std::max(out.torque_ratio_max, motor.cwiseQuotient(ankle_motors.limit_Nm[leg]).cwiseAbs().maxCoeff());
+          }
         }
         if (bal.defined && bal.margin_m < kAtEdge_m) out.zmp_at_edge_s += static_cast<double>(ev.dt_ns) * 1e-9;
         const double pos_err = (est.q.head<2>() - t.q.head<2>()).norm();

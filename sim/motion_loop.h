@@ -55,6 +55,9 @@ struct Percentiles {
 };
 Percentiles percentiles(std::vector<double> samples);
 
+// Stepping phases (MotionSummary::steps).
+inline constexpr double kUnloaded_N = 5.0, kLoaded_N = 100.0, kMinStance_s = 0.05;
+
 struct MotionSummary {
   RunSummary run;
   std::string planner;
@@ -64,13 +67,15 @@ struct MotionSummary {
   double com_err_m_max = 0.0;          // ‖CoM − planned CoM‖
   // What was danced, before a fall (issue 18's "the dance is kept"): the path length (3D, as
   // mocap::motion_metrics) of the plant's CoM and of the motion's planned CoM over the same ticks, and the stepping
-  // phases (lift-offs: a foot's load below 5 N after it carried over 100 N).
+  // phases (lift-offs: a foot's load below kUnloaded_N after it carried over kLoaded_N for
+  // kMinStance_s at least; a shorter touch is a bump before the lift, not a stance).
   double com_path_m = 0.0, com_path_plan_m = 0.0;
   int steps = 0;
   double zmp_margin_m_min = 0.0;       // centre of pressure to the support polygon's edge
   double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
   double torque_ratio_max = 0.0;       // max over joints and ticks before a fall of |τ_joint| / peak torque
-                                       // (PlantTruth::joint_torque_Nm; 1: the drive saturates)
+                                       // (PlantTruth::joint_torque_Nm; the ankles also per motor against
+                                       // its clamp; 1: the drive saturates)
   std::string perturbation_json;       // the set, seed and drawn figures; empty when inactive
   Percentiles mpc_ms;                  // planner iteration compute time
   Percentiles wbc_us;                  // control tick (estimator + reference + WBC) compute time

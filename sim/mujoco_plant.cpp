@@ -200,11 +200,18 @@ struct MujocoPlant::Impl {
     return r;
   }
 
-  void apply_drives() {
+  void joint_state(JointValues& q, JointValues& v) const {
     for (int j = 0; j < model::kNumJoints; ++j) {
-      d->qfrc_applied[joint_v[j]] = drive_torque(command.joints[j], d->qpos[joint_q[j]], d->qvel[joint_v[j]],
-                                                 model.limits.peak_torque_Nm[j], nullptr);
+      q[j] = d->qpos[joint_q[j]];
+      v[j] = d->qvel[joint_v[j]];
     }
+  }
+
+  void apply_drives() {
+    JointValues q{}, v{}, tau{};
+    joint_state(q, v);
+    drive_torques(command, model, q, v, config.ankle_motors, tau);
+    for (int j = 0; j < model::kNumJoints; ++j) d->qfrc_applied[joint_v[j]] = tau[j];
     // MuJoCo applies xfrc_applied at the body's centre of mass, as Plant applies the push.
     const double t = d->time;
     const bool pushing = push.duration_s > 0.0 && t >= push.start_s && t < push.start_s + push.duration_s;
@@ -222,13 +229,14 @@ struct MujocoPlant::Impl {
     const Vec3 v_world(d->qvel[base_v], d->qvel[base_v + 1], d->qvel[base_v + 2]);
     t.v.head<3>() = r.transpose() * v_world;
     for (int k = 0; k < 3; ++k) t.v[3 + k] = d->qvel[base_v + 3 + k];
+    JointValues q{}, v{}, tau{};
+    joint_state(q, v);
+    const int clipped = drive_torques(command, model, q, v, config.ankle_motors, tau);
+    if (count_saturations) saturations += clipped;
     for (int j = 0; j < model::kNumJoints; ++j) {
-      const double q = d->qpos[joint_q[j]], v = d->qvel[joint_v[j]];
-      t.q[7 + j] = q;
-      t.v[6 + j] = v;
-      bool saturated = false;
-      t.joint_torque_Nm[j] = drive_torque(command.joints[j], q, v, model.limits.peak_torque_Nm[j], &saturated);
-      if (saturated && count_saturations) ++saturations;
+      t.q[7 + j] = q[j];
+      t.v[6 + j] = v[j];
+      t.joint_torque_Nm[j] = tau[j];
     }
     for (int c = 0; c < model::kNumContactPoints; ++c) {
       const int g = corner_sphere[c];

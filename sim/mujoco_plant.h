@@ -41,6 +41,7 @@ struct MujocoPlantConfig {
   double timestep_s = 5.0e-4;
   bool gravity = true;
   bool contact = true;
+  const drivers::AnkleMotors* ankle_motors = nullptr;  // as PlantConfig::ankle_motors
 };
 
 // Why a ground is refused (nullptr: accepted).

@@ -52,22 +52,20 @@ class RobotForces : public SimTK::Force::Custom::Implementation {
                  SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
     const model::Model& m = *in_->model;
     const SimbodyRobot& r = *in_->robot;
+    JointValues q{}, v{}, tau{};
     for (int j = 0; j < model::kNumJoints; ++j) {
-      const SimTK::MobilizedBody& b = r.body(j + 1);
-      bool saturated = false;
-      double tau = drive_torque(in_->forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0),
-                                m.limits.peak_torque_Nm[j], &saturated);
-      if (in_->forces.actuation != nullptr) tau = actuated_torque(*in_->forces.actuation, j, tau, b.getOneU(s, 0));
-      if (saturated && in_->count_saturations) ++in_->saturations;
-      tau += joint_stop_torque(b.getOneQ(s, 0), b.getOneU(s, 0), m.limits.position_min_rad[j], m.limits.position_max_rad[j]);
-      b.applyOneMobilityForce(s, 0, tau, mobility_forces);
+      q[j] = r.body(j + 1).getOneQ(s, 0);
+      v[j] = r.body(j + 1).getOneU(s, 0);
+    }
+    const int clipped = drive_torques(in_->forces.command, m, q, v, in_->forces.ankle_motors, tau);
+    if (in_->count_saturations) in_->saturations += clipped;
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      if (in_->forces.actuation != nullptr) tau[j] = actuated_torque(*in_->forces.actuation, j, tau[j], v[j]);
+      tau[j] += joint_stop_torque(q[j], v[j], m.limits.position_min_rad[j], m.limits.position_max_rad[j]);
+      r.body(j + 1).applyOneMobilityForce(s, 0, tau[j], mobility_forces);
     }
     if (in_->forces.torque_source != nullptr) {
-      std::array<double, model::kNumJoints> q{}, v{}, extra{};
-      for (int j = 0; j < model::kNumJoints; ++j) {
-        q[j] = r.body(j + 1).getOneQ(s, 0);
-        v[j] = r.body(j + 1).getOneU(s, 0);
-      }
+      JointValues extra{};
       in_->forces.torque_source->add_joint_torques(q, v, extra);
       for (int j = 0; j < model::kNumJoints; ++j) r.body(j + 1).applyOneMobilityForce(s, 0, extra[j], mobility_forces);
     }
@@ -154,6 +152,7 @@ struct Plant::Impl {
     inputs.forces.gravity = c.gravity;
     inputs.forces.push = &inputs.push;
     inputs.forces.actuation = c.actuation;
+    inputs.forces.ankle_motors = c.ankle_motors;
     SimTK::Force::Custom(robot.forces(), new RobotForces(&inputs));
     robot.system().realizeTopology();
     state = robot.system().getDefaultState();
@@ -281,20 +280,20 @@ struct Plant::Impl {
           inputs.forces.contact ? contact_force(inputs.forces.ground, truth.contact_point_m[c], v, inputs.forces.points[c])
                                 : Vec3::Zero();
     }
+    JointValues q{}, v{}, tau{};
     for (int j = 0; j < model::kNumJoints; ++j) {
-      const SimTK::MobilizedBody& b = robot.body(j + 1);
-      truth.joint_torque_Nm[j] =
-          drive_torque(inputs.forces.command.joints[j], b.getOneQ(s, 0), b.getOneU(s, 0), model.limits.peak_torque_Nm[j], nullptr);
+      q[j] = robot.body(j + 1).getOneQ(s, 0);
+      v[j] = robot.body(j + 1).getOneU(s, 0);
+    }
+    drive_torques(inputs.forces.command, model, q, v, inputs.forces.ankle_motors, tau);
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      truth.joint_torque_Nm[j] = tau[j];
       if (inputs.forces.actuation != nullptr) {
-        truth.joint_torque_Nm[j] = actuated_torque(*inputs.forces.actuation, j, truth.joint_torque_Nm[j], b.getOneU(s, 0));
+        truth.joint_torque_Nm[j] = actuated_torque(*inputs.forces.actuation, j, truth.joint_torque_Nm[j], v[j]);
       }
     }
     if (inputs.forces.torque_source != nullptr) {
-      std::array<double, model::kNumJoints> q{}, v{}, extra{};
-      for (int j = 0; j < model::kNumJoints; ++j) {
-        q[j] = robot.body(j + 1).getOneQ(s, 0);
-        v[j] = robot.body(j + 1).getOneU(s, 0);
-      }
+      JointValues extra{};
       inputs.forces.torque_source->add_joint_torques(q, v, extra);
       for (int j = 0; j < model::kNumJoints; ++j) truth.joint_torque_Nm[j] += extra[j];
     }

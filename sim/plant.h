@@ -51,6 +51,9 @@ struct PlantConfig {
   // inertia needs kCvodeBdf with kRigidBody (Simbody's Pin has no armature): advance()
   // refuses it otherwise. Must outlive the plant.
   const JointActuation* actuation = nullptr;
+  // The ankle pairs clipped per motor through the linkage (sim/motor_model.h); nullptr: each
+  // ankle joint clips at its own peak. Must outlive the plant.
+  const drivers::AnkleMotors* ankle_motors = nullptr;
 };
 
 // A force on the torso's centre of mass over [start_s, start_s + duration_s):

@@ -69,6 +69,22 @@ std::array<double, model::kNumJoints> source_torques(const PlantForceInputs& in,
   return tau;
 }
 
+// The drives' torques at (q, v) (sim/motor_model.h) with the joints' mismatch applied;
+// returns the drives that clipped.
+template <class Q, class V>
+int drive_torques_at(const model::Model& model, const PlantForceInputs& in, const Q& q, const V& v, JointValues& tau) {
+  JointValues qj{}, vj{};
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    qj[j] = q[7 + j];
+    vj[j] = v[6 + j];
+  }
+  const int clipped = drive_torques(in.command, model, qj, vj, in.ankle_motors, tau);
+  if (in.actuation != nullptr) {
+    for (int j = 0; j < model::kNumJoints; ++j) tau[j] = actuated_torque(*in.actuation, j, tau[j], vj[j]);
+  }
+  return clipped;
+}
+
 }  // namespace
 
 PlantDynamics::PlantDynamics(const model::Model& model, const SimbodyLayout& layout)
@@ -110,19 +126,13 @@ bool PlantDynamics::derivative(double t_s, const double* y, const PlantForceInpu
   dynamics::crba(model_, d);
   dynamics::rnea(model_, d, dynamics::VelocityVector::Zero(), in.gravity);
   w.rhs = -d.tau;
-  if (in.actuation == nullptr) {
-    for (int j = 0; j < model::kNumJoints; ++j) {
-      w.rhs[6 + j] += drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
-    }
-  } else {
+  JointValues drive{};
+  drive_torques_at(model_, in, w.q, w.v, drive);
+  for (int j = 0; j < model::kNumJoints; ++j) w.rhs[6 + j] += drive[j];
+  if (in.actuation != nullptr) {
     // A rotor spinning N times faster adds N²·I_rotor to its joint's diagonal only (its
     // gyroscopic coupling to the carrier is neglected, as in MuJoCo's armature).
-    for (int j = 0; j < model::kNumJoints; ++j) {
-      d.mass_matrix(6 + j, 6 + j) += in.actuation->armature_kgm2[j];
-      const double drive =
-          drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], nullptr);
-      w.rhs[6 + j] += actuated_torque(*in.actuation, j, drive, w.v[6 + j]);
-    }
+    for (int j = 0; j < model::kNumJoints; ++j) d.mass_matrix(6 + j, 6 + j) += in.actuation->armature_kgm2[j];
   }
   if (in.torque_source != nullptr) {
     const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
@@ -225,13 +235,9 @@ bool PlantDynamics::truth(double t_s, const double* y, const PlantForceInputs& i
     out.contact_force_N[c] = w.contact_f[c];
     contact_velocity_m_s[c] = w.contact_v[c];
   }
-  for (int j = 0; j < model::kNumJoints; ++j) {
-    bool clipped = false;
-    out.joint_torque_Nm[j] =
-        drive_torque(in.command.joints[j], w.q[7 + j], w.v[6 + j], model_.limits.peak_torque_Nm[j], &clipped);
-    if (in.actuation != nullptr) out.joint_torque_Nm[j] = actuated_torque(*in.actuation, j, out.joint_torque_Nm[j], w.v[6 + j]);
-    saturations += clipped;
-  }
+  JointValues drive{};
+  saturations += drive_torques_at(model_, in, w.q, w.v, drive);
+  for (int j = 0; j < model::kNumJoints; ++j) out.joint_torque_Nm[j] = drive[j];
   if (in.torque_source != nullptr) {
     const std::array<double, model::kNumJoints> extra = source_torques(in, w.q, w.v);
     for (int j = 0; j < model::kNumJoints; ++j) out.joint_torque_Nm[j] += extra[j];

@@ -37,6 +37,11 @@ namespace kuavo::sim {
 struct Push;
 struct PlantTruth;
 struct JointActuation;
+}  // namespace kuavo::sim
+namespace kuavo::drivers {
+struct AnkleMotors;  // drivers/transmission/ankle_motors.h
+}  // namespace kuavo::drivers
+namespace kuavo::sim {
 
 // Where our quantities sit in Simbody's y = [q; u] (filled from the built system).
 struct SimbodyLayout {
@@ -70,6 +75,7 @@ struct PlantForceInputs {
   // Model mismatch (sim/perturbation.h): torque-constant error and friction on the drive
   // torque, rotor inertia on M's diagonal. nullptr: ideal joints.
   const JointActuation* actuation = nullptr;
+  const drivers::AnkleMotors* ankle_motors = nullptr;  // PlantConfig::ankle_motors
   std::array<ContactPointState, model::kNumContactPoints> points{};
   const Push* push = nullptr;
 };

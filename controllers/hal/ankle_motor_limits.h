@@ -3,9 +3,9 @@
 // (FACTS.md §2.4): motor torques (A, B) = joint_to_motor · (τ_pitch, τ_roll), about
 // 0.5·τ_pitch ± 1.1·τ_roll near the zero pose (1.45 at full dorsiflexion). Each motor's
 // 27 N·m bounds pitch and roll jointly, which no joint-space box can express. The binding
-// (the firmware, from the drivers' transmissions at the sampled ankle angles) fills this
-// each tick; the WBC bounds the motor torques with it, and the MPC the stance ankles' share
-// of them. Inactive (the simulator's plant drives the joints directly): joint-space limits.
+// (the firmware and the simulator alike: drivers/transmission/ankle_motors.h, at the sampled
+// ankle angles) fills this each tick; the WBC bounds the motor torques with it, and the MPC
+// the stance ankles' share of them. Inactive: joint-space limits only.
 #pragma once
 
 #include <Eigen/Core>

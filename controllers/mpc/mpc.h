@@ -118,15 +118,15 @@ struct MpcConfig {
   // Leg joint torques of each stance foot: the moment of its corner forces about each of the
   // leg's six joint axes stays within this share of the joint's torque limit (relaxed
   // barrier, δ in N·m). The corners sit 0.1–0.15 m ahead of and behind the ankle, so the
-  // friction pyramids and the support polygon allow a centre of pressure the two 27 N·m ankle
-  // motors cannot hold (perfume: CoM 0.09 m ahead, both ankles saturated, fell at 14.8 s),
+  // friction pyramids and the support polygon allow a centre of pressure the ankles cannot
+  // hold (perfume, with a 27 N·m ankle box: CoM 0.09 m ahead, both ankles saturated, fell at 14.8 s),
   // and a crouch or a turn on one foot loads the knee (130 N·m) and hip yaw (20 N·m) beyond
   // theirs (perfume's spin at 23–26 s: 230 and 116 N·m in the TO's result). Linear in the
   // forces with the leg geometry of the iterate (lagged: no state gradient), so convex; the
   // legs' own weight and inertia are left out (a few N·m at the hip). μ small enough that
   // standing (≈ 8 N·m per ankle) feels no pull (the barrier's gradient at rest, 2μτ/L², moved
   // the standing CoM 1.3 mm/s with μ = 0.1), δ small so that a violation costs as much as
-  // with μ = 0.1, δ = 1. With MpcWorkspace::ankle_motor_limits active (the firmware) the
+  // with μ = 0.1, δ = 1. With MpcWorkspace::ankle_motor_limits active (the firmware, the sim) the
   // ankle pair's two motor torques are held to the same share of the motors' limits too: the
   // joint-space box on pitch and roll allows combinations the two motors cannot hold together
   // (pitch ≈ τ_A + τ_B, roll ≈ 0.46 (τ_A − τ_B)). 0 = off.

@@ -30,14 +30,21 @@ planner::MotionPlan& step_plan(int steps) {
 }
 
 // Lift-offs per foot seen in the simulator: the foot's load falls below 5 N after
-// having carried over 100 N.
+// having carried over 100 N for 50 ms at least (the trace's samples are stride ticks
+// apart; a shorter touch is the bump of a foot about to lift, not a stance).
 std::array<int, 2> lift_offs(const sim::MotionTrace& trace) {
   std::array<int, 2> count{};
   std::array<bool, 2> loaded{true, true};
-  for (const auto& f : trace.foot_force_z_N) {
+  std::array<std::size_t, 2> loaded_at{0, 0};
+  const double sample_s = trace.stride * sim::kControlPeriod_s;
+  for (std::size_t i = 0; i < trace.foot_force_z_N.size(); ++i) {
+    const auto& f = trace.foot_force_z_N[i];
     for (int foot = 0; foot < 2; ++foot) {
-      if (loaded[foot] && f[foot] < 5.0) ++count[foot], loaded[foot] = false;
-      if (!loaded[foot] && f[foot] > 100.0) loaded[foot] = true;
+      if (loaded[foot] && f[foot] < 5.0) {
+        count[foot] += (i - loaded_at[foot]) * sample_s >= 0.05 - 1e-9;
+        loaded[foot] = false;
+      }
+      if (!loaded[foot] && f[foot] > 100.0) loaded[foot] = true, loaded_at[foot] = i;
     }
   }
   return count;

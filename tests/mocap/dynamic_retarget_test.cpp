@@ -406,17 +406,21 @@ TEST(mocap_dynamic_retarget, ConvergedWindowSatisfiesTheKktConditions) {
   ASSERT_EQ(out.stats.windows_not_converged, 0);
   ASSERT_EQ(static_cast<int>(out.stage_x.size()), T + 1);
 
+  // The OCP as the optimization poses it: the planning model's limits (the ankles at one
+  // motor's clamp), the robot's dynamics.
+  const model::Model planning = planning_model(robot());
+  ASSERT_LT(planning.limits.torque_Nm[model::kLeftLegFirst + 4], robot().limits.torque_Nm[model::kLeftLegFirst + 4]);
   auto ws = std::make_unique<mpc::MpcWorkspace>();
-  mpc::mpc_init(robot(), cfg.ocp, *ws);
+  mpc::mpc_init(planning, cfg.ocp, *ws);
   auto window = std::make_unique<planner::PlanWindow>();
-  planner::motion_plan_window_rt(robot(), scratch(), *plan, plan->start_ns, cfg.ocp.dt_s, T + 1, *window);
+  planner::motion_plan_window_rt(planning, scratch(), *plan, plan->start_ns, cfg.ocp.dt_s, T + 1, *window);
   ws->warm = true;  // linearize at the committed trajectory, unshifted
   ws->last_stamp_ns = window->knots[0].stamp_ns;
   for (int k = 0; k <= T; ++k) {
     ws->x[k] = out.stage_x[k];
     ws->u[k] = out.stage_u[k];
   }
-  ASSERT_EQ(mpc::mpc_build_qp_from_state_rt(robot(), cfg.ocp, *ws, out.stage_x[0], *window), mpc::MpcStatus::kOk);
+  ASSERT_EQ(mpc::mpc_build_qp_from_state_rt(planning, cfg.ocp, *ws, out.stage_x[0], *window), mpc::MpcStatus::kOk);
   double defect = 0.0, residual = 0.0;
   for (int k = 0; k < T; ++k) {
     const auto& st = ws->qp.stages[k];

@@ -11,6 +11,8 @@
 #include <memory>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "drivers/config/drivers_config.h"
+#include "drivers/transmission/ankle_motors.h"
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/leg_ik_lm.h"
 
@@ -121,8 +123,21 @@ void stage_torque(const model::Model& robot, dynamics::Data& data, const StateVe
   for (int j = 0; j < kNumMpcJoints; ++j) column(mpc::kXJoints + j);
 }
 
-bool dynamic_retarget(const model::Model& robot, const planner::MotionPlan& plan, const DynamicRetargetConfig& cfg,
+model::Model planning_model(const model::Model& robot) {
+  const drivers::AnkleMotors motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot));
+  model::Model planning = robot;
+  for (int leg = 0; leg < 2 && motors.active; ++leg) {
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
+    for (int k = 0; k < 2; ++k) {
+      planning.limits.torque_Nm[j + k] = std::min(planning.limits.torque_Nm[j + k], motors.limit_Nm[leg].minCoeff());
+    }
+  }
+  return planning;
+}
+
+bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan& plan, const DynamicRetargetConfig& cfg,
                       DynamicResult& out, std::string& error) {
+  const model::Model robot = planning_model(robot_model);
   const auto t_start = std::chrono::steady_clock::now();
   if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
     error = std::string("dynamic retargeting: ") + why;

@@ -86,6 +86,14 @@ struct DynamicResult {
   DynamicStats stats;
 };
 
+// The model the optimization plans with: the robot's, each ankle joint's torque limit at one
+// ankle motor's clamp (27 N·m, not the joint box's 36): the motors' two-motor envelope
+// (pitch to ~54 N·m, drivers/transmission/ankle_motors.h) stays the online controller's
+// reserve. Binding the envelope in the plan as well (the MPC's motor barrier at each window's
+// first ankle angles) was tried, over the joint box and over this cap: one CMU clip or the
+// other then failed check runs it passes without.
+model::Model planning_model(const model::Model& robot);
+
 // plan: the repaired reference (motion_plan_finish'ed), starting at rest in double support.
 // false with a message (bad config, a flight phase, a motion that does not start in double
 // support, a non-finite iterate).

@@ -8,6 +8,8 @@
 #include <memory>
 
 #include "controllers/planner/support_polygon.h"
+#include "drivers/config/drivers_config.h"
+#include "drivers/transmission/ankle_motors.h"
 
 namespace kuavo::mocap {
 namespace {
@@ -64,6 +66,7 @@ void check_dynamics(const model::Model& robot, const std::vector<ConfigVector>& 
   auto data = std::make_unique<dynamics::Data>();
   std::array<dynamics::FrameJacobian, kPoints> jac;
   double force_sum = 0.0, moment_sum = 0.0;
+  const drivers::AnkleMotors ankle_motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot));
   for (int i = 0; i < n; ++i) {
     dynamics::forward_kinematics(robot, *data, q[i]);
     dynamics::forward_velocities(robot, *data, v[i]);
@@ -100,8 +103,19 @@ void check_dynamics(const model::Model& robot, const std::vector<ConfigVector>& 
     force_sum += rf;
     moment_sum += rm;
     out.tau_Nm[i] = tau.tail<model::kNumJoints>();
+    std::array<double, model::kNumJoints> ratios;
+    for (int j = 0; j < model::kNumJoints; ++j) ratios[j] = std::abs(tau[6 + j]) / robot.limits.torque_Nm[j];
+    for (int leg = 0; leg < 2 && ankle_motors.active; ++leg) {  // the ankle slots: their motors
+      const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
+      Eigen::Vector2d motor;
+      if (!drivers::ankle_motor_torques_rt(ankle_motors, leg, Eigen::Vector2d(q[i][7 + j], q[i][8 + j]),
+                                           Eigen::Vector2d(tau[6 + j], tau[7 + j]), motor)) {
+        continue;  // off the linkage's reach: the joint box stands
+      }
+      for (int k = 0; k < 2; ++k) ratios[j + k] = std::abs(motor[k]) / ankle_motors.limit_Nm[leg](k);
+    }
     for (int j = 0; j < model::kNumJoints; ++j) {
-      const double ratio = std::abs(tau[6 + j]) / robot.limits.torque_Nm[j];
+      const double ratio = ratios[j];
       if (ratio > 1.0) ++out.torque_violations;
       if (ratio > out.max_torque_ratio) {
         out.max_torque_ratio = ratio;

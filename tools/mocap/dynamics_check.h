@@ -28,10 +28,12 @@ inline constexpr double kFrictionTolerance_N = 1.0;
 
 struct DynamicsCheck {
   int frames = 0;
-  int torque_violations = 0;    // (frame, joint) samples with |τ| above the model's limit
+  // (frame, joint) samples with |τ| above the model's limit; the ankle pitch and roll slots
+  // count their motors A and B against the drives' clamps (drivers/transmission/ankle_motors.h)
+  int torque_violations = 0;
   int friction_violations = 0;  // (frame, stance corner) samples outside the pyramid
   double zmp_outside_m_max = 0.0;
-  double max_torque_ratio = 0.0;  // max over frames and joints of |τ| / limit
+  double max_torque_ratio = 0.0;  // max over frames and joints (ankles: motors) of |τ| / limit
   int max_torque_ratio_joint = -1;
   double base_force_residual_N_max = 0.0, base_force_residual_N_mean = 0.0;
   double base_moment_residual_Nm_max = 0.0, base_moment_residual_Nm_mean = 0.0;

@@ -307,6 +307,16 @@ Error read_limits(const GeneratorInput& in, std::array<model::JointLimitTable, m
       l.peak_velocity_rad_s = jt.velocity;
       l.peak_torque_Nm = jt.effort;
       l.torque_Nm = jt.effort;
+    } else if (i < 12 && i % 6 >= 4) {
+      // The ankle pitch and roll joints are virtual: two motors drive them through the
+      // linkage (FACTS.md §2.4), and kuavo.json's limits are those motors' (27 N·m each),
+      // which bound pitch and roll jointly (drivers/transmission/ankle_motors.h: about 54 N·m
+      // of pitch alone). The joint box is the URDF's effort, an outer bound; the controller
+      // and the simulator bound the motors themselves.
+      l.velocity_rad_s = std::min(vel[i], peak_vel[i]);
+      l.peak_velocity_rad_s = peak_vel[i];
+      l.peak_torque_Nm = jt.effort;
+      l.torque_Nm = jt.effort;
     } else {
       const int wbc_row = i < 12 ? i % 6 : 6 + (i - 12) % 7;
       // kuavo.json lists wrist joints with continuous 10 > peak 7 rad/s; plan within the lower.
