@@ -323,17 +323,17 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
           if (!foot_loaded[foot] && fz > kLoaded_N) foot_loaded[foot] = true, foot_loaded_at_s[foot] = t_s;
         }
         if (bal.defined) out.zmp_margin_m_min = std::min(out.zmp_margin_m_min, bal.margin_m);
-        for (int j = 0; j < model::kNumJoints; ++j) {
-          out.torque_ratio_max = std::max(out.torque_ratio_max, std::abs(t.joint_torque_Nm[j]) / model.limits.peak_torque_Nm[j]);
-        }
-        for (int leg = 0; leg < 2 && ankle_motors.active; ++leg) {  // the ankles' motors, as the plant clips them
+        std::array<double, model::kNumJoints> ratio;
+        for (int j = 0; j < model::kNumJoints; ++j) ratio[j] = std::abs(t.joint_torque_Nm[j]) / model.limits.peak_torque_Nm[j];
+        for (int leg = 0; leg < 2 && ankle_motors.active; ++leg) {  // the ankle slots: their motors, as the plant clips them
           const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
           Eigen::Vector2d motor;
           if (drivers::ankle_motor_torques_rt(ankle_motors, leg, Eigen::Vector2d(t.q[7 + j], t.q[8 + j]),
                                               Eigen::Vector2d(t.joint_torque_Nm[j], t.joint_torque_Nm[j + 1]), motor)) {
-            out.torque_ratio_max = std::max(out.torque_ratio_max, motor.cwiseQuotient(ankle_motors.limit_Nm[leg]).cwiseAbs().maxCoeff());
+            for (int k = 0; k < 2; ++k) ratio[j + k] = std::abs(motor[k]) / ankle_motors.limit_Nm[leg](k);
           }
         }
+        for (const double r : ratio) out.torque_ratio_max = std::max(out.torque_ratio_max, r);
         if (bal.defined && bal.margin_m < kAtEdge_m) out.zmp_at_edge_s += static_cast<double>(ev.dt_ns) * 1e-9;
         const double pos_err = (est.q.head<2>() - t.q.head<2>()).norm();
         out.estimator_position_err_m_max = std::max(out.estimator_position_err_m_max, pos_err);

@@ -74,7 +74,7 @@ struct MotionSummary {
   double zmp_margin_m_min = 0.0;       // centre of pressure to the support polygon's edge
   double zmp_at_edge_s = 0.0;          // time the centre of pressure spent within 1 mm of the edge (a foot rolling)
   double torque_ratio_max = 0.0;       // max over joints and ticks before a fall of |τ_joint| / peak torque
-                                       // (PlantTruth::joint_torque_Nm; the ankles also per motor against
+                                       // (PlantTruth::joint_torque_Nm; the ankle slots per motor against
                                        // its clamp; 1: the drive saturates)
   std::string perturbation_json;       // the set, seed and drawn figures; empty when inactive
   Percentiles mpc_ms;                  // planner iteration compute time
