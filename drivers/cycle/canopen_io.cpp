@@ -32,27 +32,32 @@ CanopenSendReport canopen_send_rt(CanPort& port, std::span<const canopen::DriveC
                                   std::span<canopen::DriveState> states,
                                   std::span<const canopen::DriveCommand> commands, hal::TimeNs now_ns) {
   CanopenSendReport r;
-  can_frame f;
-  auto send = [&](const can_frame& frame) {
-    const DriverError e = send_rt(port, frame);
-    if (e == DriverError::kOk) {
-      ++r.sent;
-      return true;
+  can_frame frames[kMaxBatchFrames];
+  DriverError results[kMaxBatchFrames];
+  int count = 0;
+  bool sync_queued = false;
+  auto flush = [&] {
+    send_batch_rt(port, std::span<const can_frame>(frames, count), std::span<DriverError>(results, count));
+    for (int k = 0; k < count; ++k) {
+      if (results[k] == DriverError::kOk) {
+        ++r.sent;
+      } else if (results[k] == DriverError::kTxQueueFull) {
+        ++r.dropped;
+      } else {
+        ++r.failed;
+      }
     }
-    if (e == DriverError::kTxQueueFull) {
-      ++r.dropped;
-    } else {
-      ++r.failed;
-    }
-    return false;
+    if (sync_queued) r.sync_sent = results[count - 1] == DriverError::kOk;
+    count = 0;
   };
   const canopen::DriveCommand idle{};
   for (std::size_t i = 0; i < configs.size() && i < states.size(); ++i) {
     const canopen::DriveCommand& cmd = i < commands.size() ? commands[i] : idle;
-    if (canopen::step_rt(configs[i], states[i], now_ns, cmd, f)) send(f);
+    if (canopen::step_rt(configs[i], states[i], now_ns, cmd, frames[count]) && ++count == kMaxBatchFrames) flush();
   }
-  canopen::encode_sync_rt(f);
-  r.sync_sent = send(f);
+  canopen::encode_sync_rt(frames[count++]);
+  sync_queued = true;
+  flush();
   return r;
 }
 

@@ -31,23 +31,30 @@ RuiwoReceiveReport ruiwo_receive_rt(CanPort& port, ruiwo::Bus& bus, hal::TimeNs 
 RuiwoSendReport ruiwo_send_rt(CanPort& port, ruiwo::Bus& bus, const hal::CommandFrame& commands,
                               hal::TimeNs now_ns) {
   RuiwoSendReport r;
-  can_frame f;
-  for (int i = 0; i < bus.count; ++i) {
-    const std::uint8_t flags = ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], f);
-    r.clamp_flags |= flags;
-    if (flags != 0) ++r.clamped;
-    const DriverError e = send_rt(port, f);
-    if (e == DriverError::kOk) {
-      ++r.sent;
-    } else if (e == DriverError::kTxQueueFull) {
-      ++r.dropped;
-    } else {
-      ++r.failed;
+  can_frame frames[kMaxBatchFrames];
+  DriverError results[kMaxBatchFrames];
+  for (int first = 0; first < bus.count; first += kMaxBatchFrames) {
+    const int count = bus.count - first < kMaxBatchFrames ? bus.count - first : kMaxBatchFrames;
+    for (int k = 0; k < count; ++k) {
+      const int i = first + k;
+      const std::uint8_t flags = ruiwo::encode_command_rt(bus, i, commands.joints[bus.motors[i].joint], frames[k]);
+      r.clamp_flags |= flags;
+      if (flags != 0) ++r.clamped;
     }
-    // Noted even when it did not leave the host: a request that cannot be sent
-    // goes unanswered, so a full queue or a dead bus makes the motors silent
-    // on the usual schedule instead of never.
-    ruiwo::note_sent_rt(bus, i, now_ns);
+    send_batch_rt(port, std::span<const can_frame>(frames, count), std::span<DriverError>(results, count));
+    for (int k = 0; k < count; ++k) {
+      if (results[k] == DriverError::kOk) {
+        ++r.sent;
+      } else if (results[k] == DriverError::kTxQueueFull) {
+        ++r.dropped;
+      } else {
+        ++r.failed;
+      }
+      // Noted even when it did not leave the host: a request that cannot be sent
+      // goes unanswered, so a full queue or a dead bus makes the motors silent
+      // on the usual schedule instead of never.
+      ruiwo::note_sent_rt(bus, first + k, now_ns);
+    }
   }
   return r;
 }

@@ -1,7 +1,9 @@
 // The bounded receive loop every bus binding runs each cycle: read at most
-// max_frames frames, stop at an empty queue or a closed peer, count controller
-// error frames and frames that are not classic CAN, hand the rest (with their
-// monotonic sample time) to on_frame. Real-time safe: no heap, bounded.
+// max_frames frames (up to kMaxBatchFrames per system call), stop at an empty
+// queue, a closed peer or a failing socket, count controller error frames and
+// frames that are not classic CAN (receive errors among them), hand the rest
+// (with their monotonic sample time) to on_frame. Real-time safe: no heap,
+// bounded.
 #pragma once
 
 #include "drivers/cycle/rx_stamp.h"
@@ -19,24 +21,30 @@ template <typename OnFrame>
 DrainCounts drain_classic_frames_rt(CanPort& port, int max_frames, hal::TimeNs now_ns,
                                     hal::TimeNs realtime_to_monotonic_ns, OnFrame&& on_frame) {
   DrainCounts counts;
-  RxFrame rx;
+  RxFrame rx[kMaxBatchFrames];
+  DriverError results[kMaxBatchFrames];
   can_frame f;
-  for (int n = 0; n < max_frames; ++n) {
-    const DriverError e = receive_rt(port, rx);
-    if (e == DriverError::kRxEmpty) break;
-    if (e == DriverError::kPeerClosed) {
-      counts.peer_closed = true;
-      break;
+  for (int n = 0; n < max_frames;) {
+    const int want = max_frames - n < kMaxBatchFrames ? max_frames - n : kMaxBatchFrames;
+    const int got = receive_batch_rt(port, std::span<RxFrame>(rx, want), std::span<DriverError>(results, want));
+    for (int k = 0; k < got; ++k) {
+      const DriverError e = results[k];
+      if (e == DriverError::kPeerClosed) {
+        counts.peer_closed = true;
+        return counts;
+      }
+      if (e == DriverError::kErrorFrame) {
+        ++counts.error_frames;
+        continue;
+      }
+      if (e != DriverError::kOk || !as_classic(rx[k], f)) {
+        ++counts.not_classic;
+        continue;
+      }
+      on_frame(static_cast<const can_frame&>(f), rx_stamp_ns(rx[k], now_ns, realtime_to_monotonic_ns));
     }
-    if (e == DriverError::kErrorFrame) {
-      ++counts.error_frames;
-      continue;
-    }
-    if (e != DriverError::kOk || !as_classic(rx, f)) {
-      ++counts.not_classic;
-      continue;
-    }
-    on_frame(static_cast<const can_frame&>(f), rx_stamp_ns(rx, now_ns, realtime_to_monotonic_ns));
+    n += got;
+    if (got < want || (got > 0 && results[got - 1] == DriverError::kIoError)) break;  // queue empty, or the socket failed
   }
   return counts;
 }

@@ -9,6 +9,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <vector>
+
 #include "drivers/can/can_port.h"
 #include "drivers/can/can_socket.h"
 #include "tests/support/alloc_trap.h"
@@ -202,6 +204,170 @@ TEST(CanPort, ClosedPeerIsReportedNotFatal) {
   EXPECT_EQ(send_rt(port, make_frame(0x1, 1, 0)), DriverError::kPeerClosed);  // no SIGPIPE
 }
 
+// The batched calls against the single-frame ones as the oracle: the same
+// datagrams (data, error, FD, bad-sized, end-of-stream) read both ways give the
+// same results, frames, counters and bus health.
+TEST(CanPortBatch, ReceiveMatchesSingleFrameReads) {
+  Pair a, b;
+  auto feed = [](int fd) {
+    for (int i = 0; i < 2 * kMaxBatchFrames + 3; ++i) {  // spans three batches
+      const can_frame f = make_frame(0x100 + i, static_cast<std::uint8_t>(i % 9), static_cast<std::uint8_t>(i));
+      ASSERT_EQ(send(fd, &f, CAN_MTU, 0), CAN_MTU);
+      if (i == 5) {
+        can_frame busoff{};
+        busoff.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
+        busoff.len = CAN_ERR_DLC;
+        ASSERT_EQ(send(fd, &busoff, CAN_MTU, 0), CAN_MTU);
+      }
+      if (i == 17) {
+        const char junk[5] = {1, 2, 3, 4, 5};
+        ASSERT_EQ(send(fd, junk, sizeof(junk), 0), 5);
+      }
+      if (i == 20) {
+        canfd_frame fd_frame{};
+        fd_frame.can_id = 0x55;
+        fd_frame.len = 48;
+        for (int k = 0; k < 48; ++k) fd_frame.data[k] = static_cast<std::uint8_t>(k + i);
+        ASSERT_EQ(send(fd, &fd_frame, CANFD_MTU, 0), CANFD_MTU);
+      }
+    }
+  };
+  feed(a.fd[0]);
+  feed(b.fd[0]);
+  close(a.fd[0]), close(b.fd[0]);
+  a.fd[0] = b.fd[0] = -1;
+  ASSERT_TRUE(enable_rx_timestamps(b.fd[1]));
+  CanPort single = attach_can_port(a.fd[1], true), batched = attach_can_port(b.fd[1], true);
+
+  std::vector<DriverError> want_e;
+  std::vector<RxFrame> want_f;
+  for (;;) {
+    RxFrame f;
+    const DriverError e = receive_rt(single, f);
+    want_e.push_back(e), want_f.push_back(f);
+    if (e == DriverError::kPeerClosed || e == DriverError::kRxEmpty) break;
+  }
+  ASSERT_EQ(want_e.back(), DriverError::kPeerClosed);
+  ASSERT_EQ(want_e.size(), 2u * kMaxBatchFrames + 3 + 4);  // frames, bus-off, junk, FD, end
+
+  std::vector<DriverError> got_e;
+  std::vector<RxFrame> got_f;
+  std::vector<int> call_sizes;
+  for (int calls = 0; calls < 10; ++calls) {
+    RxFrame f[kMaxBatchFrames];
+    DriverError e[kMaxBatchFrames];
+    const int n = receive_batch_rt(batched, f, e);
+    call_sizes.push_back(n);
+    for (int k = 0; k < n; ++k) got_e.push_back(e[k]), got_f.push_back(f[k]);
+    if (n == 0 || e[n - 1] == DriverError::kPeerClosed) break;
+  }
+  EXPECT_EQ(call_sizes, (std::vector<int>{kMaxBatchFrames, kMaxBatchFrames, 7}));
+  ASSERT_EQ(got_e, want_e);
+  for (std::size_t i = 0; i + 1 < want_f.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(got_f[i].is_fd, want_f[i].is_fd);
+    EXPECT_EQ(got_f[i].frame.can_id, want_f[i].frame.can_id);
+    EXPECT_EQ(got_f[i].frame.len, want_f[i].frame.len);
+    EXPECT_EQ(std::memcmp(got_f[i].frame.data, want_f[i].frame.data, want_f[i].frame.len), 0);
+    if (want_e[i] != DriverError::kBadDatagram) {
+      EXPECT_GT(got_f[i].rx_realtime_ns, 0);  // each datagram its own stamp
+    }
+  }
+  EXPECT_EQ(batched.stats.rx_frames, single.stats.rx_frames);
+  EXPECT_EQ(batched.stats.rx_bad, 1u);
+  EXPECT_EQ(single.stats.rx_bad, 1u);
+  EXPECT_TRUE(batched.health.bus_off);
+  EXPECT_EQ(batched.health.bus_off, single.health.bus_off);
+}
+
+TEST(CanPortBatch, EmptyQueueReadsNothing) {
+  Pair p;
+  CanPort rx = attach_can_port(p.fd[1], false);
+  RxFrame f[4];
+  DriverError e[4];
+  EXPECT_EQ(receive_batch_rt(rx, f, e), 0);
+  EXPECT_EQ(rx.stats.io_errors, 0u);
+}
+
+// Sending: frames leave in order; a full queue drops (and counts) exactly the
+// frames single sends would have dropped, and the rest of the batch is still tried.
+TEST(CanPortBatch, SendKeepsOrderAndDropsWhatSingleSendsWouldDrop) {
+  auto fill_to_full = [](int fd, int& queued) {
+    const int small = 4096;
+    ASSERT_EQ(setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &small, sizeof(small)), 0);
+    queued = 0;
+    const can_frame f = make_frame(0x1, 8, 0);
+    while (send(fd, &f, CAN_MTU, MSG_DONTWAIT) == CAN_MTU) ++queued;
+  };
+  std::vector<can_frame> frames;
+  for (int i = 0; i < 2 * kMaxBatchFrames + 5; ++i) frames.push_back(make_frame(0x200 + i, 8, static_cast<std::uint8_t>(i)));
+
+  // In order, all of them, when there is room.
+  {
+    Pair p;
+    CanPort tx = attach_can_port(p.fd[0], false), rx = attach_can_port(p.fd[1], false);
+    std::vector<DriverError> e(frames.size(), DriverError::kIoError);
+    send_batch_rt(tx, frames, e);
+    EXPECT_EQ(e, std::vector<DriverError>(frames.size(), DriverError::kOk));
+    EXPECT_EQ(tx.stats.tx_frames, frames.size());
+    for (const can_frame& want : frames) {
+      RxFrame got;
+      ASSERT_EQ(receive_rt(rx, got), DriverError::kOk);
+      EXPECT_EQ(got.frame.can_id, want.can_id);
+      EXPECT_EQ(std::memcmp(got.frame.data, want.data, 8), 0);
+    }
+  }
+  // A full queue: both ways agree frame by frame (DGRAM, whose queue a small
+  // SO_SNDBUF bounds, as the FullQueue test above).
+  Pair a(SOCK_DGRAM), b(SOCK_DGRAM);
+  int queued_a = 0, queued_b = 0;
+  fill_to_full(a.fd[0], queued_a);
+  fill_to_full(b.fd[0], queued_b);
+  ASSERT_EQ(queued_a, queued_b);
+  CanPort single = attach_can_port(a.fd[0], false), batched = attach_can_port(b.fd[0], false);
+  std::vector<DriverError> want, got(frames.size(), DriverError::kOk);
+  for (const can_frame& f : frames) want.push_back(send_rt(single, f));
+  send_batch_rt(batched, frames, got);
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(got.front(), DriverError::kTxQueueFull);
+  EXPECT_EQ(batched.stats.tx_dropped, frames.size());
+  EXPECT_EQ(batched.stats.tx_dropped, single.stats.tx_dropped);
+  EXPECT_EQ(batched.stats.io_errors, 0u);
+  // Room for a few: the batch sends as many as single sends do, then drops the rest.
+  for (int fd : {a.fd[1], b.fd[1]}) {
+    can_frame sink;
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(recv(fd, &sink, sizeof(sink), MSG_DONTWAIT), CAN_MTU);
+  }
+  want.clear();
+  for (const can_frame& f : frames) want.push_back(send_rt(single, f));
+  send_batch_rt(batched, frames, got);
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(got.front(), DriverError::kOk);
+  EXPECT_EQ(got.back(), DriverError::kTxQueueFull);
+  EXPECT_EQ(batched.stats.tx_frames, single.stats.tx_frames);
+  EXPECT_EQ(batched.stats.tx_dropped, single.stats.tx_dropped);
+}
+
+TEST(CanPortBatch, BusOffAndClosedPeerRefuseEveryFrame) {
+  Pair p;
+  CanPort port = attach_can_port(p.fd[1], false);
+  const std::vector<can_frame> frames(3, make_frame(0x1, 1, 0));
+  std::vector<DriverError> e(3, DriverError::kOk);
+  port.health.bus_off = true;
+  send_batch_rt(port, frames, e);
+  EXPECT_EQ(e, std::vector<DriverError>(3, DriverError::kBusOff));
+  EXPECT_EQ(port.stats.tx_frames + port.stats.tx_dropped + port.stats.io_errors, 0u);  // never reached the socket
+  clear_bus_off(port.health);
+  close(p.fd[0]);
+  p.fd[0] = -1;
+  send_batch_rt(port, frames, e);  // no SIGPIPE
+  EXPECT_EQ(e, std::vector<DriverError>(3, DriverError::kPeerClosed));
+  RxFrame f[4];
+  DriverError r[4];
+  EXPECT_EQ(receive_batch_rt(port, f, r), 1);  // one end-of-stream, not four
+  EXPECT_EQ(r[0], DriverError::kPeerClosed);
+}
+
 TEST(CanPort, FrameIoDoesNotAllocate) {
   Pair p;
   ASSERT_TRUE(enable_rx_timestamps(p.fd[1]));
@@ -214,6 +380,13 @@ TEST(CanPort, FrameIoDoesNotAllocate) {
     (void)receive_rt(rx, got);
   }
   (void)receive_rt(rx, got);
+  const can_frame batch[3] = {f, f, f};
+  DriverError results[kMaxBatchFrames];
+  RxFrame rx_batch[kMaxBatchFrames];
+  for (int i = 0; i < 100; ++i) {
+    send_batch_rt(tx, batch, std::span<DriverError>(results, 3));
+    (void)receive_batch_rt(rx, rx_batch, results);
+  }
   EXPECT_EQ(trap.count(), 0u) << "first allocation " << trap.first_size_bytes() << " bytes";
 }
 
