@@ -248,6 +248,66 @@ TEST(mocap_dynamic_retarget, RefusesABadConfig) {
   error.clear();
   EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
   EXPECT_FALSE(error.empty());
+  cfg = DynamicRetargetConfig{};
+  cfg.support_margin_m = std::numeric_limits<double>::quiet_NaN();
+  error.clear();
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+  EXPECT_NE(error.find("support_margin_m"), std::string::npos) << error;
+}
+
+// The planning model's sole corners: each moved in by the margin in x and in y (FACTS.md's
+// corners: toe +0.17084, heel -0.073164, sides ±0.04773 on leg_*6_link), nothing else changed.
+TEST(mocap_dynamic_retarget, PlanningSoleIsInsetByTheMargin) {
+  const double m = 0.015;
+  const model::Model planning = planning_model(robot(), m);
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    SCOPED_TRACE(model::frame_name(robot(), c));
+    const Vec3& p = robot().frames[c].position_m;
+    const Vec3& q = planning.frames[c].position_m;
+    EXPECT_NEAR(std::abs(p.x() - q.x()), m, 1e-12);
+    EXPECT_NEAR(std::abs(p.y() - q.y()), m, 1e-12);
+    EXPECT_EQ(p.z(), q.z());
+    EXPECT_NEAR(std::abs(q.y()), 0.04773 - m, 1e-9);
+    EXPECT_TRUE(std::abs(q.x() - (0.17084 - m)) < 1e-9 || std::abs(q.x() - (-0.073164 + m)) < 1e-9) << q.x();
+    EXPECT_EQ(planning.frames[c].body, robot().frames[c].body);
+  }
+  const model::Model none = planning_model(robot(), 0.0);
+  for (int c = 0; c < model::kNumContactPoints; ++c) EXPECT_EQ(none.frames[c].position_m, robot().frames[c].position_m);
+}
+
+// Forces planned on the inset corners, moved onto the robot's: per foot the same force and
+// the same moment about the world origin (forward kinematics of a bent, turned pose with both
+// models), every corner's force a non-negative multiple of forces in the cone, and a zero
+// margin gives the forces back unchanged.
+TEST(mocap_dynamic_retarget, InsetForcesMoveOntoTheRobotsCornersWithTheSameWrench) {
+  const model::Model planning = planning_model(robot(), 0.02);
+  const ConfigVector q = bent_pose();
+  auto data_r = std::make_unique<dynamics::Data>();
+  auto data_p = std::make_unique<dynamics::Data>();
+  dynamics::forward_kinematics(robot(), *data_r, q);
+  dynamics::forward_kinematics(planning, *data_p, q);
+  CornerForces f;
+  for (int c = 0; c < model::kNumContactPoints; ++c) {  // inside the μ = 0.5 pyramid
+    f.segment<3>(3 * c) = Vec3(0.3 * std::sin(c + 1.0), 0.3 * std::cos(2.0 * c), 1.0) * (50.0 + 20.0 * c);
+  }
+  const CornerForces g = forces_on_robot_corners(robot(), planning, f);
+  for (int foot = 0; foot < 2; ++foot) {
+    Vec3 force_p = Vec3::Zero(), force_r = Vec3::Zero(), moment_p = Vec3::Zero(), moment_r = Vec3::Zero();
+    for (int k = 4 * foot; k < 4 * foot + 4; ++k) {
+      force_p += f.segment<3>(3 * k), force_r += g.segment<3>(3 * k);
+      moment_p += dynamics::frame_position(planning, *data_p, k).cross(Vec3(f.segment<3>(3 * k)));
+      moment_r += dynamics::frame_position(robot(), *data_r, k).cross(Vec3(g.segment<3>(3 * k)));
+      const Vec3 gk = g.segment<3>(3 * k);
+      EXPECT_GT(gk.z(), 0.0);
+      EXPECT_LE(std::abs(gk.x()), kMu * gk.z() + 1e-9);
+      EXPECT_LE(std::abs(gk.y()), kMu * gk.z() + 1e-9);
+    }
+    EXPECT_LT((force_r - force_p).norm(), 1e-9);
+    EXPECT_LT((moment_r - moment_p).norm(), 1e-9) << "foot " << foot;
+    EXPECT_GT((g - f).norm(), 1.0) << "the forces did move";
+  }
+  const model::Model none = planning_model(robot(), 0.0);
+  EXPECT_LT((forces_on_robot_corners(robot(), none, f) - f).norm(), 1e-12);
 }
 
 // The repair with `forbid flight` over a hop keeps the flight (feasibility_repair.h), and
@@ -407,8 +467,8 @@ TEST(mocap_dynamic_retarget, ConvergedWindowSatisfiesTheKktConditions) {
   ASSERT_EQ(static_cast<int>(out.stage_x.size()), T + 1);
 
   // The OCP as the optimization poses it: the planning model's limits (the ankles at one
-  // motor's clamp), the robot's dynamics.
-  const model::Model planning = planning_model(robot());
+  // motor's clamp) and its inset sole corners, the robot's dynamics.
+  const model::Model planning = planning_model(robot(), cfg.support_margin_m);
   ASSERT_LT(planning.limits.torque_Nm[model::kLeftLegFirst + 4], robot().limits.torque_Nm[model::kLeftLegFirst + 4]);
   auto ws = std::make_unique<mpc::MpcWorkspace>();
   mpc::mpc_init(planning, cfg.ocp, *ws);

@@ -123,7 +123,30 @@ void stage_torque(const model::Model& robot, dynamics::Data& data, const StateVe
   for (int j = 0; j < kNumMpcJoints; ++j) column(mpc::kXJoints + j);
 }
 
-model::Model planning_model(const model::Model& robot) {
+namespace {
+
+// The bilinear weights of point (x, y) of a foot's sole in its four corners (foot frame x-y):
+// w[k] ≥ 0, Σ w = 1 and Σ w[k] corner[k] = (x, y) for a point inside the corners' rectangle.
+std::array<double, 4> sole_weights(const model::Model& robot, int foot, double x, double y) {
+  double x_lo = 1e9, x_hi = -1e9, y_lo = 1e9, y_hi = -1e9;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3& p = robot.frames[4 * foot + k].position_m;
+    x_lo = std::min(x_lo, p.x()), x_hi = std::max(x_hi, p.x());
+    y_lo = std::min(y_lo, p.y()), y_hi = std::max(y_hi, p.y());
+  }
+  const double a = (x - x_lo) / (x_hi - x_lo), b = (y - y_lo) / (y_hi - y_lo);
+  std::array<double, 4> w;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3& p = robot.frames[4 * foot + k].position_m;
+    const bool front = p.x() - x_lo > x_hi - p.x(), left = p.y() - y_lo > y_hi - p.y();
+    w[k] = (front ? a : 1.0 - a) * (left ? b : 1.0 - b);
+  }
+  return w;
+}
+
+}  // namespace
+
+model::Model planning_model(const model::Model& robot, double support_margin_m) {
   const drivers::AnkleMotors motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot));
   model::Model planning = robot;
   for (int leg = 0; leg < 2 && motors.active; ++leg) {
@@ -132,12 +155,39 @@ model::Model planning_model(const model::Model& robot) {
       planning.limits.torque_Nm[j + k] = std::min(planning.limits.torque_Nm[j + k], motors.limit_Nm[leg].minCoeff());
     }
   }
+  for (int foot = 0; foot < 2; ++foot) {
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centre += 0.25 * robot.frames[4 * foot + k].position_m;
+    for (int k = 0; k < 4; ++k) {
+      Vec3& p = planning.frames[4 * foot + k].position_m;
+      for (int axis = 0; axis < 2; ++axis) {
+        const double half = std::abs(p[axis] - centre[axis]);
+        p[axis] = centre[axis] + std::copysign(std::max(half - support_margin_m, 0.0), p[axis] - centre[axis]);
+      }
+    }
+  }
   return planning;
+}
+
+CornerForces forces_on_robot_corners(const model::Model& robot, const model::Model& planning, const CornerForces& f) {
+  CornerForces out = CornerForces::Zero();
+  for (int foot = 0; foot < 2; ++foot) {
+    for (int i = 0; i < 4; ++i) {
+      const Vec3& q = planning.frames[4 * foot + i].position_m;
+      const std::array<double, 4> w = sole_weights(robot, foot, q.x(), q.y());
+      for (int k = 0; k < 4; ++k) out.segment<3>(3 * (4 * foot + k)) += w[k] * f.segment<3>(3 * (4 * foot + i));
+    }
+  }
+  return out;
 }
 
 bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan& plan, const DynamicRetargetConfig& cfg,
                       DynamicResult& out, std::string& error) {
-  const model::Model robot = planning_model(robot_model);
+  if (!(cfg.support_margin_m >= 0.0 && cfg.support_margin_m <= 0.04)) {
+    error = "dynamic retargeting: support_margin_m must be within 0..0.04 m (the sole is 0.095 m wide)";
+    return false;
+  }
+  const model::Model robot = planning_model(robot_model, cfg.support_margin_m);
   const auto t_start = std::chrono::steady_clock::now();
   if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
     error = std::string("dynamic retargeting: ") + why;
@@ -484,6 +534,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
       }
       out.forces_N[i].segment<3>(3 * c) = f;
     }
+    out.forces_N[i] = forces_on_robot_corners(robot_model, robot, out.forces_N[i]);
   }
   // Stance feet exactly on their footholds (the reference's, which the repair placed).
   // Pass 1 finds, frame by frame, how far the base must come down for the legs to reach

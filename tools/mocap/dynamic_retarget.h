@@ -34,6 +34,9 @@
 
 namespace kuavo::mocap {
 
+// Forces at the 8 sole corners, world axes [N].
+using CornerForces = Eigen::Matrix<double, 3 * model::kNumContactPoints, 1>;
+
 struct DynamicRetargetConfig {
   mpc::MpcConfig ocp = default_ocp();
   int commit_stages = 10;          // 0.2 s per window at dt 0.02
@@ -51,6 +54,11 @@ struct DynamicRetargetConfig {
   double torque_penalty_weight = 0.0;
   double velocity_barrier_mu = 0.01;
   double velocity_barrier_delta_rad_s = 0.1;
+  // The plan keeps its centre of pressure this far inside each foot's sole (planning_model):
+  // a reference whose single stances put the pressure on the sole's edge leaves the online
+  // controller nothing to correct with (cmu_05_20 on carpet: 3 ms of ZMP margin over the
+  // right foot's stances, then the fall).
+  double support_margin_m = 0.015;
   // Called after each window with the share of the motion committed so far (0…1]; empty: none.
   std::function<void(double)> on_progress;
   static mpc::MpcConfig default_ocp();
@@ -77,7 +85,7 @@ struct DynamicStats {
 struct DynamicResult {
   std::vector<dynamics::ConfigVector> q;                     // frames at the plan's rate
   std::vector<ContactLabel> contacts;
-  std::vector<Eigen::Matrix<double, 3 * model::kNumContactPoints, 1>> forces_N;  // per frame, world
+  std::vector<CornerForces> forces_N;  // per frame, world, on the robot's sole corners
   // The committed stage trajectory itself (S + 1 states, S inputs + a copy, dt = ocp.dt_s),
   // before the interpolation to frames and the foothold IK.
   std::vector<mpc::StateVector> stage_x;
@@ -91,8 +99,18 @@ struct DynamicResult {
 // (pitch to ~54 N·m, drivers/transmission/ankle_motors.h) stays the online controller's
 // reserve. Binding the envelope in the plan as well (the MPC's motor barrier at each window's
 // first ankle angles) was tried, over the joint box and over this cap: one CMU clip or the
-// other then failed check runs it passes without.
-model::Model planning_model(const model::Model& robot);
+// other then failed check runs it passes without. So was capping each axis at what the motors
+// give it alone at the standing pose, at the WBC's share (roll 18.7 N·m): cmu_05_07 then
+// passed no round of its check.
+// Its sole corners are moved in toward each sole's centre by support_margin_m in x and in y,
+// so forces planned there put the centre of pressure at least that far inside the sole.
+model::Model planning_model(const model::Model& robot, double support_margin_m);
+
+// Forces at the planning model's inset corners as the same wrench on the robot's corners:
+// each inset corner is a convex (bilinear) combination of its foot's four corners, so its
+// force split by those weights keeps each foot's force and moment about any point, and
+// every piece stays in the friction cone. DynamicResult::forces_N are on the robot's corners.
+CornerForces forces_on_robot_corners(const model::Model& robot, const model::Model& planning, const CornerForces& f);
 
 // plan: the repaired reference (motion_plan_finish'ed), starting at rest in double support.
 // false with a message (bad config, a flight phase, a motion that does not start in double
