@@ -170,6 +170,18 @@ void send_batch_rt(CanPort& port, std::span<const can_frame> frames, std::span<D
   }
 }
 
+void count_sends(std::span<const DriverError> results, SendCounts& counts) {
+  for (const DriverError e : results) {
+    if (e == DriverError::kOk) {
+      ++counts.sent;
+    } else if (e == DriverError::kTxQueueFull) {
+      ++counts.dropped;
+    } else {
+      ++counts.failed;
+    }
+  }
+}
+
 int receive_batch_rt(CanPort& port, std::span<RxFrame> out, std::span<DriverError> results) {
   const int want = static_cast<int>(std::min({out.size(), results.size(), static_cast<std::size_t>(kMaxBatchFrames)}));
   if (want <= 0) return 0;

@@ -69,6 +69,13 @@ inline constexpr int kMaxBatchFrames = 16;
 // frame the kernel refuses is counted and skipped; the rest are still tried.
 void send_batch_rt(CanPort& port, std::span<const can_frame> frames, std::span<DriverError> results);
 
+// A batch's send results as the bus cycles report them: kOk sent, kTxQueueFull
+// dropped, anything else (bus-off, closed peer, I/O error) failed.
+struct SendCounts {
+  int sent = 0, dropped = 0, failed = 0;
+};
+void count_sends(std::span<const DriverError> results, SendCounts& counts);
+
 // Reads up to min(out.size(), results.size(), kMaxBatchFrames) datagrams;
 // results[i] as receive_rt. Returns how many results it wrote: 0 when the
 // queue is empty; a kPeerClosed or kIoError result is the last one written.

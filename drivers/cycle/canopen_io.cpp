@@ -36,17 +36,10 @@ CanopenSendReport canopen_send_rt(CanPort& port, std::span<const canopen::DriveC
   DriverError results[kMaxBatchFrames];
   int count = 0;
   bool sync_queued = false;
+  SendCounts counts;
   auto flush = [&] {
     send_batch_rt(port, std::span<const can_frame>(frames, count), std::span<DriverError>(results, count));
-    for (int k = 0; k < count; ++k) {
-      if (results[k] == DriverError::kOk) {
-        ++r.sent;
-      } else if (results[k] == DriverError::kTxQueueFull) {
-        ++r.dropped;
-      } else {
-        ++r.failed;
-      }
-    }
+    count_sends(std::span<const DriverError>(results, count), counts);
     if (sync_queued) r.sync_sent = results[count - 1] == DriverError::kOk;
     count = 0;
   };
@@ -58,6 +51,7 @@ CanopenSendReport canopen_send_rt(CanPort& port, std::span<const canopen::DriveC
   canopen::encode_sync_rt(frames[count++]);
   sync_queued = true;
   flush();
+  r.sent = counts.sent, r.dropped = counts.dropped, r.failed = counts.failed;
   return r;
 }
 

@@ -31,6 +31,7 @@ RuiwoReceiveReport ruiwo_receive_rt(CanPort& port, ruiwo::Bus& bus, hal::TimeNs 
 RuiwoSendReport ruiwo_send_rt(CanPort& port, ruiwo::Bus& bus, const hal::CommandFrame& commands,
                               hal::TimeNs now_ns) {
   RuiwoSendReport r;
+  SendCounts counts;
   can_frame frames[kMaxBatchFrames];
   DriverError results[kMaxBatchFrames];
   for (int first = 0; first < bus.count; first += kMaxBatchFrames) {
@@ -42,20 +43,15 @@ RuiwoSendReport ruiwo_send_rt(CanPort& port, ruiwo::Bus& bus, const hal::Command
       if (flags != 0) ++r.clamped;
     }
     send_batch_rt(port, std::span<const can_frame>(frames, count), std::span<DriverError>(results, count));
+    count_sends(std::span<const DriverError>(results, count), counts);
     for (int k = 0; k < count; ++k) {
-      if (results[k] == DriverError::kOk) {
-        ++r.sent;
-      } else if (results[k] == DriverError::kTxQueueFull) {
-        ++r.dropped;
-      } else {
-        ++r.failed;
-      }
       // Noted even when it did not leave the host: a request that cannot be sent
       // goes unanswered, so a full queue or a dead bus makes the motors silent
       // on the usual schedule instead of never.
       ruiwo::note_sent_rt(bus, first + k, now_ns);
     }
   }
+  r.sent = counts.sent, r.dropped = counts.dropped, r.failed = counts.failed;
   return r;
 }
 

@@ -348,6 +348,17 @@ TEST(CanPortBatch, SendKeepsOrderAndDropsWhatSingleSendsWouldDrop) {
   EXPECT_EQ(batched.stats.tx_dropped, single.stats.tx_dropped);
 }
 
+TEST(CanPortBatch, SendCountsSplitSentDroppedAndFailed) {
+  const DriverError results[] = {DriverError::kOk, DriverError::kTxQueueFull, DriverError::kBusOff,
+                                 DriverError::kOk, DriverError::kPeerClosed, DriverError::kIoError};
+  SendCounts counts;
+  counts.sent = 1;  // adds to what is there
+  count_sends(results, counts);
+  EXPECT_EQ(counts.sent, 3);
+  EXPECT_EQ(counts.dropped, 1);
+  EXPECT_EQ(counts.failed, 3);
+}
+
 TEST(CanPortBatch, BusOffAndClosedPeerRefuseEveryFrame) {
   Pair p;
   CanPort port = attach_can_port(p.fd[1], false);
