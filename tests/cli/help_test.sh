@@ -39,6 +39,10 @@ for cmd in demo paper replay retarget retarget-sweep simulate campaign model; do
   expect 2 "" "usage: kuavo $cmd" "$cmd" --no-such-option
 done
 expect 2 "" "usage: kuavo replay" replay --out "$dir/r"
+# A number option out of its range, or given to a stage it does not apply to, is refused by name.
+expect 2 "" "support-margin" retarget -o "$dir/never.motion" --support-margin 0.05
+expect 2 "" "support-margin" retarget -o "$dir/never.motion" --stage geometric --support-margin 0.01
+[ ! -e "$dir/never.motion" ] || fail "kuavo retarget wrote a motion with a refused --support-margin"
 expect 2 "" "no such file" demo "$dir/missing.bvh" --out "$dir/never"
 [ ! -e "$dir/never" ] || fail "kuavo demo with a missing BVH made its report folder"
 # A run piped or with --quiet shows no progress line (no carriage return); --quiet also drops the

@@ -459,6 +459,7 @@ TEST(mocap_dynamic_retarget, ConvergedWindowSatisfiesTheKktConditions) {
   const int T = static_cast<int>(std::lround(cfg.ocp.horizon_s / cfg.ocp.dt_s));
   cfg.commit_stages = T;
   cfg.step_tolerance = 1e-7;
+  cfg.support_margin_m = 0.015;  // the inset sole in the OCP too
   DynamicResult out;
   std::string error;
   ASSERT_TRUE(dynamic_retarget(robot(), *plan, cfg, out, error)) << error;

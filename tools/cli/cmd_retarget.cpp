@@ -4,14 +4,15 @@
 //                  [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
 //                  [--torque-weight W] [--attenuate ROUNDS] [--verify ROUNDS] [--figures DIR|none]
-//                  [--human-csv OUT.csv] [--duration S]
+//                  [--support-margin M] [--human-csv OUT.csv] [--duration S]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
 // geometric stage (what the human did, kinematically on the robot; for those motions
 // `kuavo simulate` and `kuavo_fw` offer --balance-filter on).
 // --torque-weight W turns on the TO's joint-torque hinge (off by default, see
-// dynamic_retarget.h). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
+// dynamic_retarget.h). --support-margin M (0…0.04 m, default 0) plans the TO's centre of
+// pressure M inside the soles (DynamicRetargetConfig::support_margin_m). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
@@ -110,7 +111,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> inputs;
   std::string human_path;
   bool quiet = false;
-  double horizon_s = 0.0, torque_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
+  double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, verify_rounds = DynamicStageOptions{}.verify_rounds;
   std::string verify_mujoco = "on";
   DynamicStageOptions dyn_options;
@@ -129,6 +130,7 @@ int run(int argc, char** argv) {
   p.input_file("--repairs", "FILE", &repairs_path).modes = kDynamic;
   p.output_file("--dynamic-csv", "OUT.csv", &dyn_options.csv_path).modes = kDynamic;
   p.number("--torque-weight", "W", 0.0, 1e4, "", &torque_weight).modes = kDynamic;
+  p.number("--support-margin", "M", 0.0, 0.04, "m", &support_margin_m).modes = kDynamic;
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.integer("--verify", "ROUNDS", 0, 16, "rounds", &verify_rounds).modes = kDynamic;
   p.choice("--verify-mujoco", {"on", "off"}, &verify_mujoco).modes = kDynamic;
@@ -168,6 +170,7 @@ int run(int argc, char** argv) {
   model::parse_variant(variant_name.c_str(), variant);  // one of the two names
   if (p.given("--horizon")) dyn_options.dynamic.set_horizon(horizon_s);
   if (p.given("--torque-weight")) dyn_options.dynamic.torque_penalty_weight = torque_weight;
+  if (p.given("--support-margin")) dyn_options.dynamic.support_margin_m = support_margin_m;
   dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);
   dyn_options.verify_rounds = static_cast<int>(verify_rounds);
   dyn_options.verify_mujoco = verify_mujoco == "on";

@@ -31,7 +31,8 @@ constexpr CommandHelp kHelp[] = {
      "                      [--map MAPPING.txt] [--csv OUT.csv] [--dance-bvh OUT.bvh] --report REPORT.json\n"
      "                      [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]\n"
      "                      [--torque-weight W] [--attenuate ROUNDS] [--verify ROUNDS] [--figures DIR|none]\n"
-     "                      [--verify-mujoco on|off] [--human-csv OUT.csv]\n"
+     "                      [--verify-mujoco on|off] [--support-margin M] [--human-csv OUT.csv]\n"
+     "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
      "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
