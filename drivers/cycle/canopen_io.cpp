@@ -35,22 +35,22 @@ CanopenSendReport canopen_send_rt(CanPort& port, std::span<const canopen::DriveC
   can_frame frames[kMaxBatchFrames];
   DriverError results[kMaxBatchFrames];
   int count = 0;
-  bool sync_queued = false;
   SendCounts counts;
   auto flush = [&] {
     send_batch_rt(port, std::span<const can_frame>(frames, count), std::span<DriverError>(results, count));
     count_sends(std::span<const DriverError>(results, count), counts);
-    if (sync_queued) r.sync_sent = results[count - 1] == DriverError::kOk;
-    count = 0;
   };
   const canopen::DriveCommand idle{};
   for (std::size_t i = 0; i < configs.size() && i < states.size(); ++i) {
     const canopen::DriveCommand& cmd = i < commands.size() ? commands[i] : idle;
-    if (canopen::step_rt(configs[i], states[i], now_ns, cmd, frames[count]) && ++count == kMaxBatchFrames) flush();
+    if (canopen::step_rt(configs[i], states[i], now_ns, cmd, frames[count]) && ++count == kMaxBatchFrames) {
+      flush();
+      count = 0;
+    }
   }
   canopen::encode_sync_rt(frames[count++]);
-  sync_queued = true;
   flush();
+  r.sync_sent = results[count - 1] == DriverError::kOk;  // SYNC is the batch's last frame
   r.sent = counts.sent, r.dropped = counts.dropped, r.failed = counts.failed;
   return r;
 }
