@@ -71,6 +71,12 @@ TEST(Model, JointOrderAndLimitsFollowTheFactSheet) {
   // kuavo.json's continuous 10 rad/s exceeds its 7 rad/s peak, so plan within 7.
   EXPECT_DOUBLE_EQ(l.torque_Nm[16], 14.1);
   EXPECT_DOUBLE_EQ(l.velocity_rad_s[16], 7.0);
+  // Ankle pitch and roll, both legs: the joint box is Leju's WBC limit, 60 Nm (FACTS §2.5);
+  // the two 27 Nm motors behind the linkage bound them jointly (drivers/transmission).
+  for (const int j : {4, 5, 10, 11}) {
+    EXPECT_DOUBLE_EQ(l.torque_Nm[j], 60.0) << j;
+    EXPECT_DOUBLE_EQ(l.peak_torque_Nm[j], 60.0) << j;
+  }
   // Head: kuavo.json protection is off; URDF effort and velocity are used.
   EXPECT_DOUBLE_EQ(l.torque_Nm[26], 1.5);
   EXPECT_DOUBLE_EQ(l.torque_Nm[27], 12.0);

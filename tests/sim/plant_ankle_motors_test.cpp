@@ -29,6 +29,7 @@ const drivers::AnkleMotors& ankle_motors() {
 }
 
 constexpr int kLeftPitch = model::kLeftLegFirst + 4, kRightPitch = model::kRightLegFirst + 4;
+constexpr double kPitch_Nm = 70.0;
 
 hal::CommandFrame ankle_torques(double left_pitch_Nm, double right_roll_Nm) {
   hal::CommandFrame c{};
@@ -53,9 +54,15 @@ sim::PlantTruth after_one_ms(PlantT& plant, const hal::CommandFrame& command) {
 void expect_motor_clamps(const sim::PlantTruth& with, const sim::PlantTruth& without, const char* engine) {
   SCOPED_TRACE(engine);
   const model::Model& m = robot();
-  // Pitch 45 N·m: each motor ≈ 22.5 of its 27; the joint box (URDF effort 36) alone clips it.
-  EXPECT_EQ(with.joint_torque_Nm[kLeftPitch], 45.0);
-  EXPECT_EQ(with.joint_torque_Nm[kLeftPitch + 1], 0.0);
+  // Pitch 70 N·m: beyond both motors (≈ 54 of pitch alone), and beyond the joint box (Leju's
+  // WBC limit, 60), which alone clips it without the motors.
+  Eigen::Vector2d pitch(kPitch_Nm, 0.0);
+  const Eigen::Vector2d q_left(with.q[7 + kLeftPitch], with.q[8 + kLeftPitch]);
+  ASSERT_EQ(drivers::clip_ankle_torques_rt(ankle_motors(), 0, q_left, pitch), 2);
+  EXPECT_NEAR(with.joint_torque_Nm[kLeftPitch], pitch[0], 1e-9);
+  EXPECT_NEAR(with.joint_torque_Nm[kLeftPitch + 1], pitch[1], 1e-9);
+  EXPECT_GT(pitch[0], 50.0);  // more than the URDF's 36 N·m effort: two motors, not one
+  EXPECT_LT(pitch[0], m.limits.peak_torque_Nm[kLeftPitch]);
   EXPECT_EQ(without.joint_torque_Nm[kLeftPitch], m.limits.peak_torque_Nm[kLeftPitch]);
   // Roll 30 N·m: beyond one motor (≈ 24.5 of roll alone); what the drivers' clip gives at the
   // ankle angles the truth reports, pitch coupled in.
@@ -67,7 +74,7 @@ void expect_motor_clamps(const sim::PlantTruth& with, const sim::PlantTruth& wit
   EXPECT_LT(roll[1], 27.0);
   EXPECT_EQ(without.joint_torque_Nm[kRightPitch + 1], 30.0);  // within the joint box
   // The robot moves with what is delivered: from rest, the left ankle's speed scales with it.
-  EXPECT_NEAR(with.v[6 + kLeftPitch] / without.v[6 + kLeftPitch], 45.0 / m.limits.peak_torque_Nm[kLeftPitch], 0.01);
+  EXPECT_NEAR(with.v[6 + kLeftPitch] / without.v[6 + kLeftPitch], pitch[0] / m.limits.peak_torque_Nm[kLeftPitch], 0.01);
 }
 
 TEST(PlantAnkleMotors, SimbodyPlantClipsEachMotorNotTheJoints) {
@@ -80,7 +87,7 @@ TEST(PlantAnkleMotors, SimbodyPlantClipsEachMotorNotTheJoints) {
     sim::Plant without(robot(), cfg);
     cfg.ankle_motors = &ankle_motors();
     sim::Plant with(robot(), cfg);
-    const hal::CommandFrame command = ankle_torques(45.0, 30.0);
+    const hal::CommandFrame command = ankle_torques(kPitch_Nm, 30.0);
     const sim::PlantTruth t_with = after_one_ms(with, command), t_without = after_one_ms(without, command);
     expect_motor_clamps(t_with, t_without, engine == sim::DerivativeEngine::kSimbody ? "simbody forces" : "rigid body");
   }
@@ -94,7 +101,7 @@ TEST(PlantAnkleMotors, MujocoPlantClipsEachMotorNotTheJoints) {
   cfg.ankle_motors = &ankle_motors();
   sim::MujocoPlant with(robot(), cfg);
   ASSERT_TRUE(with.ok()) << with.last_error();
-  const hal::CommandFrame command = ankle_torques(45.0, 30.0);
+  const hal::CommandFrame command = ankle_torques(kPitch_Nm, 30.0);
   const sim::PlantTruth t_with = after_one_ms(with, command), t_without = after_one_ms(without, command);
   expect_motor_clamps(t_with, t_without, "mujoco");
 }

@@ -311,12 +311,16 @@ Error read_limits(const GeneratorInput& in, std::array<model::JointLimitTable, m
       // The ankle pitch and roll joints are virtual: two motors drive them through the
       // linkage (FACTS.md §2.4), and kuavo.json's limits are those motors' (27 N·m each),
       // which bound pitch and roll jointly (drivers/transmission/ankle_motors.h: about 54 N·m
-      // of pitch alone). The joint box is the URDF's effort, an outer bound; the controller
-      // and the simulator bound the motors themselves.
+      // of pitch alone). The joint box is Leju's WBC limit (task.info, 60 N·m), an outer
+      // bound; the controller and the simulator bound the motors themselves. With the
+      // URDF's 36 N·m instead, the WBC held both ankle pitches at 36 while the motors had
+      // more to give, and the show campaign fell in 64 of 90 runs against 50 (perfume,
+      // cmu_05_07, cmu_05_20 × 30 seeds: 14 saved, none lost).
+      const int wbc_row = i % 6;
       l.velocity_rad_s = std::min(vel[i], peak_vel[i]);
       l.peak_velocity_rad_s = peak_vel[i];
-      l.peak_torque_Nm = jt.effort;
-      l.torque_Nm = jt.effort;
+      l.peak_torque_Nm = wbc[wbc_row];
+      l.torque_Nm = wbc[wbc_row];
     } else {
       const int wbc_row = i < 12 ? i % 6 : 6 + (i - 12) % 7;
       // kuavo.json lists wrist joints with continuous 10 > peak 7 rad/s; plan within the lower.
