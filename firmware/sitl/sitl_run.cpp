@@ -228,6 +228,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.plan_positions_on_a_stop = FirmwareLoop::planner().ws.plan_positions_on_a_stop;
 
   out.final_mode = to_string(f.mode.mode);
+  if (dance_requested && motion != nullptr && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);
   out.danced_to_end = motion != nullptr && loop->control_task().danced_until_ns >= 0 && out.faults.empty() && !run.fell;
   out.dance = dc.counters;
   for (const CanopenBusIo& c : loop->io().canopen) {
@@ -277,7 +278,7 @@ std::string sitl_summary_json(const SitlSummary& s) {
   for (std::size_t i = 0; i < s.faults.size(); ++i) {
     add("%s{\"number\": %d, \"name\": \"%s\"}", i ? ", " : "", static_cast<int>(s.faults[i]), to_string(s.faults[i]));
   }
-  add("],\n  \"fault_at_s\": %.3f,\n", s.fault_at_s);
+  add("],\n  \"fault_at_s\": %.3f,\n  \"dance_started_at_s\": %.3f,\n", s.fault_at_s, s.dance_started_at_s);
   add("  \"output_stage\": {\"references_put_on_a_stop\": %llu, \"finish_references_put_on_a_stop\": %llu, "
       "\"torques_clipped_at_peak\": %llu, \"max_torque_demand_x_peak\": %.3f},\n",
       u(s.dance.references_limited), u(s.dance.finish_references_limited), u(s.dance.torques_saturated),

@@ -81,14 +81,20 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   ASSERT_TRUE(report.contains("dynamic"));
   const auto& d = report["dynamic"];
   // The built-in dance dances in the closed-loop check on both grounds with each of the three
-  // noise seeds and in MuJoCo: no round of repair.
+  // noise seeds, in MuJoCo, and in the firmware loop on both grounds: no round of repair.
   ASSERT_TRUE(d.contains("verification"));
   EXPECT_EQ(d["verification"]["rounds"], 0);
-  ASSERT_EQ(d["verification"]["runs"].size(), 7u);
+  ASSERT_EQ(d["verification"]["runs"].size(), 9u);
   EXPECT_EQ(d["verification"]["runs"][0]["engine"], "simbody");
   EXPECT_EQ(d["verification"]["runs"][1]["ground"], "carpet");
   EXPECT_EQ(d["verification"]["runs"][5]["seed"], 3);
   EXPECT_EQ(d["verification"]["runs"][6]["engine"], "mujoco");
+  for (const int i : {7, 8}) {
+    EXPECT_EQ(d["verification"]["runs"][i]["engine"], "firmware");
+    EXPECT_EQ(d["verification"]["runs"][i]["ground"], i == 7 ? "floor" : "carpet");
+    EXPECT_EQ(d["verification"]["runs"][i]["seed"], 1);
+    EXPECT_FALSE(d["verification"]["runs"][i]["fell"].get<bool>());
+  }
   EXPECT_TRUE(d["verification"]["danced"].get<bool>()) << d["verification"].dump();
   for (const char* key : {"solve_s", "frames", "windows", "sqp_iterations", "torque_violations", "friction_violations",
                           "zmp_outside_m_max", "max_torque_ratio", "repairs", "geometric", "dynamic"})
@@ -206,7 +212,7 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   };
   EXPECT_EQ(kept, score(1) > score(0) ? 1 : 0) << v.dump();
   // Each round dances floor and carpet with noise seeds 1, 2, 3 in turn, then MuJoCo's floor,
-  // and stops at its first fall.
+  // then the firmware loop's floor and carpet (seed 1), and stops at its first fall.
   const std::vector<std::pair<std::string, std::uint64_t>> order = {{"floor", 1}, {"carpet", 1}, {"floor", 2},
                                                                     {"carpet", 2}, {"floor", 3}, {"carpet", 3}};
   for (const auto& round : runs) {
@@ -216,6 +222,12 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
       }
       if (round[i]["engine"] == "mujoco") {
         EXPECT_EQ(i, order.size()) << v.dump();
+        continue;
+      }
+      if (round[i]["engine"] == "firmware") {
+        EXPECT_GT(i, order.size()) << v.dump();
+        EXPECT_EQ(round[i]["ground"], i == order.size() + 1 ? "floor" : "carpet") << v.dump();
+        EXPECT_EQ(round[i]["seed"].get<std::uint64_t>(), 1u) << v.dump();
         continue;
       }
       ASSERT_LT(i, order.size()) << v.dump();
@@ -236,18 +248,32 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
     EXPECT_NE(r["reason"].get<std::string>().find("scaled to 50 %"), std::string::npos) << r.dump();
   }
   EXPECT_EQ(listed, kept) << report["dynamic"]["repairs"].dump();
-  // The kept round's last run is replayed by `kuavo simulate` on the written file.
+  // The kept round's last run is replayed on the written file in its own process: by
+  // `kuavo simulate`, or by kuavo_fw_sim for a firmware-loop run (whose clock starts on the
+  // gantry: the check reports the fall or fault on the motion's clock).
   const auto& last = runs[kept].back();
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
-  const std::string sim = kBin + " simulate " + kOut + "_ver.motion --quiet --engine " +
-                          last["engine"].get<std::string>() + " --ground " + last["ground"].get<std::string>() +
-                          " --seed " + std::to_string(last["seed"].get<std::uint64_t>()) + " --summary " + kOut +
-                          "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
-  ASSERT_EQ(std::system(sim.c_str()), 0) << slurp(kOut + "_ver_sim.stdout");
+  const bool fw = last["engine"] == "firmware";
+  const std::string where = " --ground " + last["ground"].get<std::string>() + " --seed " +
+                            std::to_string(last["seed"].get<std::uint64_t>()) + " --summary " + kOut +
+                            "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
+  const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
+                             : kBin + " simulate " + kOut + "_ver.motion --quiet --engine " + last["engine"].get<std::string>() + where;
+  ASSERT_EQ(std::system(sim.c_str()) == 0, fw ? !last["fell"].get<bool>() : true) << slurp(kOut + "_ver_sim.stdout");
   const auto summary = nlohmann::json::parse(slurp(kOut + "_ver_sim.json"));
-  EXPECT_EQ(summary["fell"].get<bool>(), last["fell"].get<bool>());
+  if (fw) {
+    EXPECT_EQ(summary["danced_to_end"].get<bool>(), !last["fell"].get<bool>());
+  } else {
+    EXPECT_EQ(summary["fell"].get<bool>(), last["fell"].get<bool>());
+  }
   if (last["fell"].get<bool>()) {
-    EXPECT_NEAR(summary["fell_at_s"].get<double>(), last["fell_at_s"].get<double>(), 1e-9);
+    double at = summary["fell_at_s"].get<double>();
+    if (fw) {
+      const double fault = summary["fault_at_s"].get<double>();
+      if (!summary["fell"].get<bool>() || (fault >= 0.0 && fault < at)) at = fault;
+      at -= summary["dance_started_at_s"].get<double>();
+    }
+    EXPECT_NEAR(at, last["fell_at_s"].get<double>(), fw ? 2e-3 : 1e-9);
   }
   // Still falling: the user is told where.
   if (!v["danced"].get<bool>()) {

@@ -16,7 +16,8 @@
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
-// the floor in MuJoCo (--verify-mujoco on|off, default on); where it falls,
+// the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
+// and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
@@ -113,7 +114,7 @@ int run(int argc, char** argv) {
   bool quiet = false;
   double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, verify_rounds = DynamicStageOptions{}.verify_rounds;
-  std::string verify_mujoco = "on";
+  std::string verify_mujoco = "on", verify_firmware = "on";
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   args::Parser p("kuavo retarget");
@@ -134,6 +135,7 @@ int run(int argc, char** argv) {
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.integer("--verify", "ROUNDS", 0, 16, "rounds", &verify_rounds).modes = kDynamic;
   p.choice("--verify-mujoco", {"on", "off"}, &verify_mujoco).modes = kDynamic;
+  p.choice("--verify-firmware", {"on", "off"}, &verify_firmware).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
   p.number("--duration", "SECONDS", mocap::kDefaultDanceDuration_s,
@@ -174,6 +176,7 @@ int run(int argc, char** argv) {
   dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);
   dyn_options.verify_rounds = static_cast<int>(verify_rounds);
   dyn_options.verify_mujoco = verify_mujoco == "on";
+  dyn_options.verify_firmware = verify_firmware == "on";
   // Figures next to the report unless told otherwise (none without a report).
   if (figures_dir.empty() && !report_path.empty()) {
     figures_dir = std::filesystem::path(report_path).parent_path().string();

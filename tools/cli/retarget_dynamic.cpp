@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "controllers/motion/load_motion.h"
+#include "firmware/sitl/sitl_run.h"
 #include "sim/motion_loop.h"
 #include "tools/cli/retarget_figures.h"
 #include "tools/mocap/dynamics_check.h"
@@ -226,10 +227,12 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     std::string fell_on;
     // The Simbody runs on each ground for each noise seed, then (verify_mujoco) MuJoCo on the
     // floor: Leju's own model and MuJoCo's contact, independent of our tables.
+    // Then (verify_firmware) the image users flash, in its firmware loop on each ground.
     struct Check {
       sim::GroundParams ground;
       sim::Engine engine;
       std::uint64_t seed;
+      bool firmware = false;
     };
     std::vector<Check> checks;
     for (const std::uint64_t seed : options.verify_seeds) {
@@ -238,9 +241,50 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     if (options.verify_mujoco && !options.verify_seeds.empty()) {
       checks.push_back({sim::kFloor, sim::Engine::kMujoco, options.verify_seeds.front()});
     }
+    if (options.verify_firmware && !options.verify_seeds.empty()) {
+      for (const sim::GroundParams& ground : options.verify_grounds) {
+        checks.push_back({ground, sim::Engine::kSimbody, options.verify_seeds.front(), true});
+      }
+    }
     std::uint64_t fell_seed = 0;
     int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
-    for (const auto& [ground, engine, seed] : checks) {
+    for (const auto& [ground, engine, seed, firmware] : checks) {
+      if (firmware) {
+        firmware::sitl::SitlConfig fw;
+        fw.loop.legs = firmware::sitl::LegBinding::kCsp;  // kuavo_fw_sim's and kuavo_fw's default
+        fw.loop.ground = ground;
+        fw.loop.seed = seed;
+        const auto t0 = std::chrono::steady_clock::now();
+        const firmware::sitl::SitlSummary s = firmware::sitl::run_firmware_sim(robot, plan.get(), fw);
+        verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        ordered_json entry = {{"round", verify_round}, {"engine", "firmware"}, {"ground", ground.name}, {"seed", seed}};
+        if (!s.motion.run.ok || s.dance_started_at_s < 0.0) {
+          // The firmware loop could not run the dance (not the motion's fault, e.g. a bring-up
+          // timeout): the check goes on without it, and says so.
+          entry["error"] = s.motion.run.ok ? "the firmware did not start the dance" : s.motion.run.error;
+          verification_runs.push_back(entry);
+          continue;
+        }
+        // A fault latched or a fall, on the motion's clock (the run's starts on the gantry).
+        double end_s = -1.0;
+        if (!s.danced_to_end) {
+          end_s = s.motion.run.fell ? s.motion.run.fell_at_s : s.motion.motion_duration_s + s.dance_started_at_s;
+          if (s.fault_at_s >= 0.0) end_s = std::min(end_s, s.fault_at_s);
+          end_s -= s.dance_started_at_s;
+        }
+        entry["fell"] = !s.danced_to_end;
+        entry["fell_at_s"] = end_s;
+        if (!s.faults.empty()) entry["fault"] = firmware::to_string(s.faults.front());
+        verification_runs.push_back(entry);
+        if (!s.danced_to_end) {
+          fell_at_s = std::max(0.0, end_s);
+          fell_on = std::string(ground.name) + " in the firmware loop";
+          fell_seed = seed;
+          break;
+        }
+        ++passed;
+        continue;
+      }
       sim::MotionRunConfig cfg;
       cfg.stack.planner = stack::PlannerKind::kMpc;
       cfg.run.ground = ground;
