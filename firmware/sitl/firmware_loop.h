@@ -41,6 +41,8 @@ inline constexpr hal::TimeNs kTick_ns = 2'000'000;
 enum class LegBinding { kCst, kCsp };
 bool parse_leg_binding(const char* text, LegBinding& out);  // "cst" | "csp"
 const char* to_string(LegBinding b);
+// The robot image's default (kuavo_fw --legs csp): kuavo_fw_sim's and the retarget check's.
+inline constexpr LegBinding kImageLegBinding = LegBinding::kCsp;
 
 struct LoopConfig {
   FirmwareConfig firmware{};

@@ -57,7 +57,7 @@ constexpr kuavo::args::ModeMask kDanceMode = 1, kStandMode = 2;
 
 int run(int argc, char** argv) {
   sitl::SitlConfig cfg;
-  cfg.loop.legs = sitl::LegBinding::kCsp;
+  cfg.loop.legs = sitl::kImageLegBinding;
   cfg.loop.seed = 1;
   std::string dance_path, config_path, summary_path, legs = "csp", balance = "off", ground = "floor";
   double plan_latency_ms = static_cast<double>(cfg.plan_latency_ns) * 1e-6;

@@ -228,7 +228,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.plan_positions_on_a_stop = FirmwareLoop::planner().ws.plan_positions_on_a_stop;
 
   out.final_mode = to_string(f.mode.mode);
-  if (dance_requested && motion != nullptr && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);
+  if (dance_requested && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);
   out.danced_to_end = motion != nullptr && loop->control_task().danced_until_ns >= 0 && out.faults.empty() && !run.fell;
   out.dance = dc.counters;
   for (const CanopenBusIo& c : loop->io().canopen) {

@@ -251,7 +251,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     for (const auto& [ground, engine, seed, firmware] : checks) {
       if (firmware) {
         firmware::sitl::SitlConfig fw;
-        fw.loop.legs = firmware::sitl::LegBinding::kCsp;  // kuavo_fw_sim's and kuavo_fw's default
+        fw.loop.legs = firmware::sitl::kImageLegBinding;
         fw.loop.ground = ground;
         fw.loop.seed = seed;
         const auto t0 = std::chrono::steady_clock::now();
