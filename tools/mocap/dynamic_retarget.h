@@ -101,9 +101,16 @@ struct DynamicResult {
 // (pitch to ~54 N·m, drivers/transmission/ankle_motors.h) stays the online controller's
 // reserve. Binding the envelope in the plan as well (the MPC's motor barrier at each window's
 // first ankle angles) was tried, over the joint box and over this cap: one CMU clip or the
-// other then failed check runs it passes without. So was capping each axis at what the motors
-// give it alone at the standing pose, at the WBC's share (roll 18.7 N·m): cmu_05_07 then
-// passed no round of its check.
+// other then failed check runs it passes without. Measured again at 045c10a (over this cap):
+// the oracle's torque violations fell from 1095 / 1090 / 829 / 1090 to 141 / 618 / 633 / 516
+// (built-in, perfume, cmu_05_07, cmu_05_20), but the check danced neither CMU clip and the
+// show campaign (carpet, `show` set, a 10 N·s push, seeds 1–30) fell 20 / 23 / 29 times
+// against 9 / 17 / 17 (perfume / cmu_05_07 / cmu_05_20; 2 runs saved, 32 lost): a plan that
+// keeps the ankles inside the motors leaves the online stack motions it balances worse.
+// Nor does the other way: the pitch cap at both motors' sum (54 N·m, roll at 27) fell
+// 15 / 6 / 28 (perfume, round 0 both times: 0 saved, 6 lost).
+// Capping each axis at what the motors give it alone at the standing pose, at the WBC's
+// share (roll 18.7 N·m), was tried too: cmu_05_07 then passed no round of its check.
 // Its sole corners are moved in toward each sole's centre by support_margin_m in x and in y,
 // so forces planned there put the centre of pressure at least that far inside the sole.
 model::Model planning_model(const model::Model& robot, double support_margin_m);
