@@ -482,7 +482,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
     st.B.setZero();
     st.Q.setZero();
     st.R.setZero();
-    st.S.setZero();
+    st.S.setZero();                  // no cross terms: never written, and the Riccati skips it
+    st.s_zero = true;
     st.C.setZero();
     st.D.setZero();
     st.e.setZero();

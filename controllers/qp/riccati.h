@@ -226,8 +226,11 @@ template <kernels::Update kSum>
 void copy_addend(int i0, int i1, int j0, int j1, const kernels::Addend& add, double* C, int ldc) {
   for (int j = j0; j < j1; ++j) {
     for (int i = i0; i < i1; ++i) {
-      const double* s = kSum == kernels::Update::kSumT ? add.s + j + i * add.ld : add.s + i + j * add.ld;
-      C[i + j * ldc] = i < add.rows ? *s : 0.0;
+      if (i >= add.rows) {  // (add.s may be null: no addend, OcpStage::s_zero)
+        C[i + j * ldc] = 0.0;
+        continue;
+      }
+      C[i + j * ldc] = kSum == kernels::Update::kSumT ? add.s[j + i * add.ld] : add.s[i + j * add.ld];
     }
   }
 }
@@ -566,7 +569,9 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
     const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
     const kernels::Addend r{s.R.data(), NU, NU};   // u block: R + [B A]ᵀPₖ₊₁[B A]
-    const kernels::Addend st{s.S.data(), NU, NX};  // x-u block: Sᵀ + …
+    // x-u block: Sᵀ + …; with s_zero no addend (reads as zero, and 0 + product is the
+    // product: the tiles' sums start at +0, so no product is −0).
+    const kernels::Addend st = s.s_zero ? kernels::Addend{} : kernels::Addend{s.S.data(), NU, NX};
     if (next.p_factored) {
       // Zᵀ = [B A]ᵀLp (u and x rows), then the lower triangle of ZᵀZ (over the extents).
       if (column_extents<NX, NU, NC>(ws.last_b.data(), ws.last_a.data(), ws.extent.data())) {

@@ -322,6 +322,45 @@ TEST(OcpQp, FusedFactorSolveIsTheSeparatePassesBitForBit) {
   }
 }
 
+// OcpStage::s_zero: the Riccati recursion does not read S (NaN there must not reach the
+// result) and returns bit for bit the solution of the same stages with S = 0 read, on the
+// extents path (B with zero tails), the dense one, and a semidefinite cost-to-go (no Q).
+TEST(OcpQp, StagesWithoutCrossTermsSkipSBitForBit) {
+  using Fixture = OcpFixture<38, 50, 12, 12, 0>;
+  auto f = std::make_unique<Fixture>();
+  auto g = std::make_unique<Fixture>();
+  std::mt19937_64 rng(43);
+  for (int n = 0; n < 6; ++n) {
+    const int T = 12;
+    make_random_ocp(f->qp, rng, T);
+    for (int k = 0; k <= T; ++k) {
+      auto& s = f->qp.stages[k];
+      s.S.setZero();
+      if (n % 2 == 0) s.B.bottomRows(30).leftCols(24).setZero();  // force-like columns: extents
+      if (n >= 4) s.Q.setZero();  // P_T = 0: the general product path
+    }
+    g->qp = f->qp;
+    for (int k = 0; k <= T; ++k) {
+      g->qp.stages[k].S.setConstant(std::numeric_limits<double>::quiet_NaN());
+      g->qp.stages[k].s_zero = true;
+    }
+    copy_vectors(f->qp, f->ws.vec);
+    copy_vectors(g->qp, g->ws.vec);
+    ASSERT_EQ(riccati_factor_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol), QpStatus::kSolved) << n;
+    ASSERT_EQ(riccati_factor_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol), QpStatus::kSolved) << n;
+    for (int k = 0; k <= T; ++k) {
+      EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.costate[k], g->sol.costate[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << n << " " << k;
+    }
+    EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
+    ASSERT_EQ(riccati_factor(g->qp, g->ws.riccati), QpStatus::kSolved) << n;  // the separate passes too
+    riccati_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol);
+    for (int k = 0; k <= T; ++k) EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+  }
+}
+
 TEST(OcpQp, IterationCapIsHonoured) {
   auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
   std::mt19937_64 rng(29);
