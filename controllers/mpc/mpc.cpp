@@ -495,6 +495,7 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.qp.x_initial.setZero();
   ws.qp_settings = qp::OcpSettings{};
   ws.qp_settings.lq_residual = false;  // no one reads it; the solver still checks the step finite
+  ws.qp_settings.lq_costate = false;   // nor the costates (the step is x and u)
   ws.initialized = true;
 }
 

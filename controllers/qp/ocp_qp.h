@@ -77,6 +77,10 @@ struct OcpSettings {
   // (kBadInput otherwise). The MPC's real-time iteration sets false: nothing in the loop reads
   // the residual, and its RTI QPs are checked against an independent KKT residual in the tests.
   bool lq_residual = true;
+  // Problems without inequalities: whether to compute the costates πₖ (each stage's cost-to-go
+  // factor read once more in the forward rollout). false (and lq_residual false): sol.costate
+  // is not written. The MPC's real-time iteration sets false: it reads only x and u.
+  bool lq_costate = true;
 };
 
 template <int NX, int NU, int N, int NC, int NG>

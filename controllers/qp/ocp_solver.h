@@ -199,7 +199,8 @@ QpStatus solve_ocp_qp(const OcpQp<NX, NU, N, NC, NG>& qp, const OcpSettings& set
       ws.slack[k].setZero();
     }
     copy_vectors(qp, ws.vec);
-    const QpStatus f = riccati_factor_solve(qp, ws.riccati, ws.vec, sol);
+    // The residual's stationarity rows need the costates.
+    const QpStatus f = riccati_factor_solve(qp, ws.riccati, ws.vec, sol, settings.lq_residual || settings.lq_costate);
     if (f != QpStatus::kSolved) return finish(f);
     // kSolved promises a finite x and u (data with NaN or ∞ get past the factorization's pivot
     // tests); callers need not check again.

@@ -39,6 +39,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "controllers/qp/ocp_qp.h"
@@ -73,6 +74,11 @@ struct RiccatiStage {
   // (kernels::invert_diag4; block b at 16·b), for the vector pass's triangular solves.
   alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinv{};
   alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinvT{};
+  // The 4-row groups in which each column of B and A has a nonzero entry (kernels::transpose,
+  // set by the matrix pass; NX ≤ 64): the forward rollout's products fetch only those (the
+  // MPC's A is the identity but in 9 rows, its force columns of B reach 6 rows).
+  std::array<std::uint16_t, NU> b_groups{};
+  std::array<std::uint16_t, NX> a_groups{};
   // Barrier terms set by the caller: Hessian weight W = diag(w) and linear term Gᵀρ.
   Eigen::Matrix<double, NG, 1> w = Eigen::Matrix<double, NG, 1>::Zero();
   Eigen::Matrix<double, NG, 1> rho = Eigen::Matrix<double, NG, 1>::Zero();
@@ -125,6 +131,11 @@ struct RiccatiWorkspace {
 };
 
 namespace riccati_detail {
+
+// Whether the matrix pass records B's and A's nonzero row groups (RiccatiStage::b_groups) for
+// the forward rollout: the transpose's bit masks cover 64 rows.
+template <int NX>
+inline constexpr bool kRowGroups = NX <= 64;
 
 // Stage equalities whose Cholesky pivots of M = D Quu⁻¹ Dᵀ spread by more than this ratio
 // (condition number of M beyond 1e14, about 1/ε) are treated as dependent.
@@ -538,6 +549,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
   using kernels::gemm;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo, kXp = Layout::kXp;
+  constexpr bool kGroups = kRowGroups<NX>;
   const int T = qp.horizon;
   {
     auto& wT = ws.stage[T];
@@ -562,8 +574,10 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     FactorMap<NX, NU, NC> K(L);
     load_stage(s, ne_padded, K, false);  // R, S, Q: the addends of the products below
 
-    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data());
-    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data());
+    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data(),
+                       kGroups ? w.b_groups.data() : nullptr);
+    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data(),
+                       kGroups ? w.a_groups.data() : nullptr);
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
@@ -611,21 +625,26 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
   return QpStatus::kSolved;
 }
 
-// The forward rollout from the backward recursion's p, k0, gm: x, u, nu, costate of sol.
+// The forward rollout from the backward recursion's p, k0, gm: x, u, nu and (with costate)
+// the costates of sol.
 template <int NX, int NU, int N, int NC, int NG>
 void forward_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                  const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+                  const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol,
+                  bool costate = true) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::Update;
   constexpr int kLd = Layout::kLd, kUp = Layout::kUp, kXo = Layout::kXo;
+  constexpr bool kGroups = kRowGroups<NX>;
   const int T = qp.horizon;
   sol.x[0] = vec.x_initial;
   for (int k = 0; k < T; ++k) {
     const auto& s = qp.stages[k];
     const auto& w = ws.stage[k];
     const double* L = w.L.data();
-    sol.costate[k] = w.p;  // πₖ = pₖ + Pₖxₖ, while stage k's storage is in cache
-    add_cost_to_go_product(w, sol.x[k], sol.costate[k], ws.lpt_v);
+    if (costate) {
+      sol.costate[k] = w.p;  // πₖ = pₖ + Pₖxₖ, while stage k's storage is in cache
+      add_cost_to_go_product(w, sol.x[k], sol.costate[k], ws.lpt_v);
+    }
     ws.t = w.k0;
     kernels::gemv_t<Update::kAdd>(NX, NU, L + kXo, kLd, sol.x[k].data(), ws.t.data());   // + Xᵀx
     if constexpr (NC > 0) {
@@ -642,11 +661,18 @@ void forward_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N
     sol.u[k] = -ws.t;
     kernels::trsv_lower_trans(NU, L, kLd, w.dinvT.data(), sol.u[k].data());
     sol.x[k + 1] = vec.b[k];
-    kernels::gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data());
-    kernels::gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data());
+    if constexpr (kGroups) {  // bit for bit the dense products, over the nonzero row groups
+      kernels::gemv_n_groups(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data(), w.a_groups.data());
+      kernels::gemv_n_groups(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data(), w.b_groups.data());
+    } else {
+      kernels::gemv_n<Update::kAdd>(NX, NX, s.A.data(), NX, sol.x[k].data(), sol.x[k + 1].data());
+      kernels::gemv_n<Update::kAdd>(NX, NU, s.B.data(), NX, sol.u[k].data(), sol.x[k + 1].data());
+    }
   }
-  sol.costate[T] = ws.stage[T].p;
-  add_cost_to_go_product(ws.stage[T], sol.x[T], sol.costate[T], ws.lpt_v);
+  if (costate) {
+    sol.costate[T] = ws.stage[T].p;
+    add_cost_to_go_product(ws.stage[T], sol.x[T], sol.costate[T], ws.lpt_v);
+  }
   if constexpr (NC > 0) sol.nu[T].setZero();
   sol.u[T].setZero();
 }
@@ -674,12 +700,14 @@ void riccati_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, 
 // riccati_factor then riccati_solve in one sweep, with the same arithmetic (bit for bit): the
 // backward vector recursion runs inside the matrix pass (see factor_pass). For one solve per
 // factorization (the equality-only LQ problem, the MPC's real-time iteration). sol is written
-// only on kSolved.
+// only on kSolved. Without costate sol.costate is not written: the rollout then does not read
+// the cost-to-go factors (Pₖxₖ), ~15 % of its reads at MPC size.
 template <int NX, int NU, int N, int NC, int NG>
 QpStatus riccati_factor_solve(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
-                              const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol) {
+                              const RiccatiVectors<NX, NU, N, NC>& vec, OcpSolution<NX, NU, N, NC, NG>& sol,
+                              bool costate = true) {
   const QpStatus f = riccati_detail::factor_pass(qp, ws, &vec);
-  if (f == QpStatus::kSolved) riccati_detail::forward_pass(qp, ws, vec, sol);
+  if (f == QpStatus::kSolved) riccati_detail::forward_pass(qp, ws, vec, sol, costate);
   return f;
 }
 

@@ -22,9 +22,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
-#if defined(__AVX2__) && defined(__FMA__)
+#if (defined(__AVX2__) && defined(__FMA__)) || defined(__BMI2__)
 #include <immintrin.h>
+#endif
+#if defined(__AVX2__) && defined(__FMA__)
 #define KUAVO_QP_KERNELS_SIMD 1
 #if defined(__AVX512F__)
 #define KUAVO_QP_KERNELS_AVX512 1
@@ -336,9 +339,22 @@ inline void trmm_right_lower(int m, int n, const double* A, int lda, const doubl
 // dst(j, i) = src(i, j) for an m×n column-major src. With last (n entries): also last[j] = 1 +
 // the last row in which src's column j is nonzero (0: all zero; NaN counts as nonzero), found
 // on the vectors the transpose loads anyway (for m ≤ 64, a bit mask of nonzero rows per column,
-// branch-free) instead of a second, branchy scan of src.
-inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd, int* last = nullptr) {
-  const bool masks = last != nullptr && m <= 64;
+// branch-free) instead of a second, branchy scan of src. With groups (n entries, m ≤ 64): bit g
+// of groups[j] set when column j has a nonzero in rows [4g, 4g + 4) (gemv_n_groups).
+inline std::uint16_t nonzero_groups(unsigned long long rows) {
+  rows |= rows >> 1;
+  rows |= rows >> 2;  // bit 4g: any of rows 4g … 4g + 3
+#ifdef __BMI2__
+  return static_cast<std::uint16_t>(_pext_u64(rows, 0x1111111111111111ull));
+#else
+  unsigned g = 0;
+  for (int b = 0; b < 16; ++b) g |= static_cast<unsigned>(rows >> (4 * b) & 1ull) << b;
+  return static_cast<std::uint16_t>(g);
+#endif
+}
+inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd, int* last = nullptr,
+                      std::uint16_t* groups = nullptr) {
+  const bool masks = (last != nullptr || groups != nullptr) && m <= 64;
   int j = 0;
 #ifdef KUAVO_QP_KERNELS_SIMD
   // Column groups outside, rows inside: src is read in address order (at MPC size each stage's
@@ -379,19 +395,27 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
         if (masks) nz[c] |= static_cast<unsigned long long>(x != 0.0) << i;
       }
     }
-    if (masks) {
+    if (masks && last != nullptr) {
       for (int c = 0; c < 4; ++c) last[j + c] = nz[c] == 0 ? 0 : 64 - __builtin_clzll(nz[c]);
+    }
+    if (masks && groups != nullptr) {
+      for (int c = 0; c < 4; ++c) groups[j + c] = nonzero_groups(nz[c]);
     }
   }
 #endif
   const int j_vector_end = j;
   for (; j < n; ++j) {
     int l = 0;
+    unsigned long long nz = 0;
     for (int i = 0; i < m; ++i) {
       dst[j + i * ldd] = src[i + j * lds];
-      if (src[i + j * lds] != 0.0) l = i + 1;
+      if (src[i + j * lds] != 0.0) {  // NaN too
+        l = i + 1;
+        if (i < 64) nz |= 1ull << i;
+      }
     }
     if (last != nullptr) last[j] = l;
+    if (groups != nullptr) groups[j] = nonzero_groups(nz);
   }
   if (last != nullptr && !masks) {  // m > 64: the vector loop's columns by a scan from the bottom
     for (int c = 0; c < j_vector_end; ++c) {
@@ -544,6 +568,68 @@ inline void gemv_n(int m, int n, const double* A, int lda, const double* x, doub
 #else
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < m; ++i) y[i] += sign * A[i + j * lda] * x[j];
+  }
+#endif
+}
+
+// y[m] += A[m×n]·x, skipping the 4-row groups in which A's columns are zero: groups[j] has
+// bit g set when column j has a nonzero entry in rows [4g, 4g + 4) (transpose's groups),
+// m ≤ 64. Bit for bit gemv_n<kAdd>: a group is skipped only where all the columns of a
+// 4-column step (or the single remainder column) are zero, whose products are exact zeros,
+// and every entry of y takes the remaining products in gemv_n's order. For the forward
+// rollout's A and B (the MPC's: A the identity but in 9 rows, B's force columns 6 rows deep):
+// of each column only the nonzero groups' cache lines are fetched.
+inline void gemv_n_groups(int m, int n, const double* A, int lda, const double* x, double* y,
+                          const std::uint16_t* groups) {
+#ifdef KUAVO_QP_KERNELS_SIMD
+  const int m4 = m / 4 * 4;
+  const __m256i tail = row_mask(m - m4);
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    unsigned g = static_cast<unsigned>(groups[j] | groups[j + 1] | groups[j + 2] | groups[j + 3]);
+    const double* a = A + j * lda;
+    const __m256d b0 = _mm256_set1_pd(x[j]), b1 = _mm256_set1_pd(x[j + 1]);
+    const __m256d b2 = _mm256_set1_pd(x[j + 2]), b3 = _mm256_set1_pd(x[j + 3]);
+    while (g != 0) {
+      const int i = 4 * __builtin_ctz(g);
+      g &= g - 1;
+      if (i < m4) {
+        __m256d acc = _mm256_loadu_pd(y + i);
+        acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), b0, acc);
+        acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), b1, acc);
+        acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), b2, acc);
+        acc = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), b3, acc);
+        _mm256_storeu_pd(y + i, acc);
+      } else {
+        __m256d acc = _mm256_maskload_pd(y + i, tail);
+        acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i, tail), b0, acc);
+        acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + lda, tail), b1, acc);
+        acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 2 * lda, tail), b2, acc);
+        acc = _mm256_fmadd_pd(_mm256_maskload_pd(a + i + 3 * lda, tail), b3, acc);
+        _mm256_maskstore_pd(y + i, tail, acc);
+      }
+    }
+  }
+  for (; j < n; ++j) {
+    unsigned g = groups[j];
+    const __m256d b = _mm256_set1_pd(x[j]);
+    const double* a = A + j * lda;
+    while (g != 0) {
+      const int i = 4 * __builtin_ctz(g);
+      g &= g - 1;
+      if (i < m4) {
+        _mm256_storeu_pd(y + i, _mm256_fmadd_pd(_mm256_loadu_pd(a + i), b, _mm256_loadu_pd(y + i)));
+      } else {
+        _mm256_maskstore_pd(y + i, tail,
+                            _mm256_fmadd_pd(_mm256_maskload_pd(a + i, tail), b, _mm256_maskload_pd(y + i, tail)));
+      }
+    }
+  }
+#else
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < m; ++i) {
+      if (groups[j] >> (i / 4) & 1u) y[i] += A[i + j * lda] * x[j];
+    }
   }
 #endif
 }

@@ -490,6 +490,8 @@ TEST(mocap_dynamic_retarget, ConvergedWindowSatisfiesTheKktConditions) {
   }
   EXPECT_LT(defect, 1e-6) << "dynamics defects at the converged point";
   EXPECT_LT(residual, 1e-6) << "stance rows at the converged point";
+  // The certificate needs the costates, which the MPC's solve leaves unwritten (it reads x, u).
+  ws->qp_settings.lq_costate = true;
   ASSERT_EQ(mpc::mpc_solve_qp_rt(*ws), mpc::MpcStatus::kOk);
   const auto& qp = ws->qp;
   const auto& sol = ws->solution;

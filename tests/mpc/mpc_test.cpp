@@ -96,7 +96,13 @@ TEST(MpcStep, OneIterationSolvesItsQpAndSatisfiesTheLinearizedConstraints) {
   dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   v[1] = 0.2;  // sideways push: the QP has work to do
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
-  ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
+  // The certificate needs the costates, which the real-time iteration does not compute
+  // (OcpSettings::lq_costate; its x and u are the same either way, tests/qp).
+  EXPECT_FALSE(f.ws.qp_settings.lq_costate);
+  f.ws.qp_settings.lq_costate = true;
+  const MpcStatus solved = mpc::mpc_solve_qp_rt(f.ws);
+  f.ws.qp_settings.lq_costate = false;
+  ASSERT_EQ(solved, MpcStatus::kOk);
   double primal = 0.0;
   const double stat = kkt_residual(f.ws.qp, f.ws.solution, primal);
   std::printf("KKT: stationarity %.2e, primal %.2e\n", stat, primal);

@@ -75,23 +75,35 @@ TEST(OcpQp, EqualityOnlyMatchesDenseExactly) {
 }
 
 // lq_residual = false (the MPC's setting): the same solution bit for bit, the residual
-// reported as not computed, and a non-finite result still refused.
+// reported as not computed, and a non-finite result still refused. With lq_costate = false
+// too (also the MPC's): x, u and ν still bit for bit, the costates not written.
 TEST(OcpQp, EqualityOnlyWithoutResidualIsTheSameSolution) {
   auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
   auto g = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
+  auto h = std::make_unique<OcpFixture<4, 3, 5, 2, 0>>();
   std::mt19937_64 rng(23);
   OcpSettings fast;
   fast.lq_residual = false;
+  OcpSettings fastest = fast;
+  fastest.lq_costate = false;
   for (int n = 0; n < 10; ++n) {
     make_random_ocp(f->qp, rng, 5);
     g->qp = f->qp;
+    h->qp = f->qp;
     ASSERT_EQ(solve_ocp_qp(f->qp, OcpSettings{}, f->ws, f->sol), QpStatus::kSolved);
     ASSERT_EQ(solve_ocp_qp(g->qp, fast, g->ws, g->sol), QpStatus::kSolved);
+    for (auto& c : h->sol.costate) c.setConstant(7.0);
+    ASSERT_EQ(solve_ocp_qp(h->qp, fastest, h->ws, h->sol), QpStatus::kSolved);
     EXPECT_GE(f->sol.residual, 0.0);
     EXPECT_EQ(g->sol.residual, -1.0);
+    EXPECT_EQ(h->sol.residual, -1.0);
     for (int k = 0; k <= 5; ++k) {
       EXPECT_EQ(f->sol.x[k], g->sol.x[k]);
       EXPECT_EQ(f->sol.u[k], g->sol.u[k]);
+      EXPECT_EQ(f->sol.x[k], h->sol.x[k]);
+      EXPECT_EQ(f->sol.u[k], h->sol.u[k]);
+      EXPECT_EQ(f->sol.nu[k], h->sol.nu[k]);
+      EXPECT_EQ(h->sol.costate[k], Eigen::Vector4d::Constant(7.0));
     }
     expect_kkt(g->qp, ocp_kkt(g->qp, g->sol), 1e-10);
   }

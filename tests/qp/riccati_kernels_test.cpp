@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 #include <memory>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 #include <limits>
 #include <random>
@@ -242,6 +243,45 @@ TEST(RiccatiKernels, MatrixVectorProductsMatchEigen) {
       kernels::gemv_t<Update::kSub>(m, n, A.data(), lda, xm.data(), z.data());
       EXPECT_LE(max_abs(z.head(n) - (z0.head(n) - atx)), tol) << m << "x" << n;
       EXPECT_EQ(z(n), z0(n));
+    }
+  }
+}
+
+// gemv_n_groups over the transpose's row groups: bit for bit gemv_n on matrices whose
+// columns are zero in random 4-row groups (the MPC's A and B: identity rows, short force
+// columns), with row remainders, remainder columns and one all-zero column group. The groups
+// themselves against a plain scan (NaN counts as nonzero).
+TEST(RiccatiKernels, MatrixVectorProductOverNonzeroRowGroupsIsGemvBitForBit) {
+  std::mt19937_64 rng(108);
+  for (const int m : {1, 3, 4, 7, 12, 38, 63, 64}) {
+    for (const int n : {1, 3, 4, 5, 9, 38, 50}) {
+      const int lda = m + 3;
+      MatrixXd A = random_matrix(lda, n, rng);
+      for (int j = 0; j < n; ++j) {
+        for (int g = 0; 4 * g < m; ++g) {
+          const bool all_zero_group = j >= 4 && j < 8;  // a whole 4-column step without terms
+          if (all_zero_group || rng() % 3 != 0) A.block(4 * g, j, std::min(4, m - 4 * g), 1).setZero();
+        }
+        if (j % 7 == 2) A(m - 1, j) = std::numeric_limits<double>::quiet_NaN();
+        A(m, j) = A(m + 1, j) = A(m + 2, j) = 1.0;  // rows past m: never a group's
+      }
+      MatrixXd At = MatrixXd::Zero(n, m);
+      std::vector<std::uint16_t> groups(n, 0xdead);
+      kernels::transpose(m, n, A.data(), lda, At.data(), n, nullptr, groups.data());
+      for (int j = 0; j < n; ++j) {
+        unsigned expected = 0;
+        for (int i = 0; i < m; ++i) {
+          if (A(i, j) != 0.0) expected |= 1u << (i / 4);
+        }
+        EXPECT_EQ(groups[j], expected) << m << "x" << n << " column " << j;
+      }
+      for (int i = 0; i < m; ++i) A.row(i) = A.row(i).unaryExpr([](double v) { return std::isnan(v) ? 0.5 : v; });
+      const Eigen::VectorXd x = random_matrix(n, 1, rng);
+      const Eigen::VectorXd y0 = random_matrix(m + 1, 1, rng);  // one guard entry past m
+      Eigen::VectorXd y = y0, z = y0;
+      kernels::gemv_n<Update::kAdd>(m, n, A.data(), lda, x.data(), y.data());
+      kernels::gemv_n_groups(m, n, A.data(), lda, x.data(), z.data(), groups.data());
+      for (int i = 0; i <= m; ++i) EXPECT_EQ(z(i), y(i)) << m << "x" << n << " row " << i;
     }
   }
 }
