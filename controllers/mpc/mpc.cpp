@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <cstdint>
 
 namespace kuavo::mpc {
 namespace {
@@ -491,6 +492,16 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
     st.num_ineq = 0;
   }
   ws.swing_block_written.fill(false);
+  // Where A and B may be nonzero (the build writes nothing else; 4-row groups, ocp_qp.h): A is
+  // the identity but in rows [3, 12), B's force columns reach the momentum rows (6), its
+  // joint-velocity columns rows [0, 12) and their joint's row.
+  constexpr std::uint16_t kTopRows = 0b111;  // rows [0, 12)
+  for (int j = 0; j < kNx; ++j) ws.qp.a_groups[j] = kTopRows | static_cast<std::uint16_t>(1u << (j / 4));
+  for (int j = 0; j < 3 * kNumPoints; ++j) ws.qp.b_groups[kUForces + j] = 0b11;  // rows [0, 8)
+  for (int j = 0; j < kNumMpcJoints; ++j) {
+    ws.qp.b_groups[kUJointVelocity + j] = kTopRows | static_cast<std::uint16_t>(1u << ((kXJoints + j) / 4));
+  }
+  ws.qp.ab_groups_declared = true;
   ws.qp.horizon = ws.horizon;
   ws.qp.x_initial.setZero();
   ws.qp_settings = qp::OcpSettings{};

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 
 #include "controllers/qp/qp_status.h"
 
@@ -58,6 +59,14 @@ struct OcpQp {
   std::array<Stage, N + 1> stages{};
   Eigen::Matrix<double, NX, 1> x_initial = Eigen::Matrix<double, NX, 1>::Zero();
   int horizon = N;  // T: stages 0 … T are used, T = 0 means only x₀ (nothing to decide)
+  // Optional structure of the dynamics (used for NX ≤ 64): with ab_groups_declared, column j of
+  // every stage's B (A) is zero outside the 4-row groups whose bits b_groups[j] (a_groups[j])
+  // set (bit g: rows [4g, 4g + 4)), and the Riccati recursion does not read the rest. The
+  // centroidal MPC's A is the identity but in 9 rows and its force columns of B are 6 rows
+  // deep: about half of A's and B's cache lines (~12 KB a stage) are not fetched.
+  bool ab_groups_declared = false;
+  std::array<std::uint16_t, NU> b_groups{};
+  std::array<std::uint16_t, NX> a_groups{};
 };
 
 struct OcpSettings {

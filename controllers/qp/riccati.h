@@ -75,8 +75,9 @@ struct RiccatiStage {
   alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinv{};
   alignas(32) std::array<double, 4 * (Layout::kUp + Layout::kCp)> dinvT{};
   // The 4-row groups in which each column of B and A has a nonzero entry (kernels::transpose,
-  // set by the matrix pass; NX ≤ 64): the forward rollout's products fetch only those (the
-  // MPC's A is the identity but in 9 rows, its force columns of B reach 6 rows).
+  // set by the matrix pass; NX ≤ 64): the backward vector recursion's and the forward
+  // rollout's products fetch only those (the MPC's A is the identity but in 9 rows, its force
+  // columns of B reach 6 rows).
   std::array<std::uint16_t, NU> b_groups{};
   std::array<std::uint16_t, NX> a_groups{};
   // Barrier terms set by the caller: Hessian weight W = diag(w) and linear term Gᵀρ.
@@ -455,9 +456,10 @@ void schur_cost_to_go(double* L, int ne_padded) {
 }
 
 // Lower triangle of Q + [B A]ᵀPₖ₊₁[B A]'s x block into the x block of L (whose padding is set):
-// ZᵀZ from Zᵀ in Yt when Pₖ₊₁ is factored, else Yt·A with Yt = [B A]ᵀPₖ₊₁.
+// ZᵀZ from Zᵀ in Yt when Pₖ₊₁ is factored, else Yt·A with Yt = [B A]ᵀPₖ₊₁ (A from At, its
+// transpose in BAt's x rows, leading dimension kLd).
 template <int NX, int NU, int NC>
-void add_x_product(const double* Yt, const double* A, const int* extent, bool factored,
+void add_x_product(const double* Yt, const double* At, const int* extent, bool factored,
                    const Eigen::Matrix<double, NX, NX>& Q, double* L) {
   using Layout = RiccatiLayout<NX, NU, NC>;
   using kernels::gemm;
@@ -470,7 +472,7 @@ void add_x_product(const double* Yt, const double* A, const int* extent, bool fa
   } else if (factored) {
     gemm<true, Update::kSum, true>(kXp, NX, NX, Yt + kXo, kLd, Yt + kXo, kLd, P, kLd, q);
   } else {
-    gemm<false, Update::kSum, true>(kXp, NX, NX, Yt + kXo, kLd, A, NX, P, kLd, q);
+    gemm<true, Update::kSum, true>(kXp, NX, NX, Yt + kXo, kLd, At, kLd, P, kLd, q);
   }
 }
 
@@ -514,9 +516,14 @@ void backward_vector_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<
   ws.v = ws.stage[k + 1].p;
   add_cost_to_go_product(ws.stage[k + 1], vec.b[k], ws.v, ws.lpt_v);
   ws.qu = vec.r[k];
-  kernels::gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data());
   w.p = vec.q[k];
-  kernels::gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data());
+  if constexpr (kRowGroups<NX>) {  // over the nonzero row groups (the matrix pass's): bit for bit
+    kernels::gemv_t_groups<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data(), w.b_groups.data());
+    kernels::gemv_t_groups<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data(), w.a_groups.data());
+  } else {
+    kernels::gemv_t<Update::kAdd>(NX, NU, s.B.data(), NX, ws.v.data(), ws.qu.data());
+    kernels::gemv_t<Update::kAdd>(NX, NX, s.A.data(), NX, ws.v.data(), w.p.data());
+  }
   if constexpr (NG > 0) {
     const int m = s.num_ineq;
     if (m > 0) {
@@ -574,10 +581,17 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     FactorMap<NX, NU, NC> K(L);
     load_stage(s, ne_padded, K, false);  // R, S, Q: the addends of the products below
 
-    kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data(),
-                       kGroups ? w.b_groups.data() : nullptr);
-    kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data(),
-                       kGroups ? w.a_groups.data() : nullptr);
+    if (kGroups && qp.ab_groups_declared) {  // reads only the declared groups (ocp_qp.h)
+      kernels::transpose_declared(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data(), w.b_groups.data(),
+                                  qp.b_groups.data());
+      kernels::transpose_declared(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data(),
+                                  w.a_groups.data(), qp.a_groups.data());
+    } else {
+      kernels::transpose(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data(),
+                         kGroups ? w.b_groups.data() : nullptr);
+      kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data(),
+                         kGroups ? w.a_groups.data() : nullptr);
+    }
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
@@ -604,10 +618,12 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       // Yt = [B A]ᵀPₖ₊₁ (u and x rows), then the lower triangle of Yt·[B A].
       gemm<false, Update::kSet>(kUp, NX, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
       gemm<false, Update::kSet>(kXp, NX, NX, ws.BAt.data() + kXo, kLd, P_next, kLd, Yt + kXo, kLd);
-      gemm<false, Update::kSum, true>(kUp, NU, NX, Yt, kLd, s.B.data(), NX, L, kLd, r);
-      gemm<false, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, s.B.data(), NX, L + kXo, kLd, st);
+      // [B A] from BAt (as op(B) = BAtᵀ: the same entries in the same order as from B and A,
+      // and the rows OcpQp::ab_groups_declared leaves unread are zero there).
+      gemm<true, Update::kSum, true>(kUp, NU, NX, Yt, kLd, ws.BAt.data(), kLd, L, kLd, r);
+      gemm<true, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, ws.BAt.data(), kLd, L + kXo, kLd, st);
     }
-    add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, s.Q, L);
+    add_x_product<NX, NU, NC>(Yt, ws.BAt.data() + kXo, extent, next.p_factored, s.Q, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);
 
@@ -616,7 +632,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     w.p_factored = factor_cost_to_go<NX, NU, NC>(L, ne_padded);
     if (!w.p_factored) {
       load_x_block<NX, NU, NC>(s.Q, K, false);
-      add_x_product<NX, NU, NC>(Yt, s.A.data(), extent, next.p_factored, s.Q, L);
+      add_x_product<NX, NU, NC>(Yt, ws.BAt.data() + kXo, extent, next.p_factored, s.Q, L);
       add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
       schur_cost_to_go<NX, NU, NC>(L, ne_padded);
     }

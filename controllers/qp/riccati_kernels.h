@@ -426,6 +426,71 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
   }
 }
 
+// transpose (with last and groups) of an m×n src (m ≤ 64) whose column j is zero outside the
+// 4-row groups declared[j] (bit g: rows [4g, 4g + 4)), reading only the groups some column of
+// each 4-column step declares: dst's other entries are written zero. On such a src the same
+// dst, last and groups as transpose's, bit for bit. For [B A] of the MPC (A the identity but
+// in 9 rows, B's force columns 6 rows deep): ~half of each column's cache lines not fetched.
+inline void transpose_declared(int m, int n, const double* src, int lds, double* dst, int ldd, int* last,
+                               std::uint16_t* groups, const std::uint16_t* declared) {
+  int j = 0;
+#ifdef KUAVO_QP_KERNELS_SIMD
+  const __m256d zero = _mm256_setzero_pd();
+  for (; j + 4 <= n; j += 4) {
+    const unsigned read = static_cast<unsigned>(declared[j] | declared[j + 1] | declared[j + 2] | declared[j + 3]);
+    const double* s0 = src + j * lds;
+    unsigned long long nz[4] = {0, 0, 0, 0};
+    int i = 0;
+    for (; i + 4 <= m; i += 4) {
+      if ((read >> (i / 4) & 1u) == 0) {
+        for (int r = 0; r < 4; ++r) _mm256_storeu_pd(dst + j + (i + r) * ldd, zero);
+        continue;
+      }
+      const double* c0 = s0 + i;
+      KUAVO_UNROLL
+      for (int c = 0; c < 4; ++c) {
+        const int bits = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(c0 + c * lds), zero, _CMP_NEQ_UQ));
+        nz[c] |= static_cast<unsigned long long>(bits) << i;
+      }
+      const __m256d h0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0)), _mm_loadu_pd(c0 + 2 * lds), 1);
+      const __m256d h1 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds)), _mm_loadu_pd(c0 + 3 * lds), 1);
+      const __m256d h2 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + 2)), _mm_loadu_pd(c0 + 2 * lds + 2), 1);
+      const __m256d h3 =
+          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds + 2)), _mm_loadu_pd(c0 + 3 * lds + 2), 1);
+      _mm256_storeu_pd(dst + j + i * ldd, _mm256_unpacklo_pd(h0, h1));
+      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_unpackhi_pd(h0, h1));
+      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_unpacklo_pd(h2, h3));
+      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_unpackhi_pd(h2, h3));
+    }
+    const bool tail = (read >> (i / 4) & 1u) != 0;
+    for (; i < m; ++i) {
+      for (int c = 0; c < 4; ++c) {
+        const double x = tail ? s0[i + c * lds] : 0.0;
+        dst[j + c + i * ldd] = x;
+        nz[c] |= static_cast<unsigned long long>(x != 0.0) << i;
+      }
+    }
+    for (int c = 0; c < 4; ++c) {
+      last[j + c] = nz[c] == 0 ? 0 : 64 - __builtin_clzll(nz[c]);
+      groups[j + c] = nonzero_groups(nz[c]);
+    }
+  }
+#endif
+  for (; j < n; ++j) {
+    unsigned long long nz = 0;
+    for (int i = 0; i < m; ++i) {
+      const double x = (declared[j] >> (i / 4) & 1u) != 0 ? src[i + j * lds] : 0.0;
+      dst[j + i * ldd] = x;
+      if (x != 0.0) nz |= 1ull << i;  // NaN too
+    }
+    last[j] = nz == 0 ? 0 : 64 - __builtin_clzll(nz);
+    groups[j] = nonzero_groups(nz);
+  }
+}
+
+
 // Factors the four columns [j, j+4) of a symmetric matrix S = L·diag(d)·Lᵀ in place (lower,
 // column-major, leading dimension ld), d = ±1 for all four. The panel's rows are
 // [j, row_end) ∪ [row2_begin, row2_end) (two ranges, so a block of unused rows can sit between
@@ -684,6 +749,80 @@ inline void gemv_t(int m, int n, const double* A, int lda, const double* x, doub
   for (int j = 0; j < n; ++j) {
     double d = 0.0;
     for (int i = 0; i < m; ++i) d += A[i + j * lda] * x[i];
+    if constexpr (kUpdate == Update::kSet) y[j] = d;
+    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
+    else y[j] -= d;
+  }
+#endif
+}
+
+// y[n] (=, +=, −=) Aᵀ·x over the 4-row groups in which A's columns are nonzero (groups as in
+// gemv_n_groups), m ≤ 64. Bit for bit gemv_t: a 4-column step skips a row group only where all
+// its columns are zero there, and the column sums start at +0, which adding exact zeros
+// leaves unchanged (a sum that starts at +0 is never −0).
+template <Update kUpdate>
+inline void gemv_t_groups(int m, int n, const double* A, int lda, const double* x, double* y,
+                          const std::uint16_t* groups) {
+#ifdef KUAVO_QP_KERNELS_SIMD
+  const int m4 = m / 4 * 4;
+  const __m256i tail = row_mask(m - m4);
+  const __m256d x_tail = m4 < m ? _mm256_maskload_pd(x + m4, tail) : _mm256_setzero_pd();
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const double* a = A + j * lda;
+    unsigned g = static_cast<unsigned>(groups[j] | groups[j + 1] | groups[j + 2] | groups[j + 3]);
+    __m256d c0 = _mm256_setzero_pd(), c1 = _mm256_setzero_pd(), c2 = _mm256_setzero_pd(), c3 = _mm256_setzero_pd();
+    while (g != 0) {
+      const int i = 4 * __builtin_ctz(g);
+      g &= g - 1;
+      if (i < m4) {
+        const __m256d xv = _mm256_loadu_pd(x + i);
+        c0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), xv, c0);
+        c1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), xv, c1);
+        c2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), xv, c2);
+        c3 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), xv, c3);
+      } else {
+        c0 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c0);
+        c1 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + lda, tail), x_tail, c1);
+        c2 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 2 * lda, tail), x_tail, c2);
+        c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
+      }
+    }
+    const __m256d h01 = _mm256_hadd_pd(c0, c1), h23 = _mm256_hadd_pd(c2, c3);
+    const __m256d sum = _mm256_add_pd(_mm256_permute2f128_pd(h01, h23, 0x20), _mm256_permute2f128_pd(h01, h23, 0x31));
+    if constexpr (kUpdate == Update::kSet) {
+      _mm256_storeu_pd(y + j, sum);
+    } else if constexpr (kUpdate == Update::kAdd) {
+      _mm256_storeu_pd(y + j, _mm256_add_pd(_mm256_loadu_pd(y + j), sum));
+    } else {
+      _mm256_storeu_pd(y + j, _mm256_sub_pd(_mm256_loadu_pd(y + j), sum));
+    }
+  }
+  for (; j < n; ++j) {
+    const double* a = A + j * lda;
+    unsigned g = groups[j];
+    __m256d c = _mm256_setzero_pd();
+    while (g != 0) {
+      const int i = 4 * __builtin_ctz(g);
+      g &= g - 1;
+      if (i < m4) {
+        c = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), _mm256_loadu_pd(x + i), c);
+      } else {
+        c = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c);
+      }
+    }
+    const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
+    const double d = _mm_cvtsd_f64(_mm_add_sd(h, _mm_unpackhi_pd(h, h)));
+    if constexpr (kUpdate == Update::kSet) y[j] = d;
+    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
+    else y[j] -= d;
+  }
+#else
+  for (int j = 0; j < n; ++j) {
+    double d = 0.0;
+    for (int i = 0; i < m; ++i) {
+      if (groups[j] >> (i / 4) & 1u) d += A[i + j * lda] * x[i];
+    }
     if constexpr (kUpdate == Update::kSet) y[j] = d;
     else if constexpr (kUpdate == Update::kAdd) y[j] += d;
     else y[j] -= d;

@@ -280,7 +280,8 @@ TEST(MpcStep, CachedReferenceAndPartialClearingBuildTheSameQp) {
 // identity / zero), and centroidal_evaluate writes only the non-structural blocks of fx, fu and
 // the base twist derivatives (the rest keeps the zeros of construction). Through stepping and
 // back to standing, every stage's A and B must equal the whole products of a freshly
-// constructed point's evaluation, bit for bit, and the reused point must equal the fresh one.
+// constructed point's evaluation, bit for bit, and the reused point must equal the fresh one;
+// and A and B stay zero outside the row groups mpc_init declares to the Riccati.
 TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
   MpcFixture& f = mpc_fixture();
   mpc::mpc_init(f.model, f.config, f.ws);
@@ -311,6 +312,24 @@ TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
       ASSERT_TRUE(st.A == a) << call << " " << k;
       ASSERT_TRUE(st.B == b) << call << " " << k;
       ++compared;
+    }
+    // Every stage's A and B are zero outside the row groups mpc_init declares (ocp_qp.h): the
+    // Riccati does not read there.
+    ASSERT_TRUE(f.ws.qp.ab_groups_declared);
+    for (int k = 0; k < f.ws.horizon; ++k) {
+      const auto& st = f.ws.qp.stages[k];
+      for (int i = 0; i < mpc::kNx; ++i) {
+        for (int j = 0; j < mpc::kNx; ++j) {
+          if ((f.ws.qp.a_groups[j] >> (i / 4) & 1u) == 0) {
+            ASSERT_EQ(st.A(i, j), 0.0) << call << " " << k;
+          }
+        }
+        for (int j = 0; j < mpc::kNu; ++j) {
+          if ((f.ws.qp.b_groups[j] >> (i / 4) & 1u) == 0) {
+            ASSERT_EQ(st.B(i, j), 0.0) << call << " " << k;
+          }
+        }
+      }
     }
     // The workspace's point was last evaluated at stage T − 1: reused, it must equal a fresh one.
     const int last = f.ws.horizon - 1;

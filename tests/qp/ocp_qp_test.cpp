@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <random>
@@ -368,6 +369,83 @@ TEST(OcpQp, StagesWithoutCrossTermsSkipSBitForBit) {
     }
     EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
     ASSERT_EQ(riccati_factor(g->qp, g->ws.riccati), QpStatus::kSolved) << n;  // the separate passes too
+    riccati_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol);
+    for (int k = 0; k <= T; ++k) EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+  }
+}
+
+// OcpQp::ab_groups_declared: the matrix pass reads only the declared row groups of A and B
+// (NaN in the undeclared groups of a column step must not reach the result), and the solution
+// is bit for bit the undeclared one, at MPC-like structure (A the identity but in a few rows,
+// short force columns), on the extents and the general (semidefinite cost-to-go) paths, fused
+// and in separate passes.
+TEST(OcpQp, DeclaredDynamicsRowGroupsGiveTheSameSolutionBitForBit) {
+  constexpr int kNx = 38, kNu = 50, kN = 12;
+  using Fixture = OcpFixture<kNx, kNu, kN, 12, 0>;
+  auto f = std::make_unique<Fixture>();
+  auto g = std::make_unique<Fixture>();
+  std::mt19937_64 rng(47);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto a_groups = [](int j) { return static_cast<std::uint16_t>(0b111 | 1u << (j / 4)); };
+  auto b_groups = [](int j) { return static_cast<std::uint16_t>(j < 24 ? 0b11 : 0b111 | 1u << ((12 + j - 24) / 4)); };
+  for (int n = 0; n < 4; ++n) {
+    const int T = kN;
+    make_random_ocp(f->qp, rng, T);
+    for (int k = 0; k <= T; ++k) {
+      auto& s = f->qp.stages[k];
+      for (int j = 0; j < kNx; ++j) {
+        for (int i = 0; i < kNx; ++i) {
+          if ((a_groups(j) >> (i / 4) & 1u) == 0) s.A(i, j) = 0.0;
+          if (i >= 12 && i != j) s.A(i, j) = 0.0;  // joint rows: the identity (inside declared groups too)
+        }
+        if (j >= 12) s.A(j, j) = 1.0;
+      }
+      for (int j = 0; j < kNu; ++j) {
+        for (int i = 0; i < kNx; ++i) {
+          if ((b_groups(j) >> (i / 4) & 1u) == 0 || (j < 24 && i >= 6)) s.B(i, j) = 0.0;
+          if (j >= 24 && i >= 12 && i != 12 + j - 24) s.B(i, j) = 0.0;
+        }
+      }
+      if (n >= 2) {  // P_T = 0: the general product path
+        s.Q.setZero();
+        s.S.setZero();
+      }
+    }
+    g->qp = f->qp;
+    g->qp.ab_groups_declared = true;
+    for (int j = 0; j < kNx; ++j) g->qp.a_groups[j] = a_groups(j);
+    for (int j = 0; j < kNu; ++j) g->qp.b_groups[j] = b_groups(j);
+    for (int k = 0; k < T; ++k) {  // poison what no 4-column step declares
+      auto& s = g->qp.stages[k];
+      for (int j = 0; j < kNx; ++j) {
+        const int step = j / 4 * 4;
+        unsigned read = a_groups(j);
+        if (step + 4 <= kNx) read = a_groups(step) | a_groups(step + 1) | a_groups(step + 2) | a_groups(step + 3);
+        for (int i = 0; i < kNx; ++i) {
+          if ((read >> (i / 4) & 1u) == 0) s.A(i, j) = nan;
+        }
+      }
+      for (int j = 0; j < kNu; ++j) {
+        const int step = j / 4 * 4;
+        unsigned read = b_groups(j);
+        if (step + 4 <= kNu) read = b_groups(step) | b_groups(step + 1) | b_groups(step + 2) | b_groups(step + 3);
+        for (int i = 0; i < kNx; ++i) {
+          if ((read >> (i / 4) & 1u) == 0) s.B(i, j) = nan;
+        }
+      }
+    }
+    copy_vectors(f->qp, f->ws.vec);
+    copy_vectors(g->qp, g->ws.vec);
+    ASSERT_EQ(riccati_factor_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol), QpStatus::kSolved) << n;
+    ASSERT_EQ(riccati_factor_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol), QpStatus::kSolved) << n;
+    for (int k = 0; k <= T; ++k) {
+      EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.costate[k], g->sol.costate[k]) << n << " " << k;
+      EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << n << " " << k;
+    }
+    EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
+    ASSERT_EQ(riccati_factor(g->qp, g->ws.riccati), QpStatus::kSolved) << n;
     riccati_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol);
     for (int k = 0; k <= T; ++k) EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
   }

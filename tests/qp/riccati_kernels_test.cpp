@@ -286,6 +286,64 @@ TEST(RiccatiKernels, MatrixVectorProductOverNonzeroRowGroupsIsGemvBitForBit) {
   }
 }
 
+// transpose_declared reads only the declared row groups (NaN beyond them, where no column of
+// the 4-column step declares the group, never reaches the result) and gives transpose's dst,
+// last and groups bit for bit; gemv_t_groups over those groups is gemv_t bit for bit
+// (set, add, subtract), with row remainders and remainder columns.
+TEST(RiccatiKernels, DeclaredRowGroupsTransposeAndProductAreTheDenseOnesBitForBit) {
+  std::mt19937_64 rng(109);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const int m : {1, 3, 4, 7, 12, 38, 63, 64}) {
+    for (const int n : {1, 3, 4, 5, 9, 38, 50}) {
+      const int groups_m = (m + 3) / 4;
+      MatrixXd A = random_matrix(m, n, rng);
+      std::vector<std::uint16_t> declared(n);
+      for (int j = 0; j < n; ++j) {
+        declared[j] = static_cast<std::uint16_t>(rng() & ((1u << groups_m) - 1));
+        if (j % 5 == 4) declared[j] = 0;
+        for (int g = 0; g < groups_m; ++g) {
+          if ((declared[j] >> g & 1u) == 0) A.block(4 * g, j, std::min(4, m - 4 * g), 1).setZero();
+          else if (rng() % 4 == 0) A.block(4 * g, j, std::min(4, m - 4 * g), 1).setZero();  // declared, zero
+        }
+      }
+      MatrixXd poisoned = A;  // NaN where no column of the step (or the remainder column) declares
+      for (int j = 0; j < n; ++j) {
+        const int step = j / 4 * 4;
+        unsigned read = declared[j];
+        if (step + 4 <= n) read = declared[step] | declared[step + 1] | declared[step + 2] | declared[step + 3];
+        for (int i = 0; i < m; ++i) {
+          if ((read >> (i / 4) & 1u) == 0) poisoned(i, j) = nan;
+        }
+      }
+      MatrixXd dense_t = MatrixXd::Constant(n, m, 5.0), declared_t = MatrixXd::Constant(n, m, 5.0);
+      std::vector<int> last(n), last_d(n);
+      std::vector<std::uint16_t> groups(n), groups_d(n);
+      kernels::transpose(m, n, A.data(), m, dense_t.data(), n, last.data(), groups.data());
+      kernels::transpose_declared(m, n, poisoned.data(), m, declared_t.data(), n, last_d.data(), groups_d.data(),
+                                  declared.data());
+      for (int j = 0; j < n; ++j) {
+        EXPECT_EQ(last_d[j], last[j]) << m << "x" << n << " column " << j;
+        EXPECT_EQ(groups_d[j], groups[j]) << m << "x" << n << " column " << j;
+        for (int i = 0; i < m; ++i) EXPECT_EQ(declared_t(j, i), dense_t(j, i)) << m << "x" << n;
+      }
+      const Eigen::VectorXd x = random_matrix(m, 1, rng);
+      const Eigen::VectorXd y0 = random_matrix(n + 1, 1, rng);  // one guard entry past n
+      Eigen::VectorXd y = y0, z = y0;
+      kernels::gemv_t<Update::kSet>(m, n, A.data(), m, x.data(), y.data());
+      kernels::gemv_t_groups<Update::kSet>(m, n, A.data(), m, x.data(), z.data(), groups.data());
+      for (int j = 0; j <= n; ++j) EXPECT_EQ(z(j), y(j)) << m << "x" << n << " set " << j;
+      y = y0, z = y0;
+      kernels::gemv_t<Update::kAdd>(m, n, A.data(), m, x.data(), y.data());
+      kernels::gemv_t_groups<Update::kAdd>(m, n, A.data(), m, x.data(), z.data(), groups.data());
+      for (int j = 0; j <= n; ++j) EXPECT_EQ(z(j), y(j)) << m << "x" << n << " add " << j;
+      y = y0, z = y0;
+      kernels::gemv_t<Update::kSub>(m, n, A.data(), m, x.data(), y.data());
+      kernels::gemv_t_groups<Update::kSub>(m, n, A.data(), m, x.data(), z.data(), groups.data());
+      for (int j = 0; j <= n; ++j) EXPECT_EQ(z(j), y(j)) << m << "x" << n << " sub " << j;
+    }
+  }
+}
+
 TEST(RiccatiKernels, TriangularSolvesAndProductsMatchEigen) {
   std::mt19937_64 rng(107);
   for (const int n : {1, 2, 3, 4, 5, 7, 12, 38, 50}) {
