@@ -485,6 +485,7 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
     st.R.setZero();
     st.S.setZero();                  // no cross terms: never written, and the Riccati skips it
     st.s_zero = true;
+    st.r_dense = 3 * kNumPoints;     // R: the force block and the joint velocities' diagonal
     st.C.setZero();
     st.D.setZero();
     st.e.setZero();

@@ -36,6 +36,11 @@ struct OcpStage {
   // recursion then does not read S: a stage without cross terms (the centroidal MPC's) spares
   // S's 15 KB of the ~82 KB fetched per stage and factorization (the x-u block is ZᵀZ alone).
   bool s_zero = false;
+  // R is zero outside its leading r_dense × r_dense block and its diagonal (r_dense = NU: no
+  // structure), and the Riccati recursion reads only those (and R's 4×4 diagonal blocks): the
+  // MPC's R is its force block (friction and leg-torque barriers) and the joint velocities'
+  // diagonal, ~2/3 of the lower triangle's cache lines not fetched.
+  int r_dense = NU;
   Eigen::Matrix<double, NU, NU> R = Eigen::Matrix<double, NU, NU>::Identity();
   Eigen::Matrix<double, NX, 1> q = Eigen::Matrix<double, NX, 1>::Zero();
   Eigen::Matrix<double, NU, 1> r = Eigen::Matrix<double, NU, 1>::Zero();

@@ -596,7 +596,10 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
     const int* extent = nullptr;  // set if [B A] has zero tails and Pₖ₊₁ is factored
-    const kernels::Addend r{s.R.data(), NU, NU};   // u block: R + [B A]ᵀPₖ₊₁[B A]
+    // u block: R + [B A]ᵀPₖ₊₁[B A]; R's rows past r_dense read as zero, its diagonal there
+    // added after the product (p + R is R + p, and 0 + p is p: no product is −0).
+    const int r_rows = std::clamp(s.r_dense, 0, NU);
+    const kernels::Addend r{s.R.data(), NU, r_rows};
     // x-u block: Sᵀ + …; with s_zero no addend (reads as zero, and 0 + product is the
     // product: the tiles' sums start at +0, so no product is −0).
     const kernels::Addend st = s.s_zero ? kernels::Addend{} : kernels::Addend{s.S.data(), NU, NX};
@@ -623,6 +626,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       gemm<true, Update::kSum, true>(kUp, NU, NX, Yt, kLd, ws.BAt.data(), kLd, L, kLd, r);
       gemm<true, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, ws.BAt.data(), kLd, L + kXo, kLd, st);
     }
+    for (int j = r_rows; j < NU; ++j) L[j * (kLd + 1)] += s.R(j, j);
     add_x_product<NX, NU, NC>(Yt, ws.BAt.data() + kXo, extent, next.p_factored, s.Q, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);

@@ -313,11 +313,16 @@ TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
       ASSERT_TRUE(st.B == b) << call << " " << k;
       ++compared;
     }
-    // Every stage's A and B are zero outside the row groups mpc_init declares (ocp_qp.h): the
-    // Riccati does not read there.
+    // Every stage's A and B are zero outside the row groups mpc_init declares, and R outside
+    // its force block and diagonal (ocp_qp.h): the Riccati does not read there.
     ASSERT_TRUE(f.ws.qp.ab_groups_declared);
     for (int k = 0; k < f.ws.horizon; ++k) {
       const auto& st = f.ws.qp.stages[k];
+      ASSERT_EQ(st.r_dense, 3 * mpc::kNumPoints);
+      Eigen::Matrix<double, mpc::kNu, mpc::kNu> outside = st.R;
+      outside.topLeftCorner<3 * mpc::kNumPoints, 3 * mpc::kNumPoints>().setZero();
+      outside.diagonal().setZero();
+      ASSERT_EQ(outside.cwiseAbs().maxCoeff(), 0.0) << call << " " << k;
       for (int i = 0; i < mpc::kNx; ++i) {
         for (int j = 0; j < mpc::kNx; ++j) {
           if ((f.ws.qp.a_groups[j] >> (i / 4) & 1u) == 0) {

@@ -335,10 +335,12 @@ TEST(OcpQp, FusedFactorSolveIsTheSeparatePassesBitForBit) {
   }
 }
 
-// OcpStage::s_zero: the Riccati recursion does not read S (NaN there must not reach the
-// result) and returns bit for bit the solution of the same stages with S = 0 read, on the
-// extents path (B with zero tails), the dense one, and a semidefinite cost-to-go (no Q).
-TEST(OcpQp, StagesWithoutCrossTermsSkipSBitForBit) {
+// OcpStage::s_zero and r_dense: the Riccati recursion does not read S, nor R outside its
+// leading block and diagonal (NaN there must not reach the result), and returns bit for bit
+// the solution of the same stages with those zeros read, on the extents path (B with zero
+// tails), the dense one, and a semidefinite cost-to-go (no Q).
+TEST(OcpQp, StageCostStructureIsNotReadAndGivesTheSameSolutionBitForBit) {
+  constexpr int kDense = 22;  // not a multiple of 4: a column strip straddles it
   using Fixture = OcpFixture<38, 50, 12, 12, 0>;
   auto f = std::make_unique<Fixture>();
   auto g = std::make_unique<Fixture>();
@@ -349,13 +351,25 @@ TEST(OcpQp, StagesWithoutCrossTermsSkipSBitForBit) {
     for (int k = 0; k <= T; ++k) {
       auto& s = f->qp.stages[k];
       s.S.setZero();
+      const Eigen::Matrix<double, 50, 1> diagonal = s.R.diagonal();
+      s.R.bottomRows(50 - kDense).setZero();
+      s.R.rightCols(50 - kDense).setZero();
+      s.R.diagonal() = diagonal;
       if (n % 2 == 0) s.B.bottomRows(30).leftCols(24).setZero();  // force-like columns: extents
       if (n >= 4) s.Q.setZero();  // P_T = 0: the general product path
     }
     g->qp = f->qp;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     for (int k = 0; k <= T; ++k) {
-      g->qp.stages[k].S.setConstant(std::numeric_limits<double>::quiet_NaN());
-      g->qp.stages[k].s_zero = true;
+      auto& s = g->qp.stages[k];
+      s.S.setConstant(nan);
+      s.s_zero = true;
+      for (int j = 0; j < 50; ++j) {
+        for (int i = 0; i < 50; ++i) {
+          if ((i >= kDense || j >= kDense) && i / 4 != j / 4) s.R(i, j) = nan;  // but 4×4 diagonal blocks
+        }
+      }
+      s.r_dense = kDense;
     }
     copy_vectors(f->qp, f->ws.vec);
     copy_vectors(g->qp, g->ws.vec);
