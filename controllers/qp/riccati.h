@@ -24,7 +24,11 @@
 // into the factor storage: the u, x-u and x blocks' products write R + ZᵀZ, Sᵀ + ZᵀZ and
 // Q + ZᵀZ, reading R, S and Q in their tiles' epilogues (kernels::Update::kSum, kSumT), where at
 // MPC size (the horizon's data beyond L2) their first touch overlaps the FMAs instead of
-// stalling a copy loop.
+// stalling a copy loop. Known zeros are not fetched at all: a stage without S (s_zero), R
+// beyond its leading block and diagonal (r_dense), the rows of A and B outside their declared
+// row groups (OcpQp::ab_groups_declared), and in the vector passes every zero 4-row group of
+// A and B (found by the transpose): at MPC size each stage's data is fetched from beyond L2 in
+// every call, so what is not read is what the call no longer waits for.
 // Square-root recursion with the classical statuses: the sweep goes on into the x block, whose
 // Schur complement Pₖ is factored in place (Pₖ = Lp·Lpᵀ, the next stage's Lp, no copy). Pₖ need
 // not be definite (singular Q; barrier weights spread over 15 decades in the interior point):
