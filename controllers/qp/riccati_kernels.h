@@ -699,6 +699,36 @@ inline void gemv_n_groups(int m, int n, const double* A, int lda, const double* 
 #endif
 }
 
+// y (=, +=, −=) d: the scalar update of the matrix-vector products.
+template <Update kUpdate>
+inline void update_scalar(double& y, double d) {
+  if constexpr (kUpdate == Update::kSet) y = d;
+  else if constexpr (kUpdate == Update::kAdd) y += d;
+  else y -= d;
+}
+
+#ifdef KUAVO_QP_KERNELS_SIMD
+// y[0..3] (=, +=, −=) [Σc0, Σc1, Σc2, Σc3], the lane sums of four column accumulators.
+template <Update kUpdate>
+inline void update_lane_sums4(double* y, __m256d c0, __m256d c1, __m256d c2, __m256d c3) {
+  const __m256d h01 = _mm256_hadd_pd(c0, c1), h23 = _mm256_hadd_pd(c2, c3);
+  const __m256d sum = _mm256_add_pd(_mm256_permute2f128_pd(h01, h23, 0x20), _mm256_permute2f128_pd(h01, h23, 0x31));
+  if constexpr (kUpdate == Update::kSet) {
+    _mm256_storeu_pd(y, sum);
+  } else if constexpr (kUpdate == Update::kAdd) {
+    _mm256_storeu_pd(y, _mm256_add_pd(_mm256_loadu_pd(y), sum));
+  } else {
+    _mm256_storeu_pd(y, _mm256_sub_pd(_mm256_loadu_pd(y), sum));
+  }
+}
+
+// The lane sum of one column accumulator.
+inline double lane_sum(__m256d c) {
+  const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(h, _mm_unpackhi_pd(h, h)));
+}
+#endif
+
 // y[n] (=, +=, −=) Aᵀ·x for a column-major A[m×n] (lda).
 template <Update kUpdate>
 inline void gemv_t(int m, int n, const double* A, int lda, const double* x, double* y) {
@@ -723,35 +753,20 @@ inline void gemv_t(int m, int n, const double* A, int lda, const double* x, doub
       c2 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 2 * lda, tail), x_tail, c2);
       c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
     }
-    // Horizontal sums of c0…c3 into one vector [Σc0, Σc1, Σc2, Σc3].
-    const __m256d h01 = _mm256_hadd_pd(c0, c1), h23 = _mm256_hadd_pd(c2, c3);
-    const __m256d sum = _mm256_add_pd(_mm256_permute2f128_pd(h01, h23, 0x20), _mm256_permute2f128_pd(h01, h23, 0x31));
-    if constexpr (kUpdate == Update::kSet) {
-      _mm256_storeu_pd(y + j, sum);
-    } else if constexpr (kUpdate == Update::kAdd) {
-      _mm256_storeu_pd(y + j, _mm256_add_pd(_mm256_loadu_pd(y + j), sum));
-    } else {
-      _mm256_storeu_pd(y + j, _mm256_sub_pd(_mm256_loadu_pd(y + j), sum));
-    }
+    update_lane_sums4<kUpdate>(y + j, c0, c1, c2, c3);
   }
   for (; j < n; ++j) {
     const double* a = A + j * lda;
     __m256d c = _mm256_setzero_pd();
     for (int i = 0; i < m4; i += 4) c = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), _mm256_loadu_pd(x + i), c);
     if (m4 < m) c = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c);
-    const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
-    const double d = _mm_cvtsd_f64(_mm_add_sd(h, _mm_unpackhi_pd(h, h)));
-    if constexpr (kUpdate == Update::kSet) y[j] = d;
-    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
-    else y[j] -= d;
+    update_scalar<kUpdate>(y[j], lane_sum(c));
   }
 #else
   for (int j = 0; j < n; ++j) {
     double d = 0.0;
     for (int i = 0; i < m; ++i) d += A[i + j * lda] * x[i];
-    if constexpr (kUpdate == Update::kSet) y[j] = d;
-    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
-    else y[j] -= d;
+    update_scalar<kUpdate>(y[j], d);
   }
 #endif
 }
@@ -788,15 +803,7 @@ inline void gemv_t_groups(int m, int n, const double* A, int lda, const double* 
         c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
       }
     }
-    const __m256d h01 = _mm256_hadd_pd(c0, c1), h23 = _mm256_hadd_pd(c2, c3);
-    const __m256d sum = _mm256_add_pd(_mm256_permute2f128_pd(h01, h23, 0x20), _mm256_permute2f128_pd(h01, h23, 0x31));
-    if constexpr (kUpdate == Update::kSet) {
-      _mm256_storeu_pd(y + j, sum);
-    } else if constexpr (kUpdate == Update::kAdd) {
-      _mm256_storeu_pd(y + j, _mm256_add_pd(_mm256_loadu_pd(y + j), sum));
-    } else {
-      _mm256_storeu_pd(y + j, _mm256_sub_pd(_mm256_loadu_pd(y + j), sum));
-    }
+    update_lane_sums4<kUpdate>(y + j, c0, c1, c2, c3);
   }
   for (; j < n; ++j) {
     const double* a = A + j * lda;
@@ -811,11 +818,7 @@ inline void gemv_t_groups(int m, int n, const double* A, int lda, const double* 
         c = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c);
       }
     }
-    const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
-    const double d = _mm_cvtsd_f64(_mm_add_sd(h, _mm_unpackhi_pd(h, h)));
-    if constexpr (kUpdate == Update::kSet) y[j] = d;
-    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
-    else y[j] -= d;
+    update_scalar<kUpdate>(y[j], lane_sum(c));
   }
 #else
   for (int j = 0; j < n; ++j) {
@@ -823,9 +826,7 @@ inline void gemv_t_groups(int m, int n, const double* A, int lda, const double* 
     for (int i = 0; i < m; ++i) {
       if (groups[j] >> (i / 4) & 1u) d += A[i + j * lda] * x[i];
     }
-    if constexpr (kUpdate == Update::kSet) y[j] = d;
-    else if constexpr (kUpdate == Update::kAdd) y[j] += d;
-    else y[j] -= d;
+    update_scalar<kUpdate>(y[j], d);
   }
 #endif
 }

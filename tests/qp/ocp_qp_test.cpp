@@ -335,6 +335,26 @@ TEST(OcpQp, FusedFactorSolveIsTheSeparatePassesBitForBit) {
   }
 }
 
+// f and g (the same stages, g with NaN where the solver is promised zeros) solved fused and g
+// again in separate passes: the same x, u, costates and multipliers, bit for bit.
+template <class Fixture>
+void expect_same_solution_bit_for_bit(Fixture& f, Fixture& g, int T, int n) {
+  copy_vectors(f.qp, f.ws.vec);
+  copy_vectors(g.qp, g.ws.vec);
+  ASSERT_EQ(riccati_factor_solve(f.qp, f.ws.riccati, f.ws.vec, f.sol), QpStatus::kSolved) << n;
+  ASSERT_EQ(riccati_factor_solve(g.qp, g.ws.riccati, g.ws.vec, g.sol), QpStatus::kSolved) << n;
+  for (int k = 0; k <= T; ++k) {
+    EXPECT_EQ(f.sol.x[k], g.sol.x[k]) << n << " " << k;
+    EXPECT_EQ(f.sol.u[k], g.sol.u[k]) << n << " " << k;
+    EXPECT_EQ(f.sol.costate[k], g.sol.costate[k]) << n << " " << k;
+    EXPECT_EQ(f.sol.nu[k], g.sol.nu[k]) << n << " " << k;
+  }
+  EXPECT_GT(f.sol.u[0].cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_EQ(riccati_factor(g.qp, g.ws.riccati), QpStatus::kSolved) << n;
+  riccati_solve(g.qp, g.ws.riccati, g.ws.vec, g.sol);
+  for (int k = 0; k <= T; ++k) EXPECT_EQ(f.sol.u[k], g.sol.u[k]) << n << " " << k;
+}
+
 // OcpStage::s_zero and r_dense: the Riccati recursion does not read S, nor R outside its
 // leading block and diagonal (NaN there must not reach the result), and returns bit for bit
 // the solution of the same stages with those zeros read, on the extents path (B with zero
@@ -371,20 +391,7 @@ TEST(OcpQp, StageCostStructureIsNotReadAndGivesTheSameSolutionBitForBit) {
       }
       s.r_dense = kDense;
     }
-    copy_vectors(f->qp, f->ws.vec);
-    copy_vectors(g->qp, g->ws.vec);
-    ASSERT_EQ(riccati_factor_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol), QpStatus::kSolved) << n;
-    ASSERT_EQ(riccati_factor_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol), QpStatus::kSolved) << n;
-    for (int k = 0; k <= T; ++k) {
-      EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.costate[k], g->sol.costate[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << n << " " << k;
-    }
-    EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
-    ASSERT_EQ(riccati_factor(g->qp, g->ws.riccati), QpStatus::kSolved) << n;  // the separate passes too
-    riccati_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol);
-    for (int k = 0; k <= T; ++k) EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+    expect_same_solution_bit_for_bit(*f, *g, T, n);
   }
 }
 
@@ -448,20 +455,7 @@ TEST(OcpQp, DeclaredDynamicsRowGroupsGiveTheSameSolutionBitForBit) {
         }
       }
     }
-    copy_vectors(f->qp, f->ws.vec);
-    copy_vectors(g->qp, g->ws.vec);
-    ASSERT_EQ(riccati_factor_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol), QpStatus::kSolved) << n;
-    ASSERT_EQ(riccati_factor_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol), QpStatus::kSolved) << n;
-    for (int k = 0; k <= T; ++k) {
-      EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.costate[k], g->sol.costate[k]) << n << " " << k;
-      EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << n << " " << k;
-    }
-    EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
-    ASSERT_EQ(riccati_factor(g->qp, g->ws.riccati), QpStatus::kSolved) << n;
-    riccati_solve(g->qp, g->ws.riccati, g->ws.vec, g->sol);
-    for (int k = 0; k <= T; ++k) EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << n << " " << k;
+    expect_same_solution_bit_for_bit(*f, *g, T, n);
   }
 }
 
