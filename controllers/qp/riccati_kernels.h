@@ -352,17 +352,42 @@ inline std::uint16_t nonzero_groups(unsigned long long rows) {
   return static_cast<std::uint16_t>(g);
 #endif
 }
+#ifdef KUAVO_QP_KERNELS_SIMD
+// The 4×4 block at c0 (column-major, lds) transposed into d (ldd): the row pairs of columns
+// (0, 2) and (1, 3) by 128-bit loads into the two halves (the insert takes any vector port,
+// the cross-lane permute only the shuffle port), then one unpack per output row.
+inline void transpose_block4(const double* c0, int lds, double* d, int ldd) {
+  const __m256d h0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0)), _mm_loadu_pd(c0 + 2 * lds), 1);
+  const __m256d h1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds)), _mm_loadu_pd(c0 + 3 * lds), 1);
+  const __m256d h2 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + 2)), _mm_loadu_pd(c0 + 2 * lds + 2), 1);
+  const __m256d h3 =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds + 2)), _mm_loadu_pd(c0 + 3 * lds + 2), 1);
+  _mm256_storeu_pd(d, _mm256_unpacklo_pd(h0, h1));
+  _mm256_storeu_pd(d + ldd, _mm256_unpackhi_pd(h0, h1));
+  _mm256_storeu_pd(d + 2 * ldd, _mm256_unpacklo_pd(h2, h3));
+  _mm256_storeu_pd(d + 3 * ldd, _mm256_unpackhi_pd(h2, h3));
+}
+
+// Bits i … i + 3 of nz[c]: which of the 4 rows at c0 of column c (c = 0…3, lds apart) are
+// nonzero (NaN counts as nonzero).
+inline void mark_nonzero_rows4(const double* c0, int lds, int i, unsigned long long nz[4]) {
+  const __m256d zero = _mm256_setzero_pd();
+  KUAVO_UNROLL
+  for (int c = 0; c < 4; ++c) {
+    const int bits = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(c0 + c * lds), zero, _CMP_NEQ_UQ));
+    nz[c] |= static_cast<unsigned long long>(bits) << i;
+  }
+}
+#endif
+
 inline void transpose(int m, int n, const double* src, int lds, double* dst, int ldd, int* last = nullptr,
                       std::uint16_t* groups = nullptr) {
   const bool masks = (last != nullptr || groups != nullptr) && m <= 64;
   int j = 0;
 #ifdef KUAVO_QP_KERNELS_SIMD
   // Column groups outside, rows inside: src is read in address order (at MPC size each stage's
-  // A and B are first touched here, from beyond L2, and a sequential read streams). Each 4×4
-  // block: the row pairs of columns (j, j+2) and (j+1, j+3) by 128-bit loads into the two halves
-  // (the insert takes any vector port, the cross-lane permute only the shuffle port), then one
-  // unpack per output row.
-  const __m256d zero = _mm256_setzero_pd();
+  // A and B are first touched here, from beyond L2, and a sequential read streams), one 4×4
+  // block at a time (transpose_block4).
   for (; j + 4 <= n; j += 4) {
     const double* s0 = src + j * lds;
     unsigned long long nz[4] = {0, 0, 0, 0};  // bit r: row r of column j + c is nonzero
@@ -370,23 +395,9 @@ inline void transpose(int m, int n, const double* src, int lds, double* dst, int
     for (; i + 4 <= m; i += 4) {
       const double* c0 = s0 + i;
       if (masks) {
-        KUAVO_UNROLL
-        for (int c = 0; c < 4; ++c) {
-          const int bits = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(c0 + c * lds), zero, _CMP_NEQ_UQ));
-          nz[c] |= static_cast<unsigned long long>(bits) << i;
-        }
+        mark_nonzero_rows4(c0, lds, i, nz);
       }
-      const __m256d h0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0)), _mm_loadu_pd(c0 + 2 * lds), 1);
-      const __m256d h1 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds)), _mm_loadu_pd(c0 + 3 * lds), 1);
-      const __m256d h2 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + 2)), _mm_loadu_pd(c0 + 2 * lds + 2), 1);
-      const __m256d h3 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds + 2)), _mm_loadu_pd(c0 + 3 * lds + 2), 1);
-      _mm256_storeu_pd(dst + j + i * ldd, _mm256_unpacklo_pd(h0, h1));
-      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_unpackhi_pd(h0, h1));
-      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_unpacklo_pd(h2, h3));
-      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_unpackhi_pd(h2, h3));
+      transpose_block4(c0, lds, dst + j + i * ldd, ldd);
     }
     for (; i < m; ++i) {
       for (int c = 0; c < 4; ++c) {
@@ -447,22 +458,8 @@ inline void transpose_declared(int m, int n, const double* src, int lds, double*
         continue;
       }
       const double* c0 = s0 + i;
-      KUAVO_UNROLL
-      for (int c = 0; c < 4; ++c) {
-        const int bits = _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(c0 + c * lds), zero, _CMP_NEQ_UQ));
-        nz[c] |= static_cast<unsigned long long>(bits) << i;
-      }
-      const __m256d h0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0)), _mm_loadu_pd(c0 + 2 * lds), 1);
-      const __m256d h1 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds)), _mm_loadu_pd(c0 + 3 * lds), 1);
-      const __m256d h2 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + 2)), _mm_loadu_pd(c0 + 2 * lds + 2), 1);
-      const __m256d h3 =
-          _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(c0 + lds + 2)), _mm_loadu_pd(c0 + 3 * lds + 2), 1);
-      _mm256_storeu_pd(dst + j + i * ldd, _mm256_unpacklo_pd(h0, h1));
-      _mm256_storeu_pd(dst + j + (i + 1) * ldd, _mm256_unpackhi_pd(h0, h1));
-      _mm256_storeu_pd(dst + j + (i + 2) * ldd, _mm256_unpacklo_pd(h2, h3));
-      _mm256_storeu_pd(dst + j + (i + 3) * ldd, _mm256_unpackhi_pd(h2, h3));
+      mark_nonzero_rows4(c0, lds, i, nz);
+      transpose_block4(c0, lds, dst + j + i * ldd, ldd);
     }
     const bool tail = (read >> (i / 4) & 1u) != 0;
     for (; i < m; ++i) {
