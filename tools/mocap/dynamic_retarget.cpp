@@ -280,11 +280,9 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     double accepted_violation = 0.0;
     while (it < cfg.max_sqp_iterations) {
       // The builds rewrite what they own; the terms below touch R's force block across
-      // corners and S, which they do not: cleared here.
-      for (int k = 0; k < T; ++k) {
-        ws->qp.stages[k].R.topLeftCorner<kForces, kForces>().setZero();
-        ws->qp.stages[k].S.setZero();
-      }
+      // corners, which they do not: cleared here. (Nothing writes S: mpc_init zeroes it once
+      // and declares it zero, OcpStage::s_zero, so the Riccati does not read it.)
+      for (int k = 0; k < T; ++k) ws->qp.stages[k].R.topLeftCorner<kForces, kForces>().setZero();
       // A touchdown inside the window holds the corner where the current iterate lands it.
       for (int k = 1; k <= T; ++k) {
         const planner::ContactFlags& now = window->knots[k].in_contact;
