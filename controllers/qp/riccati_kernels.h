@@ -719,6 +719,24 @@ inline void update_lane_sums4(double* y, __m256d c0, __m256d c1, __m256d c2, __m
   }
 }
 
+// c0…c3 += the 4 rows at a of four columns (lda apart) times xv, lane by lane; kMasked: only
+// the rows mask sets are loaded (a column's tail).
+template <bool kMasked>
+inline void fma_columns4(const double* a, int lda, __m256i mask, __m256d xv, __m256d& c0, __m256d& c1, __m256d& c2,
+                         __m256d& c3) {
+  const auto load = [mask](const double* p) {
+    if constexpr (kMasked) {
+      return _mm256_maskload_pd(p, mask);
+    } else {
+      return _mm256_loadu_pd(p);
+    }
+  };
+  c0 = _mm256_fmadd_pd(load(a), xv, c0);
+  c1 = _mm256_fmadd_pd(load(a + lda), xv, c1);
+  c2 = _mm256_fmadd_pd(load(a + 2 * lda), xv, c2);
+  c3 = _mm256_fmadd_pd(load(a + 3 * lda), xv, c3);
+}
+
 // The lane sum of one column accumulator.
 inline double lane_sum(__m256d c) {
   const __m128d h = _mm_add_pd(_mm256_castpd256_pd128(c), _mm256_extractf128_pd(c, 1));
@@ -738,17 +756,10 @@ inline void gemv_t(int m, int n, const double* A, int lda, const double* x, doub
     const double* a = A + j * lda;
     __m256d c0 = _mm256_setzero_pd(), c1 = _mm256_setzero_pd(), c2 = _mm256_setzero_pd(), c3 = _mm256_setzero_pd();
     for (int i = 0; i < m4; i += 4) {
-      const __m256d xv = _mm256_loadu_pd(x + i);
-      c0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), xv, c0);
-      c1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), xv, c1);
-      c2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), xv, c2);
-      c3 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), xv, c3);
+      fma_columns4<false>(a + i, lda, tail, _mm256_loadu_pd(x + i), c0, c1, c2, c3);
     }
     if (m4 < m) {
-      c0 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c0);
-      c1 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + lda, tail), x_tail, c1);
-      c2 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 2 * lda, tail), x_tail, c2);
-      c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
+      fma_columns4<true>(a + m4, lda, tail, x_tail, c0, c1, c2, c3);
     }
     update_lane_sums4<kUpdate>(y + j, c0, c1, c2, c3);
   }
@@ -788,16 +799,9 @@ inline void gemv_t_groups(int m, int n, const double* A, int lda, const double* 
       const int i = 4 * __builtin_ctz(g);
       g &= g - 1;
       if (i < m4) {
-        const __m256d xv = _mm256_loadu_pd(x + i);
-        c0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i), xv, c0);
-        c1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + lda), xv, c1);
-        c2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 2 * lda), xv, c2);
-        c3 = _mm256_fmadd_pd(_mm256_loadu_pd(a + i + 3 * lda), xv, c3);
+        fma_columns4<false>(a + i, lda, tail, _mm256_loadu_pd(x + i), c0, c1, c2, c3);
       } else {
-        c0 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4, tail), x_tail, c0);
-        c1 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + lda, tail), x_tail, c1);
-        c2 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 2 * lda, tail), x_tail, c2);
-        c3 = _mm256_fmadd_pd(_mm256_maskload_pd(a + m4 + 3 * lda, tail), x_tail, c3);
+        fma_columns4<true>(a + m4, lda, tail, x_tail, c0, c1, c2, c3);
       }
     }
     update_lane_sums4<kUpdate>(y + j, c0, c1, c2, c3);
