@@ -705,6 +705,74 @@ TEST(mocap_feasibility_repair, DeepCrouchIsRaisedToTheKneeBound) {
   RecordProperty("deepest_knee_rad", number(deepest));
 }
 
+// A lean of up to 0.55 rad (32°), forward and a little to the side, in double support:
+// beyond the base tilt bound (RepairConfig::max_base_tilt_rad). Checked from the frames' own
+// quaternions: no output frame tilts beyond the bound; where the human leaned beyond it the
+// pelvis leans by exactly the bound in the human's direction (the body z axis keeps its
+// horizontal direction: the least rotation back, not a different lean); frames within the
+// bound keep their orientation; one tilt entry
+// covers the frames beyond it. With the bound out of reach the lean is left as it is.
+TEST(mocap_feasibility_repair, DeepLeanIsLimitedToTheTiltBound) {
+  const int n = 200, a = 50, b = 150;
+  const Vec3 axis = Vec3(0.3, 0.95, 0.0).normalized();  // about this horizontal axis: forward, a little left
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.base_shift.z() = -0.1;  // the hips lower, so the legs reach under the lean
+    if (i > a && i < b) k.base_lean = 0.55 * std::sin(M_PI * (i - a) / (b - a)) * axis;
+    return k;
+  });
+  const auto tilt_of = [](const ConfigVector& q) {
+    const Eigen::Quaterniond qb(q[6], q[3], q[4], q[5]);
+    return std::acos(std::clamp(qb.normalized().toRotationMatrix()(2, 2), -1.0, 1.0));
+  };
+  const auto z_heading = [](const ConfigVector& q) {  // the body z axis's horizontal direction
+    const Vec3 z = Eigen::Quaterniond(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix().col(2);
+    return std::atan2(z.y(), z.x());
+  };
+  const RepairConfig cfg;
+  double before = 0.0;
+  for (const ConfigVector& q : m.q) before = std::max(before, tilt_of(q));
+  ASSERT_GT(before, cfg.max_base_tilt_rad + 0.1) << "precondition: the lean is beyond the bound";
+  const RepairedMotion r = repair(m);
+  expect_dancable(r, n);
+  SCOPED_TRACE(listing(r));
+  const Repair* tilt = first(r, RepairKind::kTilt);
+  ASSERT_NE(tilt, nullptr);
+  int first_over = -1, last_over = -1, over = 0;
+  double worst = 0.0, unchanged = 0.0;
+  for (int d = 0; d < n; ++d) {
+    const ConfigVector& in = m.q[d];
+    const ConfigVector& out = r.q[r.lead_frames + d];
+    const double t_in = tilt_of(in), t_out = tilt_of(out);
+    worst = std::max(worst, t_out);
+    ASSERT_LE(t_out, cfg.max_base_tilt_rad + 1e-9) << "frame " << d;
+    if (t_in > cfg.max_base_tilt_rad) {
+      if (first_over < 0) first_over = d;
+      last_over = d, ++over;
+      EXPECT_NEAR(t_out, cfg.max_base_tilt_rad, 1e-9) << "frame " << d;
+      EXPECT_NEAR(std::remainder(z_heading(out) - z_heading(in), 2.0 * M_PI), 0.0, 1e-9) << "frame " << d;
+    } else {
+      const Eigen::Quaterniond qi(in[6], in[3], in[4], in[5]), qo(out[6], out[3], out[4], out[5]);
+      unchanged = std::max(unchanged, qi.angularDistance(qo));
+    }
+  }
+  ASSERT_GT(over, 20);
+  EXPECT_LT(unchanged, 1e-9) << "frames within the bound keep their orientation";
+  EXPECT_LE(tilt->start_s, (r.lead_frames + first_over) / kRate_hz + 1e-9);
+  EXPECT_GE(tilt->end_s, (r.lead_frames + last_over + 1) / kRate_hz - 1e-9);
+  EXPECT_EQ(std::count_if(r.repairs.begin(), r.repairs.end(), [](const Repair& x) { return x.kind == RepairKind::kTilt; }), 1);
+  RecordProperty("lean_in_rad", number(before));
+  RecordProperty("lean_out_rad", number(worst));
+
+  RepairConfig off;
+  off.max_base_tilt_rad = M_PI;
+  const RepairedMotion unlimited = repair(m, {}, off);
+  EXPECT_FALSE(has(unlimited, RepairKind::kTilt));
+  double kept = 0.0;
+  for (int d = 0; d < n; ++d) kept = std::max(kept, tilt_of(unlimited.q[unlimited.lead_frames + d]));
+  EXPECT_NEAR(kept, before, 1e-9);
+}
+
 // A dip of 8 cm in 0.3 s in double support: 8.8 m/s² at its bottom, beyond the 0.5 g the
 // feet carry (RepairConfig::max_vertical_acceleration_m_s2). The repair smooths it until no
 // frame's second difference of the pelvis height is beyond the limit (checked here from the

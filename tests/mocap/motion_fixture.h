@@ -134,6 +134,7 @@ struct Keyframe {
   Vec3 base_shift = Vec3::Zero();  // added to the default base position
   double base_yaw = 0.0;
   Eigen::Matrix<double, 2 * model::kArmJoints, 1> arms = Eigen::Matrix<double, 2 * model::kArmJoints, 1>::Zero();
+  Vec3 base_lean = Vec3::Zero();  // rotation vector [rad] applied in the world frame after the yaw
 };
 
 // The frame by leg IK from guess; ik_error: the largest corner miss [m] (within joint limits).
@@ -142,7 +143,9 @@ inline ConfigVector frame_of(const Keyframe& k, const ConfigVector& guess, doubl
   ConfigVector q = guess;
   const Vec3 mid = 0.5 * (k.left.centre + k.right.centre);
   q.head<3>() = Vec3(mid.x(), mid.y(), 0.0) + rot_z(k.base_yaw) * st.base_from_mid + k.base_shift;
-  set_base_rotation(q, rot_z(k.base_yaw));
+  const double lean = k.base_lean.norm();
+  const Mat3 tilt = lean > 0.0 ? Eigen::AngleAxisd(lean, k.base_lean / lean).toRotationMatrix() : Mat3::Identity();
+  set_base_rotation(q, tilt * rot_z(k.base_yaw));
   q.segment<2 * model::kArmJoints>(7 + 2 * model::kLegJoints) =
       st.q.segment<2 * model::kArmJoints>(7 + 2 * model::kLegJoints) + k.arms;
   std::array<Vec3, kCorners> targets;
