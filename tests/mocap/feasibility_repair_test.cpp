@@ -710,8 +710,8 @@ TEST(mocap_feasibility_repair, DeepCrouchIsRaisedToTheKneeBound) {
 // quaternions: no output frame tilts beyond the bound; where the human leaned beyond it the
 // pelvis leans by exactly the bound in the human's direction (the body z axis keeps its
 // horizontal direction: the least rotation back, not a different lean); frames within the
-// bound keep their orientation; one tilt entry
-// covers the frames beyond it. With the bound out of reach the lean is left as it is.
+// bound keep their orientation; one tilt entry covers the frames beyond it. With the bound
+// out of reach the lean is left as it is.
 TEST(mocap_feasibility_repair, DeepLeanIsLimitedToTheTiltBound) {
   const int n = 200, a = 50, b = 150;
   const Vec3 axis = Vec3(0.3, 0.95, 0.0).normalized();  // about this horizontal axis: forward, a little left
