@@ -436,24 +436,20 @@ TEST(OcpQp, DeclaredDynamicsRowGroupsGiveTheSameSolutionBitForBit) {
     g->qp.ab_groups_declared = true;
     for (int j = 0; j < kNx; ++j) g->qp.a_groups[j] = a_groups(j);
     for (int j = 0; j < kNu; ++j) g->qp.b_groups[j] = b_groups(j);
-    for (int k = 0; k < T; ++k) {  // poison what no 4-column step declares
-      auto& s = g->qp.stages[k];
-      for (int j = 0; j < kNx; ++j) {
+    // Poison what no 4-column step declares: a column's rows outside the groups its step reads.
+    const auto poison = [&](auto& M, int cols, const auto& groups) {
+      for (int j = 0; j < cols; ++j) {
         const int step = j / 4 * 4;
-        unsigned read = a_groups(j);
-        if (step + 4 <= kNx) read = a_groups(step) | a_groups(step + 1) | a_groups(step + 2) | a_groups(step + 3);
+        unsigned read = groups(j);
+        if (step + 4 <= cols) read = groups(step) | groups(step + 1) | groups(step + 2) | groups(step + 3);
         for (int i = 0; i < kNx; ++i) {
-          if ((read >> (i / 4) & 1u) == 0) s.A(i, j) = nan;
+          if ((read >> (i / 4) & 1u) == 0) M(i, j) = nan;
         }
       }
-      for (int j = 0; j < kNu; ++j) {
-        const int step = j / 4 * 4;
-        unsigned read = b_groups(j);
-        if (step + 4 <= kNu) read = b_groups(step) | b_groups(step + 1) | b_groups(step + 2) | b_groups(step + 3);
-        for (int i = 0; i < kNx; ++i) {
-          if ((read >> (i / 4) & 1u) == 0) s.B(i, j) = nan;
-        }
-      }
+    };
+    for (int k = 0; k < T; ++k) {
+      poison(g->qp.stages[k].A, kNx, a_groups);
+      poison(g->qp.stages[k].B, kNu, b_groups);
     }
     expect_same_solution_bit_for_bit(*f, *g, T, n);
   }
