@@ -1,0 +1,307 @@
+#include "controllers/planner/recovery_step.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "controllers/dynamics/rigid_body.h"
+#include "controllers/finite.h"
+#include "controllers/planner/leg_ik.h"
+#include "controllers/planner/support_polygon.h"
+
+namespace kuavo::planner {
+namespace {
+
+constexpr double kGravity = 9.81;
+using Vec2 = Eigen::Vector2d;
+
+// 0 → 1 with zero slope at both ends (the swing foot leaves and lands at rest).
+double smooth(double s) {
+  s = std::clamp(s, 0.0, 1.0);
+  return s * s * (3.0 - 2.0 * s);
+}
+
+double fraction(hal::TimeNs t, hal::TimeNs a, hal::TimeNs b) {
+  if (b <= a) return t >= b ? 1.0 : 0.0;
+  return static_cast<double>(t - a) / static_cast<double>(b - a);
+}
+
+// The foot's displacement at time t, and the height its swing arc adds.
+Vec2 displacement_at(const FootDisplacement& d, hal::TimeNs t, double lift_height_m, double& lift_m) {
+  lift_m = 0.0;
+  if (!d.active) return Vec2::Zero();
+  Vec2 out = d.to;
+  if (t < d.land_ns) {
+    const double s = fraction(t, d.lift_ns, d.land_ns);
+    out = d.from + smooth(s) * (d.to - d.from);
+    // sin²: up and down at rest, apex mid-swing.
+    if (s > 0.0 && s < 1.0) lift_m = lift_height_m * std::sin(M_PI * s) * std::sin(M_PI * s);
+  }
+  if (d.return_known && t >= d.return_lift_ns) out *= 1.0 - smooth(fraction(t, d.return_lift_ns, d.return_land_ns));
+  return out;
+}
+
+bool in_recovery_swing(const FootDisplacement& d, hal::TimeNs t) { return d.active && t >= d.lift_ns && t < d.land_ns; }
+
+int motion_frame(const MotionPlan& motion, hal::TimeNs t) {
+  const double s = static_cast<double>(t - motion.start_ns) * 1e-9 * motion.rate_hz;
+  if (!(s > 0.0)) return 0;
+  return std::min(static_cast<int>(s), motion.frame_count - 1);
+}
+
+hal::TimeNs frame_time(const MotionPlan& motion, int i) {
+  return motion.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / motion.rate_hz * 1e9));
+}
+
+// The motion's next swing of `foot` after `after_ns`, searched up to `until_ns`: fills the
+// return interval once the lift-off is found (touchdown: the first frame back in contact,
+// or the search's end if the swing runs past it).
+void find_return(const MotionPlan& motion, int foot, hal::TimeNs after_ns, hal::TimeNs until_ns, FootDisplacement& d) {
+  if (d.return_known) return;
+  const int first = motion_frame(motion, after_ns);
+  const int last = motion_frame(motion, until_ns);
+  int lift = -1;
+  for (int i = first; i <= last; ++i) {
+    if (!motion.foot_contact[i][foot]) {
+      lift = i;
+      break;
+    }
+  }
+  if (lift < 0) return;
+  int land = lift;
+  while (land < motion.frame_count - 1 && !motion.foot_contact[land][foot]) ++land;
+  // Only commit once the touchdown is seen: a swing still running at the window's end
+  // is found again, complete, by a later call.
+  if (motion.foot_contact[land][foot]) {
+    d.return_known = true;
+    d.return_lift_ns = frame_time(motion, lift);
+    d.return_land_ns = frame_time(motion, land);
+  }
+}
+
+Vec2 foot_centre(const PlanKnot& knot, int foot) {
+  Vec2 c = Vec2::Zero();
+  for (int i = 0; i < kCornersPerFoot; ++i) c += knot.point_position_m.segment<2>(3 * (foot * kCornersPerFoot + i));
+  return c / kCornersPerFoot;
+}
+
+// Unit vector from the heel corners' midpoint to the toe corners' (corners 0, 1 toes; 2, 3 heels).
+Vec2 foot_forward(const PlanKnot& knot, int foot) {
+  const int c = foot * kCornersPerFoot;
+  const Vec2 toe = 0.5 * (knot.point_position_m.segment<2>(3 * c) + knot.point_position_m.segment<2>(3 * (c + 1)));
+  const Vec2 heel = 0.5 * (knot.point_position_m.segment<2>(3 * (c + 2)) + knot.point_position_m.segment<2>(3 * (c + 3)));
+  const Vec2 d = toe - heel;
+  return d.norm() > 1e-6 ? Vec2(d / d.norm()) : Vec2(1.0, 0.0);
+}
+
+bool foot_down(const PlanKnot& knot, int foot) {
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    if (!knot.in_contact[foot * kCornersPerFoot + i]) return false;
+  }
+  return true;
+}
+
+struct StepCandidate {
+  bool captures = false;
+  int swing = 0;
+  double margin_m = 0.0;  // of ξ at touchdown inside the support after the step
+  Vec2 current = Vec2::Zero(), step = Vec2::Zero();
+};
+
+// The step of foot `swing` (the other stands): the centre of pressure at the point of the
+// stance sole nearest ξ until touchdown, ξ propagated there, the sole centre overshoot_m
+// beyond it, inside the reach box and max_step_m; it captures if ξ at touchdown is inside
+// the support the step makes, by capture_margin_m.
+StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& st, const PlanKnot& m,
+                        const PlanKnot& k0, const std::array<Vec2, kNumPoints>& corners, const Vec2& xi,
+                        double omega, int swing) {
+  StepCandidate out;
+  out.swing = swing;
+  const int stance = 1 - swing;
+  std::array<Vec2, kCornersPerFoot> stance_corners;
+  for (int i = 0; i < kCornersPerFoot; ++i) stance_corners[i] = corners[stance * kCornersPerFoot + i];
+  const Polygon2<kCornersPerFoot> stance_sole = convex_hull<kCornersPerFoot>(stance_corners, kCornersPerFoot);
+  const Vec2 p = project_into(stance_sole, xi, 0.0);
+  const Vec2 xi_t = p + (xi - p) * std::exp(omega * (cfg.lift_delay_s + cfg.swing_s));
+  const Vec2 away = xi_t - p;
+  Vec2 target = xi_t + (away.norm() > 1e-9 ? Vec2(cfg.overshoot_m * away / away.norm()) : Vec2::Zero());
+
+  // Reach box in the stance foot's axes; the swing foot stays on its own side.
+  const Vec2 stance_centre = foot_centre(m, stance);
+  const Vec2 ahead = foot_forward(m, stance);
+  const Vec2 left(-ahead.y(), ahead.x());
+  const double side = swing == 0 ? 1.0 : -1.0;  // the left foot stands to the stance foot's left
+  const Vec2 r = target - stance_centre;
+  const double x = std::clamp(r.dot(ahead), -cfg.reach_behind_m, cfg.reach_ahead_m);
+  const double y = side * std::clamp(side * r.dot(left), cfg.min_width_m, cfg.max_width_m);
+  target = stance_centre + x * ahead + y * left;
+
+  // Displacement from where the motion (and an earlier recovery step) has the foot, bounded.
+  const FootDisplacement& d = st.foot[swing];
+  double unused = 0.0;
+  out.current = d.active ? displacement_at(d, k0.stamp_ns, 0.0, unused) : Vec2::Zero();
+  out.step = target - (foot_centre(k0, swing) + out.current);
+  if (out.step.norm() > cfg.max_step_m) out.step *= cfg.max_step_m / out.step.norm();
+
+  // The support after touchdown: the stance sole and the swing sole moved to its landing.
+  const Vec2 shift = foot_centre(k0, swing) + out.current + out.step - foot_centre(m, swing);
+  std::array<Vec2, kNumPoints> after = corners;
+  for (int i = 0; i < kCornersPerFoot; ++i) after[swing * kCornersPerFoot + i] += shift;
+  out.margin_m = signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
+  out.captures = out.margin_m >= cfg.capture_margin_m;
+  return out;
+}
+
+// Decides and starts a recovery step if the measured state calls for one.
+void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
+                   const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                   const PlanWindow& window) {
+  const PlanKnot& k0 = window.knots[0];
+  const hal::TimeNs now = k0.stamp_ns;
+  ContactFlags all{};
+  all.fill(true);
+  plan_knot_from_state(model, st.data, q, v, all, now, st.measured);
+  const PlanKnot& m = st.measured;
+
+  std::array<Vec2, kNumPoints> corners;
+  double sole_z = 0.0;
+  for (int c = 0; c < kNumPoints; ++c) {
+    corners[c] = m.point_position_m.segment<2>(3 * c);
+    sole_z += m.point_position_m[3 * c + 2] / kNumPoints;
+  }
+  const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(corners, kNumPoints);
+  const double h = std::max(m.com_position_m.z() - sole_z, cfg.min_pendulum_height_m);
+  const double omega = std::sqrt(kGravity / h);
+  const Vec2 xi = m.com_position_m.head<2>() + m.com_velocity_m_s.head<2>() / omega;
+  st.last_outside_m = -signed_margin(support, xi);
+
+  if (!st.started) {
+    st.started = true;
+    st.start_ns = now;
+  }
+  const bool settling = now - st.start_ns < static_cast<hal::TimeNs>(std::llround(cfg.settle_s * 1e9));
+  const bool swinging = (st.foot[0].active && now < st.foot[0].land_ns) || (st.foot[1].active && now < st.foot[1].land_ns);
+  // A non-finite state fails the comparison below: no step from it (the MPC refuses it too).
+  if (settling || swinging || !(st.last_outside_m > cfg.trigger_outside_m)) {
+    st.outside_calls = 0;
+    return;
+  }
+  if (++st.outside_calls < cfg.trigger_calls) return;
+
+  // The motion must keep both feet down until the step has landed and settled.
+  const hal::TimeNs lift = now + static_cast<hal::TimeNs>(std::llround(cfg.lift_delay_s * 1e9));
+  const hal::TimeNs land = lift + static_cast<hal::TimeNs>(std::llround(cfg.swing_s * 1e9));
+  const hal::TimeNs quiet_end = land + static_cast<hal::TimeNs>(std::llround(cfg.quiet_s * 1e9));
+  if (window.count < 1 || window.knots[window.count - 1].stamp_ns < quiet_end) return;
+  for (int k = 0; k < window.count && window.knots[k].stamp_ns <= quiet_end; ++k) {
+    if (!foot_down(window.knots[k], 0) || !foot_down(window.knots[k], 1)) return;
+  }
+
+  // Each foot as the swing foot: where it must land, and whether that captures.
+  StepCandidate best;
+  for (int swing = 0; swing < 2; ++swing) {
+    const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing);
+    if (c.captures && (!best.captures || c.margin_m > best.margin_m)) best = c;
+  }
+  if (!best.captures) {
+    ++st.declined;
+    return;
+  }
+  FootDisplacement& d = st.foot[best.swing];
+  d.active = true;
+  d.from = best.current;
+  d.to = best.current + best.step;
+  d.lift_ns = lift;
+  d.land_ns = land;
+  d.return_known = false;
+  st.outside_calls = 0;
+  ++st.steps;
+}
+
+}  // namespace
+
+const char* recovery_step_validate(const RecoveryStepConfig& c) {
+  const double values[] = {c.trigger_outside_m, c.lift_delay_s, c.swing_s,  c.lift_height_m, c.quiet_s,
+                           c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
+                           c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m};
+  for (double x : values) {
+    if (!std::isfinite(x)) return "recovery step: every value must be finite";
+  }
+  if (c.trigger_calls < 1) return "recovery step: trigger_calls must be at least 1";
+  if (c.lift_delay_s < 0.0 || c.swing_s < 0.1 || c.quiet_s < 0.0) return "recovery step: lift_delay_s >= 0, swing_s >= 0.1, quiet_s >= 0";
+  if (c.lift_height_m < 0.0 || c.lift_height_m > 0.15) return "recovery step: lift_height_m must be in [0, 0.15]";
+  if (c.max_step_m <= 0.0 || c.max_step_m > 0.5) return "recovery step: max_step_m must be in (0, 0.5]";
+  if (c.min_width_m <= 0.0 || c.max_width_m < c.min_width_m) return "recovery step: need 0 < min_width_m <= max_width_m";
+  if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
+  if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
+  if (c.min_pendulum_height_m <= 0.0) return "recovery step: min_pendulum_height_m must be > 0";
+  return nullptr;
+}
+
+void recovery_step_reset(RecoveryStepState& state) {
+  state.outside_calls = 0;
+  state.started = false;
+  state.foot = {};
+  state.steps = 0;
+  state.declined = 0;
+  state.last_outside_m = 0.0;
+}
+
+void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
+                      const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                      PlanWindow& window) {
+  if (!cfg.enabled || window.count < 2 || motion.frame_count < 1) return;
+  const hal::TimeNs now = window.knots[0].stamp_ns;
+  const hal::TimeNs end = window.knots[window.count - 1].stamp_ns;
+
+  // Displacements whose return swing is over are done.
+  for (FootDisplacement& d : st.foot) {
+    if (d.active && d.return_known && now >= d.return_land_ns) d = FootDisplacement{};
+  }
+  maybe_trigger(model, cfg, st, q, v, window);
+  for (int foot = 0; foot < 2; ++foot) {
+    FootDisplacement& d = st.foot[foot];
+    if (d.active && end > d.land_ns) find_return(motion, foot, std::max(now, d.land_ns), end, d);
+  }
+  if (!st.foot[0].active && !st.foot[1].active) return;
+
+  // Re-solve every knot a displacement touches.
+  const double dt = window.dt_s;
+  for (int k = 0; k < window.count; ++k) {
+    PlanKnot& knot = window.knots[k];
+    st.q[k] = knot.q;
+    st.changed[k] = false;
+    std::array<Vec3, kNumPoints> targets;
+    for (int c = 0; c < kNumPoints; ++c) targets[c] = knot.point_position_m.segment<3>(3 * c);
+    for (int foot = 0; foot < 2; ++foot) {
+      double lift = 0.0;
+      const Vec2 d = displacement_at(st.foot[foot], knot.stamp_ns, cfg.lift_height_m, lift);
+      if (in_recovery_swing(st.foot[foot], knot.stamp_ns)) {
+        for (int i = 0; i < kCornersPerFoot; ++i) knot.in_contact[foot * kCornersPerFoot + i] = false;
+        st.changed[k] = true;
+      }
+      if (d.squaredNorm() == 0.0 && lift == 0.0) continue;
+      st.changed[k] = true;
+      for (int i = 0; i < kCornersPerFoot; ++i) {
+        Vec3& t = targets[foot * kCornersPerFoot + i];
+        t.head<2>() += d;
+        t.z() += lift;
+      }
+    }
+    if (st.changed[k]) solve_leg_ik(model, st.data, targets, st.q[k]);
+  }
+  // Leg velocities: the motion's plus the rate of the re-solve's change (central differences).
+  for (int k = 0; k < window.count; ++k) {
+    st.leg_delta[k] = st.q[k].segment<12>(7 + model::kLeftLegFirst) - window.knots[k].q.segment<12>(7 + model::kLeftLegFirst);
+  }
+  for (int k = 0; k < window.count; ++k) {
+    const int a = std::max(k - 1, 0), b = std::min(k + 1, window.count - 1);
+    if (!st.changed[a] && !st.changed[k] && !st.changed[b]) continue;
+    PlanKnot& knot = window.knots[k];
+    dynamics::VelocityVector vk = knot.v;
+    vk.segment<12>(6 + model::kLeftLegFirst) += (st.leg_delta[b] - st.leg_delta[a]) / (dt * (b - a));
+    const ContactFlags flags = knot.in_contact;
+    plan_knot_from_state(model, st.data, st.q[k], vk, flags, knot.stamp_ns, knot);
+  }
+}
+
+}  // namespace kuavo::planner

@@ -1,0 +1,106 @@
+// Recovery step: a step the motion did not plan, taken when the robot's capture point leaves
+// the support polygon while the motion keeps both feet down (issue 20).
+//
+// The online MPC adapts where a planned swing foot lands, but it never adds a step: in a
+// long double support a push or a drift is caught by the ankles alone, and once the capture
+// point ξ = c + ċ/ω (linear inverted pendulum, ω = √(g/h)) is outside the support polygon
+// no centre of pressure inside it can bring the CoM to rest. 52 of 57 show-campaign falls
+// (stop 34) came in double support, 48 of them in one of at least 1 s.
+//
+// What it does, once per planner call, on the window the MPC is about to track:
+//   trigger  the measured ξ is more than trigger_outside_m outside the convex hull of the
+//            soles on trigger_calls calls in a row (not within settle_s of a reset), the
+//            motion keeps both feet down from now until the step has landed plus quiet_s,
+//            and no recovery swing is under way.
+//   choose   each foot in turn as the swing foot: the centre of pressure is taken at the
+//            point of the other (stance) sole nearest ξ, ξ is propagated to touchdown
+//            (ξ_T = p + (ξ − p)e^{ωT}), and the swing sole's centre goes overshoot_m beyond
+//            ξ_T, inside the reach box around the stance foot (its own axes: ahead/behind,
+//            and beside it on the swing foot's side) and at most max_step_m from where the
+//            motion has it. A candidate captures if ξ_T is capture_margin_m inside the
+//            support it makes; the one with the larger margin is taken, and if neither
+//            captures no step is taken (a sideways exit, or a wide stance whose single
+//            support would throw ξ farther out: the ankles keep trying, as before).
+//   rewrite  knots in [lift, land): the swing foot is out of contact, its corners move
+//            to the new place on a smooth profile with a lift_height_m arc; from land on,
+//            the foot stays displaced. The legs are re-solved on the sole corners
+//            (leg_ik.h) and their velocities follow by differences of the displacement, so
+//            the MPC's joint reference and its swing and stance rows agree.
+//   return   the displacement is held until the motion itself lifts that foot: over the
+//            motion's own swing it blends back to zero, and the foot lands where the
+//            motion has it.
+//
+// Real-time: fixed-size state, no allocation; per call at most one leg solve per window
+// knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "controllers/planner/motion_plan.h"
+
+namespace kuavo::planner {
+
+struct RecoveryStepConfig {
+  bool enabled = true;
+  double trigger_outside_m = 0.01;  // ξ this far outside the support polygon …
+  int trigger_calls = 2;            // … on this many planner calls in a row
+  double lift_delay_s = 0.06;       // trigger → lift-off: the load moves to the stance foot
+  double swing_s = 0.40;            // lift-off → touchdown (Leju's gait: 0.4–0.45 s a step)
+  double lift_height_m = 0.05;      // swing apex above the motion's sole height
+  double quiet_s = 0.20;            // the motion keeps both feet down this long after touchdown
+  double overshoot_m = 0.04;        // sole centre beyond the predicted capture point
+  // A step is taken only if ξ at touchdown lies this far inside the support it makes (the
+  // stance sole and the swing sole at its landing); otherwise the ankles keep trying.
+  double capture_margin_m = 0.02;
+  double max_step_m = 0.30;         // displacement bound of one recovery step
+  // Reach box of the swing sole's centre in the stance foot's axes (x ahead, y to the swing
+  // side). Lateral minimum: the soles are 0.10 m wide, the standing feet 0.22 m apart.
+  double reach_ahead_m = 0.30;
+  double reach_behind_m = 0.30;
+  double min_width_m = 0.16;
+  double max_width_m = 0.40;
+  double min_pendulum_height_m = 0.4;  // floor for h in ω = √(g/h)
+  // No trigger this long after a reset: the estimator's velocity settles after start-up
+  // (the show set's biased IMU on carpet: 0.58 m/s error at 26 ms, under 0.1 m/s by 0.1 s).
+  double settle_s = 0.5;
+};
+
+// nullptr if usable, else what is wrong. Load time.
+const char* recovery_step_validate(const RecoveryStepConfig& config);
+
+// One foot's displacement from the motion: d(t) = from + s(t)·(to − from) during the
+// recovery swing [lift, land) (s smooth 0 → 1), `to` after it, and back to 0 over the
+// motion's own next swing of that foot [return_lift, return_land) once it is known.
+struct FootDisplacement {
+  bool active = false;
+  Eigen::Vector2d from = Eigen::Vector2d::Zero(), to = Eigen::Vector2d::Zero();
+  hal::TimeNs lift_ns = 0, land_ns = 0;
+  bool return_known = false;
+  hal::TimeNs return_lift_ns = 0, return_land_ns = 0;
+};
+
+struct RecoveryStepState {
+  int outside_calls = 0;
+  bool started = false;
+  hal::TimeNs start_ns = 0;                // the first call after the reset
+  std::array<FootDisplacement, 2> foot{};  // [left, right]
+  std::uint64_t steps = 0;                 // recovery steps taken since the reset
+  std::uint64_t declined = 0;              // triggers where no step would have captured
+  double last_outside_m = 0.0;             // ξ's distance outside the support at the last call (< 0 inside)
+  dynamics::Data data;                     // scratch
+  PlanKnot measured;                       // scratch: the measured state as a knot
+  std::array<dynamics::ConfigVector, kMaxWindowKnots> q{};  // scratch: re-solved knots
+  std::array<Eigen::Matrix<double, 12, 1>, kMaxWindowKnots> leg_delta{};  // scratch: re-solved − motion legs
+  std::array<bool, kMaxWindowKnots> changed{};
+};
+
+void recovery_step_reset(RecoveryStepState& state);
+
+// q, v: the measured state at window.knots[0]. motion: what the window was sampled from
+// (the motion's next swings of a displaced foot). Rewrites window in place. Real-time safe.
+void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& config, RecoveryStepState& state,
+                      const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                      PlanWindow& window);
+
+}  // namespace kuavo::planner

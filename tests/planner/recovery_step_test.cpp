@@ -1,0 +1,309 @@
+// The recovery step on a standing robot whose measured CoM velocity puts its capture point
+// outside the feet. Oracles: the closed-form capture point of the linear inverted pendulum
+// (ξ = c + ċ/ω, ξ(T) = p + (ξ − p)e^{ωT}), the sole corners by forward kinematics of the
+// rewritten knots (not the knots' own corner fields), and finite differences of those
+// corners for their velocities.
+#include "controllers/planner/recovery_step.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "controllers/planner/support_polygon.h"
+#include "tests/support/alloc_trap.h"
+#include "tests/support/test_robot.h"
+
+namespace kuavo::planner {
+namespace {
+
+using kuavo::test::s45_robot;
+using kuavo::test::standing_configuration;
+using Vec2 = Eigen::Vector2d;
+
+constexpr double kDt = 0.02;
+constexpr int kKnots = 61;  // the MPC's 1.2 s horizon plus its terminal knot
+constexpr hal::TimeNs kMs = 1'000'000;
+
+// Standing still for 6 s at 100 Hz, both feet down, except where the test lifts one.
+std::unique_ptr<MotionPlan> standing_motion() {
+  auto m = std::make_unique<MotionPlan>();
+  m->rate_hz = 100.0;
+  m->frame_count = 600;
+  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
+  EXPECT_EQ(motion_plan_finish(*m), nullptr);
+  return m;
+}
+
+void lift_in_motion(MotionPlan& m, int foot, double from_s, double to_s) {
+  for (int i = static_cast<int>(std::lround(from_s * 100.0)); i < static_cast<int>(std::lround(to_s * 100.0)); ++i) {
+    m.foot_contact[i][foot] = false;
+  }
+}
+
+struct Standing {
+  std::array<Vec3, kNumPoints> corner;  // by forward kinematics
+  Vec3 com;
+  double omega;
+};
+
+Standing standing_geometry() {
+  static dynamics::Data data;
+  const dynamics::ConfigVector q = standing_configuration();
+  dynamics::compute_all_terms(s45_robot(), data, q, dynamics::VelocityVector::Zero());
+  Standing s;
+  double sole_z = 0.0;
+  for (int c = 0; c < kNumPoints; ++c) {
+    s.corner[c] = dynamics::frame_position(s45_robot(), data, c);
+    sole_z += s.corner[c].z() / kNumPoints;
+  }
+  s.com = data.com_m;
+  s.omega = std::sqrt(model::kGravity_m_s2 / (s.com.z() - sole_z));
+  return s;
+}
+
+// The whole robot moving at `velocity` (world, horizontal), joints still: ċ = velocity.
+dynamics::VelocityVector translating(const Vec2& velocity) {
+  dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  v.head<2>() = velocity;  // base axes = world axes for the upright standing base
+  return v;
+}
+
+struct Fixture {
+  std::unique_ptr<MotionPlan> motion = standing_motion();
+  std::unique_ptr<RecoveryStepState> state = std::make_unique<RecoveryStepState>();
+  std::unique_ptr<PlanWindow> window = std::make_unique<PlanWindow>();
+  std::unique_ptr<PlanWindow> untouched = std::make_unique<PlanWindow>();
+  dynamics::Data data;
+  RecoveryStepConfig config;
+  Fixture() {
+    config.settle_s = 0.0;
+    recovery_step_reset(*state);
+  }
+  // One planner call at t (s) with the robot standing and moving at `velocity`.
+  void call(double t, const Vec2& velocity) {
+    const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
+    motion_plan_window_rt(s45_robot(), data, *motion, t_ns, kDt, kKnots, *window);
+    *untouched = *window;
+    recovery_step_rt(s45_robot(), config, *state, *motion, standing_configuration(), translating(velocity), *window);
+  }
+  bool window_unchanged() const {
+    for (int k = 0; k < kKnots; ++k) {
+      const PlanKnot &a = window->knots[k], &b = untouched->knots[k];
+      if (a.q != b.q || a.v != b.v || a.in_contact != b.in_contact || a.point_position_m != b.point_position_m) return false;
+    }
+    return true;
+  }
+};
+
+// Sole corners of a knot by forward kinematics of its q.
+std::array<Vec3, kNumPoints> corners_of(const PlanKnot& knot) {
+  static dynamics::Data data;
+  dynamics::forward_kinematics(s45_robot(), data, knot.q);
+  std::array<Vec3, kNumPoints> out;
+  for (int c = 0; c < kNumPoints; ++c) out[c] = dynamics::frame_position(s45_robot(), data, c);
+  return out;
+}
+
+bool foot_in_contact(const PlanKnot& k, int foot) {
+  bool all = true, any = false;
+  for (int i = 0; i < kCornersPerFoot; ++i) all = all && k.in_contact[foot * kCornersPerFoot + i], any = any || k.in_contact[foot * kCornersPerFoot + i];
+  EXPECT_EQ(all, any) << "a foot's corners must share one flag";
+  return all;
+}
+
+TEST(RecoveryStep, StandingStillChangesNothing) {
+  Fixture f;
+  for (int i = 0; i < 50; ++i) {
+    f.call(1.0 + kDt * i, Vec2::Zero());
+    ASSERT_TRUE(f.window_unchanged()) << "call " << i;
+  }
+  EXPECT_EQ(f.state->steps, 0u);
+  EXPECT_LT(f.state->last_outside_m, -0.05);  // ξ = c, well inside
+}
+
+// ξ 4 cm behind the heels: the ankles cannot stop the CoM, a step back does.
+TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
+  Fixture f;
+  const Standing s = standing_geometry();
+  double heel_x = 1e9;
+  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
+  const double xi_x = heel_x - 0.04;
+  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+
+  f.call(1.0, velocity);
+  EXPECT_EQ(f.state->steps, 0u) << "one call outside is not yet a trigger";
+  EXPECT_TRUE(f.window_unchanged());
+  EXPECT_NEAR(f.state->last_outside_m, 0.04, 2e-3);  // the pendulum's ξ, measured by the step's own polygon
+
+  {
+    kuavo::test::AllocTrap trap;
+    f.call(1.0 + kDt, velocity);
+    EXPECT_EQ(trap.count(), 0u);
+  }
+  ASSERT_EQ(f.state->steps, 1u);
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  ASSERT_TRUE(f.state->foot[swing].active);
+  ASSERT_FALSE(f.state->foot[1 - swing].active);
+  const int stance = 1 - swing;
+
+  // Contact: the swing foot is up on [lift, land) and nowhere else; the stance foot stays down.
+  const hal::TimeNs now = f.window->knots[0].stamp_ns;
+  const hal::TimeNs lift = now + static_cast<hal::TimeNs>(std::llround(f.config.lift_delay_s * 1e9));
+  const hal::TimeNs land = lift + static_cast<hal::TimeNs>(std::llround(f.config.swing_s * 1e9));
+  int up = 0;
+  for (int k = 0; k < kKnots; ++k) {
+    const PlanKnot& knot = f.window->knots[k];
+    const bool in_swing = knot.stamp_ns >= lift && knot.stamp_ns < land;
+    EXPECT_EQ(foot_in_contact(knot, swing), !in_swing) << k;
+    EXPECT_TRUE(foot_in_contact(knot, stance)) << k;
+    up += in_swing ? 1 : 0;
+  }
+  EXPECT_EQ(up, static_cast<int>(std::lround(f.config.swing_s / kDt)));
+
+  // Every knot's legs reach their corners: the stance foot where it stands, the swing foot
+  // on its arc, then at its new place (forward kinematics of the rewritten q).
+  const PlanKnot& last = f.window->knots[kKnots - 1];
+  const auto landed = corners_of(last);
+  Vec2 shift = Vec2::Zero();
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = swing * kCornersPerFoot + i;
+    shift += (landed[c] - s.corner[c]).head<2>() / kCornersPerFoot;
+    EXPECT_NEAR(landed[c].z(), s.corner[c].z(), 1e-3) << "the landed sole is on the ground";
+  }
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = stance * kCornersPerFoot + i;
+    for (int k = 0; k < kKnots; ++k) EXPECT_LT((corners_of(f.window->knots[k])[c] - s.corner[c]).norm(), 1e-3) << k;
+  }
+  EXPECT_LT(shift.x(), -0.05) << "the foot steps back";
+  EXPECT_LE(shift.norm(), f.config.max_step_m + 1e-9);
+
+  // Capture: ξ at touchdown (CoP at the stance heel until then) is inside the new support.
+  Vec2 p(heel_x, 0.0);
+  double y_lo = 1e9, y_hi = -1e9;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    y_lo = std::min(y_lo, s.corner[stance * kCornersPerFoot + i].y());
+    y_hi = std::max(y_hi, s.corner[stance * kCornersPerFoot + i].y());
+  }
+  p.y() = std::clamp(s.com.y(), y_lo, y_hi);
+  const Vec2 xi(xi_x, s.com.y());
+  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + f.config.swing_s));
+  std::array<Vec2, kNumPoints> after;
+  for (int c = 0; c < kNumPoints; ++c) after[c] = landed[c].head<2>();
+  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 1e-3);
+  // … which the feet as they stood do not hold.
+  std::array<Vec2, kNumPoints> before;
+  for (int c = 0; c < kNumPoints; ++c) before[c] = s.corner[c].head<2>();
+  EXPECT_LT(signed_margin(convex_hull<kNumPoints>(before, kNumPoints), xi_t), -0.1);
+
+  // The arc: mid-swing the sole is lift_height_m up; corner velocities are the corners' rates.
+  const int mid = static_cast<int>(std::lround((f.config.lift_delay_s + 0.5 * f.config.swing_s) / kDt));
+  const auto apex = corners_of(f.window->knots[mid]);
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = swing * kCornersPerFoot + i;
+    EXPECT_NEAR(apex[c].z() - s.corner[c].z(), f.config.lift_height_m, 2e-3);
+  }
+  double peak = 0.0;
+  for (int k = 1; k + 1 < kKnots; ++k) {
+    const auto a = corners_of(f.window->knots[k - 1]), b = corners_of(f.window->knots[k + 1]);
+    for (int i = 0; i < kCornersPerFoot; ++i) {
+      const int c = swing * kCornersPerFoot + i;
+      const Vec3 rate = (b[c] - a[c]) / (2.0 * kDt);
+      peak = std::max(peak, rate.norm());
+      EXPECT_LT((f.window->knots[k].point_velocity_m_s.segment<3>(3 * c) - rate).norm(), 0.03) << k;
+    }
+  }
+  EXPECT_GT(peak, 0.3) << "the swing foot moves";
+
+  // No second step while this one swings, however far out ξ stays.
+  for (int i = 2; i < 10; ++i) f.call(1.0 + kDt * i, velocity);
+  EXPECT_EQ(f.state->steps, 1u);
+}
+
+// ξ 4 cm beside the left foot: the right foot cannot land beyond it (it stays on its own
+// side) and standing on the right foot throws ξ farther out: nothing captures, no step.
+TEST(RecoveryStep, SidewaysBeyondReachIsDeclined) {
+  Fixture f;
+  const Standing s = standing_geometry();
+  double outer_y = -1e9;
+  for (const Vec3& c : s.corner) outer_y = std::max(outer_y, c.y());
+  const Vec2 velocity(0.0, (outer_y + 0.04 - s.com.y()) * s.omega);
+  for (int i = 0; i < 5; ++i) {
+    f.call(1.0 + kDt * i, velocity);
+    EXPECT_TRUE(f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(f.state->steps, 0u);
+  EXPECT_GT(f.state->declined, 0u);
+}
+
+// The motion lifts a foot 0.3 s from now: the step would overlap it, so the MPC's own
+// touchdown adaptation is left to handle it.
+TEST(RecoveryStep, NoStepWhenTheMotionStepsSoon) {
+  Fixture f;
+  lift_in_motion(*f.motion, kRightFoot, 1.34, 1.74);
+  const Standing s = standing_geometry();
+  double heel_x = 1e9;
+  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
+  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  for (int i = 0; i < 3; ++i) {
+    f.call(1.0 + kDt * i, velocity);
+    EXPECT_TRUE(f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(f.state->steps, 0u);
+}
+
+// After the step the foot stays displaced until the motion lifts it; over that swing it
+// returns, and it lands where the motion has it.
+TEST(RecoveryStep, TheDisplacedFootReturnsOverTheMotionsNextSwing) {
+  Fixture f;
+  const Standing s = standing_geometry();
+  double heel_x = 1e9;
+  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
+  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  f.call(1.0, velocity);
+  f.call(1.0 + kDt, velocity);
+  ASSERT_EQ(f.state->steps, 1u);
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  lift_in_motion(*f.motion, swing, 3.0, 3.4);
+
+  // At 2.5 s the window (to 3.7 s) holds the whole return swing.
+  f.call(2.5, Vec2::Zero());
+  EXPECT_EQ(f.state->steps, 1u);
+  for (int k = 0; k < kKnots; ++k) {
+    const PlanKnot& knot = f.window->knots[k];
+    const double t = 2.5 + kDt * k;
+    const auto c = corners_of(knot);
+    Vec2 offset = Vec2::Zero();
+    for (int i = 0; i < kCornersPerFoot; ++i) offset += (c[swing * kCornersPerFoot + i] - s.corner[swing * kCornersPerFoot + i]).head<2>() / kCornersPerFoot;
+    if (t < 2.999) {
+      EXPECT_LT(offset.x(), -0.05) << t << ": still displaced";
+    }
+    if (t > 3.401) {
+      EXPECT_LT(offset.norm(), 1e-3) << t << ": back where the motion has it";
+    }
+    EXPECT_EQ(foot_in_contact(knot, swing), !(t > 2.999 && t < 3.399)) << t;
+  }
+  // Once the return swing has landed, the displacement is forgotten.
+  f.call(3.5, Vec2::Zero());
+  EXPECT_FALSE(f.state->foot[swing].active);
+  EXPECT_TRUE(f.window_unchanged());
+}
+
+TEST(RecoveryStep, ConfigValidation) {
+  EXPECT_EQ(recovery_step_validate(RecoveryStepConfig{}), nullptr);
+  RecoveryStepConfig c;
+  c.swing_s = 0.05;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.max_width_m = 0.1;  // below min_width_m
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.trigger_outside_m = std::nan("");
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.trigger_calls = 0;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+}
+
+}  // namespace
+}  // namespace kuavo::planner
