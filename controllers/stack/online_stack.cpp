@@ -30,6 +30,7 @@ const char* stack_validate_config(const StackConfig& config) {
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
     if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
+    if (const char* why = planner::recovery_step_validate(config.recovery)) return why;
   }
   return wbc::wbc_validate_config(config.wbc);
 }
@@ -90,6 +91,7 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
   if (config.planner == PlannerKind::kMpc) {
     const int stages = mpc::mpc_num_stages(config.mpc);
     planner::motion_plan_window_rt(model, ws.data, motion, t_state_ns, config.mpc.dt_s, stages + 1, ws.window);
+    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window);
     ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
       out.stamp_ns = ws.mpc_plan.stamp_ns;
@@ -124,6 +126,7 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
     mpc::mpc_init(model, config.mpc, planner_ws.mpc);
     planner_ws.mpc_failures = 0;
     planner_ws.plan_positions_on_a_stop = 0;
+    planner::recovery_step_reset(planner_ws.recovery);
   }
   control.started = false;
   return true;
@@ -157,7 +160,10 @@ bool stack_begin_rt(const model::Model& model, const StackConfig& config, Contro
 }
 
 void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws) {
-  if (config.planner == PlannerKind::kMpc) mpc::mpc_reset(ws.mpc);
+  if (config.planner == PlannerKind::kMpc) {
+    mpc::mpc_reset(ws.mpc);
+    planner::recovery_step_reset(ws.recovery);
+  }
 }
 
 void stack_apply_plan_rt(ControlWorkspace& ws, const planner::ReferencePlan& plan) {

@@ -18,6 +18,7 @@
 
 #include "controllers/estimator/estimator.h"
 #include "controllers/mpc/mpc.h"
+#include "controllers/planner/recovery_step.h"
 #include "controllers/planner/reference_plan.h"
 #include "controllers/wbc/wbc.h"
 
@@ -50,6 +51,9 @@ struct StackConfig {
   double plan_blend_s = 0.02;
   wbc::WbcConfig wbc{};
   mpc::MpcConfig mpc{};
+  // MPC planner only: a step the motion did not plan when the capture point leaves the
+  // support in double support (recovery_step.h).
+  planner::RecoveryStepConfig recovery{};
   estimator::EstimatorConfig estimator = dance_estimator_config();
 
   // Leju's IMU low-pass corners (gyro 20 Hz, accelerometer 12 Hz) lag a dancing robot:
@@ -107,6 +111,7 @@ struct PlannerWorkspace {
   // motion (perfume's kick: the swing ankle's knots > 0.05 rad past, which the firmware
   // refuses as garbage); the plan handed to the WBC holds the hard limits.
   std::uint64_t plan_positions_on_a_stop = 0;
+  planner::RecoveryStepState recovery;  // its count: recovery.steps
 };
 
 // The state the control tick runs on: the estimator's, or (simulation only, for

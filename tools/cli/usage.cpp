@@ -47,7 +47,7 @@ constexpr CommandHelp kHelp[] = {
      "               [--engine simbody|mujoco|both]   (mujoco: Leju's MJCF and MuJoCo's contact; floor only;\n"
      "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
-     "               [--horizon SECONDS] [--plan-latency-ms MS|measured]\n"
+     "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
      "               --log run.csv --summary run.json [--quiet]\n"},
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
