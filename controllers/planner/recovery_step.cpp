@@ -244,6 +244,8 @@ void recovery_step_reset(RecoveryStepState& state) {
   state.steps = 0;
   state.declined = 0;
   state.last_outside_m = 0.0;
+  state.cache_count = 0;
+  state.cache_valid = {};
 }
 
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
@@ -264,18 +266,28 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   }
   if (!st.foot[0].active && !st.foot[1].active) return;
 
-  // Re-solve every knot a displacement touches.
+  // Re-solve every knot a displacement touches (or take it from the previous call's).
   const double dt = window.dt_s;
+  const int old_count = st.cache_count;
+  const hal::TimeNs step_ns = static_cast<hal::TimeNs>(std::llround(dt * 1e9));
+  const hal::TimeNs shift_ns = old_count > 0 ? now - st.cache[0].stamp_ns : -1;
+  const int shift = shift_ns >= 0 && step_ns > 0 && shift_ns % step_ns == 0 ? static_cast<int>(shift_ns / step_ns) : -1;
   for (int k = 0; k < window.count; ++k) {
     PlanKnot& knot = window.knots[k];
+    RecoveryStepState::CachedKnot& key = st.key;  // scratch (a PlanKnot inside: not on the stack)
+    key.stamp_ns = knot.stamp_ns;
     st.q[k] = knot.q;
     st.changed[k] = false;
+    st.hit[k] = -1;
     std::array<Vec3, kNumPoints> targets;
     for (int c = 0; c < kNumPoints; ++c) targets[c] = knot.point_position_m.segment<3>(3 * c);
     for (int foot = 0; foot < 2; ++foot) {
       double lift = 0.0;
       const Vec2 d = displacement_at(st.foot[foot], knot.stamp_ns, cfg.lift_height_m, lift);
-      if (in_recovery_swing(st.foot[foot], knot.stamp_ns)) {
+      key.d[foot] = d;
+      key.lift[foot] = lift;
+      key.swing[foot] = in_recovery_swing(st.foot[foot], knot.stamp_ns);
+      if (key.swing[foot]) {
         for (int i = 0; i < kCornersPerFoot; ++i) knot.in_contact[foot * kCornersPerFoot + i] = false;
         st.changed[k] = true;
       }
@@ -287,7 +299,26 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
         t.z() += lift;
       }
     }
-    if (st.changed[k]) solve_leg_ik(model, st.data, targets, st.q[k]);
+    // Entry j = k + shift is read before this call overwrites it (entries ≤ k are written).
+    const int j = shift >= 0 ? k + shift : -1;
+    if (st.changed[k] && j >= 0 && j < old_count && st.cache_valid[j]) {
+      const RecoveryStepState::CachedKnot& e = st.cache[j];
+      if (e.stamp_ns == key.stamp_ns && e.motion_q == knot.q && e.motion_v == knot.v && e.d == key.d &&
+          e.lift == key.lift && e.swing == key.swing) {
+        st.q[k] = e.q;
+        st.hit[k] = j;
+      }
+    }
+    if (st.changed[k] && st.hit[k] < 0) solve_leg_ik(model, st.data, targets, st.q[k]);
+    RecoveryStepState::CachedKnot& entry = st.cache[k];  // its .out is written below
+    entry.stamp_ns = key.stamp_ns;
+    entry.motion_q = knot.q;
+    entry.motion_v = knot.v;
+    entry.d = key.d;
+    entry.lift = key.lift;
+    entry.swing = key.swing;
+    entry.q = st.q[k];
+    st.cache_valid[k] = st.changed[k];
   }
   // Leg velocities: the motion's plus the rate of the re-solve's change (central differences).
   for (int k = 0; k < window.count; ++k) {
@@ -297,11 +328,20 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
     const int a = std::max(k - 1, 0), b = std::min(k + 1, window.count - 1);
     if (!st.changed[a] && !st.changed[k] && !st.changed[b]) continue;
     PlanKnot& knot = window.knots[k];
-    dynamics::VelocityVector vk = knot.v;
-    vk.segment<12>(6 + model::kLeftLegFirst) += (st.leg_delta[b] - st.leg_delta[a]) / (dt * (b - a));
-    const ContactFlags flags = knot.in_contact;
-    plan_knot_from_state(model, st.data, st.q[k], vk, flags, knot.stamp_ns, knot);
+    // The same knot and neighbours as last call's (interior there and here): its rewrite.
+    const int j = st.hit[k];
+    if (j > 0 && j + 1 < old_count && k > 0 && k + 1 < window.count && st.hit[k - 1] == j - 1 &&
+        st.hit[k + 1] == j + 1) {
+      knot = st.cache[j].out;
+    } else {
+      dynamics::VelocityVector vk = knot.v;
+      vk.segment<12>(6 + model::kLeftLegFirst) += (st.leg_delta[b] - st.leg_delta[a]) / (dt * (b - a));
+      const ContactFlags flags = knot.in_contact;
+      plan_knot_from_state(model, st.data, st.q[k], vk, flags, knot.stamp_ns, knot);
+    }
+    st.cache[k].out = knot;
   }
+  st.cache_count = window.count;
 }
 
 }  // namespace kuavo::planner

@@ -289,6 +289,45 @@ TEST(RecoveryStep, TheDisplacedFootReturnsOverTheMotionsNextSwing) {
   EXPECT_TRUE(f.window_unchanged());
 }
 
+// Consecutive calls reuse the previous call's re-solved knots: the window they give is the
+// one a state without that cache gives, bit for bit, all through a step, its hold and the
+// moment its return swing is found (which changes the displacement of knots met before).
+TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
+  Fixture f;
+  const Standing s = standing_geometry();
+  double heel_x = 1e9;
+  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
+  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  auto fresh = std::make_unique<RecoveryStepState>();
+  auto fresh_window = std::make_unique<PlanWindow>();
+  int reused = 0;
+  for (int i = 0; i < 40; ++i) {
+    const double t = 1.0 + kDt * i;
+    const Vec2 v = i < 2 ? velocity : Vec2::Zero();
+    *fresh = *f.state;
+    fresh->cache_count = 0;
+    const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
+    motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
+    recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion, standing_configuration(), translating(v), *fresh_window);
+    f.call(t, v);
+    if (i == 1) {  // the step is taken: the motion lifts that foot at 2.0 s, so its return enters the window
+      ASSERT_EQ(f.state->steps, 1u);
+      lift_in_motion(*f.motion, f.state->foot[0].active ? 0 : 1, 2.0, 2.4);
+    }
+    for (int k = 0; k < kKnots; ++k) {
+      const PlanKnot &a = f.window->knots[k], &b = fresh_window->knots[k];
+      ASSERT_TRUE(a.q == b.q && a.v == b.v && a.in_contact == b.in_contact && a.point_position_m == b.point_position_m &&
+                  a.point_velocity_m_s == b.point_velocity_m_s && a.com_position_m == b.com_position_m &&
+                  a.com_velocity_m_s == b.com_velocity_m_s)
+          << "call " << i << " knot " << k;
+      reused += f.state->hit[k] >= 0 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(f.state->steps, 1u);
+  EXPECT_TRUE(f.state->foot[0].return_known || f.state->foot[1].return_known);
+  EXPECT_GT(reused, 30 * 50) << "most knots come from the previous call";
+}
+
 TEST(RecoveryStep, ConfigValidation) {
   EXPECT_EQ(recovery_step_validate(RecoveryStepConfig{}), nullptr);
   RecoveryStepConfig c;
