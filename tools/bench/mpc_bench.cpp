@@ -8,6 +8,8 @@
 // BM_MpcStepSteppingIdle: the same with the core idle for 18 ms before each call, the planning
 // task's duty cycle at 50 Hz (kuavo_fw --timing): what the call costs once its working set has
 // left the caches.
+// BM_RecoveryStepRewrite*: the recovery step's window rewrite with a step under way or held,
+// which runs before the MPC in the same planning call.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "controllers/mpc/mpc.h"
+#include "controllers/planner/recovery_step.h"
 #include "controllers/standing/standing_controller.h"
 #include "tools/bench/bench_stats.h"
 
@@ -154,6 +157,56 @@ void BM_ReferenceState(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ReferenceState)->Unit(benchmark::kMicrosecond);
+
+// The recovery step's rewrite of a 1.2 s window (61 knots) while a step is under way and
+// held (planner/recovery_step.h): consecutive calls one stage apart, as at 50 Hz (the knots
+// met again come from the previous call), and `cold` (its cache emptied before each call:
+// every knot's legs re-solved, as on the call that takes the step). The step is triggered
+// on a standing motion by a backward CoM velocity that puts ξ 4 cm behind the heels; the
+// 3 s that follow are replayed, then the step is taken again.
+void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
+  Fixture& f = fixture();
+  static auto motion = std::make_unique<planner::MotionPlan>();
+  static auto rs = std::make_unique<planner::RecoveryStepState>();
+  static planner::PlanWindow window;
+  motion->rate_hz = 100.0;
+  motion->frame_count = 600;
+  for (int i = 0; i < motion->frame_count; ++i) motion->q[i] = f.q0, motion->foot_contact[i] = {true, true};
+  planner::RecoveryStepConfig cfg;
+  cfg.settle_s = 0.0;
+  dynamics::VelocityVector push = dynamics::VelocityVector::Zero();
+  push[0] = -0.56;  // ξ = c + ċ/ω 0.16 m behind the CoM: 4 cm behind the heels
+  const auto call = [&](int stage, const dynamics::VelocityVector& v) {
+    planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
+    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, f.q0, v, window);
+  };
+  std::vector<double> us;
+  int stage = 150;
+  for (auto _ : state) {
+    if (stage == 150) {  // take the step again
+      planner::recovery_step_reset(*rs);
+      call(0, push);
+      call(1, push);
+      if (rs->steps != 1) {
+        state.SkipWithError("no recovery step triggered");
+        return;
+      }
+      stage = 2;
+    }
+    if (cold) rs->cache_count = 0;
+    planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
+    const auto t0 = Clock::now();
+    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, f.q0, dynamics::VelocityVector::Zero(), window);
+    us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+    ++stage;
+  }
+  state.counters["p50_us"] = percentile(us, 50);
+  state.counters["p99_us"] = percentile(us, 99);
+}
+void BM_RecoveryStepRewriteConsecutive(benchmark::State& state) { BM_RecoveryStepRewrite(state, false); }
+void BM_RecoveryStepRewriteCold(benchmark::State& state) { BM_RecoveryStepRewrite(state, true); }
+BENCHMARK(BM_RecoveryStepRewriteConsecutive)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RecoveryStepRewriteCold)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
