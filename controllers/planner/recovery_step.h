@@ -31,7 +31,9 @@
 //            motion has it.
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
-// knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each).
+// knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
+// 1.3 ms on the call that takes a step), and only for the knots the previous call did not
+// have (the window's tail: 33 µs p50 on the calls after it; mpc_bench).
 #pragma once
 
 #include <array>
