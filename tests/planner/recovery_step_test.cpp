@@ -309,7 +309,11 @@ TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
     recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion, standing_configuration(), translating(v), *fresh_window);
-    f.call(t, v);
+    {
+      kuavo::test::AllocTrap trap;
+      f.call(t, v);
+      EXPECT_EQ(trap.count(), 0u) << "call " << i;
+    }
     if (i == 1) {  // the step is taken: the motion lifts that foot at 2.0 s, so its return enters the window
       ASSERT_EQ(f.state->steps, 1u);
       lift_in_motion(*f.motion, f.state->foot[0].active ? 0 : 1, 2.0, 2.4);
