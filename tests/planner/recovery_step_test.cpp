@@ -45,6 +45,10 @@ struct Standing {
   std::array<Vec3, kNumPoints> corner;  // by forward kinematics
   Vec3 com;
   double omega;
+  double heel_x = 1e9;    // the soles' rear edge
+  double outer_y = -1e9;  // the left sole's outer edge
+  // The whole robot's velocity that puts ξ = c + ċ/ω `behind` metres behind the heels.
+  Vec2 backwards(double behind) const { return Vec2((heel_x - behind - com.x()) * omega, 0.0); }
 };
 
 Standing standing_geometry() {
@@ -59,6 +63,7 @@ Standing standing_geometry() {
   }
   s.com = data.com_m;
   s.omega = std::sqrt(model::kGravity_m_s2 / (s.com.z() - sole_z));
+  for (const Vec3& c : s.corner) s.heel_x = std::min(s.heel_x, c.x()), s.outer_y = std::max(s.outer_y, c.y());
   return s;
 }
 
@@ -126,10 +131,9 @@ TEST(RecoveryStep, StandingStillChangesNothing) {
 TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
   Fixture f;
   const Standing s = standing_geometry();
-  double heel_x = 1e9;
-  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
+  const double heel_x = s.heel_x;
   const double xi_x = heel_x - 0.04;
-  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.backwards(0.04);
 
   f.call(1.0, velocity);
   EXPECT_EQ(f.state->steps, 0u) << "one call outside is not yet a trigger";
@@ -225,9 +229,7 @@ TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
 TEST(RecoveryStep, SidewaysBeyondReachIsDeclined) {
   Fixture f;
   const Standing s = standing_geometry();
-  double outer_y = -1e9;
-  for (const Vec3& c : s.corner) outer_y = std::max(outer_y, c.y());
-  const Vec2 velocity(0.0, (outer_y + 0.04 - s.com.y()) * s.omega);
+  const Vec2 velocity(0.0, (s.outer_y + 0.04 - s.com.y()) * s.omega);
   for (int i = 0; i < 5; ++i) {
     f.call(1.0 + kDt * i, velocity);
     EXPECT_TRUE(f.window_unchanged()) << i;
@@ -242,9 +244,7 @@ TEST(RecoveryStep, NoStepWhenTheMotionStepsSoon) {
   Fixture f;
   lift_in_motion(*f.motion, kRightFoot, 1.34, 1.74);
   const Standing s = standing_geometry();
-  double heel_x = 1e9;
-  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
-  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.backwards(0.04);
   for (int i = 0; i < 3; ++i) {
     f.call(1.0 + kDt * i, velocity);
     EXPECT_TRUE(f.window_unchanged()) << i;
@@ -257,9 +257,7 @@ TEST(RecoveryStep, NoStepWhenTheMotionStepsSoon) {
 TEST(RecoveryStep, TheDisplacedFootReturnsOverTheMotionsNextSwing) {
   Fixture f;
   const Standing s = standing_geometry();
-  double heel_x = 1e9;
-  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
-  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.backwards(0.04);
   f.call(1.0, velocity);
   f.call(1.0 + kDt, velocity);
   ASSERT_EQ(f.state->steps, 1u);
@@ -295,9 +293,7 @@ TEST(RecoveryStep, TheDisplacedFootReturnsOverTheMotionsNextSwing) {
 TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
   Fixture f;
   const Standing s = standing_geometry();
-  double heel_x = 1e9;
-  for (const Vec3& c : s.corner) heel_x = std::min(heel_x, c.x());
-  const Vec2 velocity((heel_x - 0.04 - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.backwards(0.04);
   auto fresh = std::make_unique<RecoveryStepState>();
   auto fresh_window = std::make_unique<PlanWindow>();
   int reused = 0;
