@@ -3,15 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
-#include "controllers/dynamics/rigid_body.h"
-#include "controllers/finite.h"
 #include "controllers/planner/leg_ik.h"
 #include "controllers/planner/support_polygon.h"
 
 namespace kuavo::planner {
 namespace {
 
-constexpr double kGravity = 9.81;
 using Vec2 = Eigen::Vector2d;
 
 // 0 → 1 with zero slope at both ends (the swing foot leaves and lands at rest).
@@ -52,9 +49,9 @@ hal::TimeNs frame_time(const MotionPlan& motion, int i) {
   return motion.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / motion.rate_hz * 1e9));
 }
 
-// The motion's next swing of `foot` after `after_ns`, searched up to `until_ns`: fills the
-// return interval once the lift-off is found (touchdown: the first frame back in contact,
-// or the search's end if the swing runs past it).
+// The motion's next swing of `foot` after `after_ns`, its lift-off searched up to `until_ns`
+// (the window's end): fills the return interval once a lift-off is found (touchdown: the
+// first frame back in contact; a motion that ends with that foot up keeps the displacement).
 void find_return(const MotionPlan& motion, int foot, hal::TimeNs after_ns, hal::TimeNs until_ns, FootDisplacement& d) {
   if (d.return_known) return;
   const int first = motion_frame(motion, after_ns);
@@ -69,8 +66,6 @@ void find_return(const MotionPlan& motion, int foot, hal::TimeNs after_ns, hal::
   if (lift < 0) return;
   int land = lift;
   while (land < motion.frame_count - 1 && !motion.foot_contact[land][foot]) ++land;
-  // Only commit once the touchdown is seen: a swing still running at the window's end
-  // is found again, complete, by a later call.
   if (motion.foot_contact[land][foot]) {
     d.return_known = true;
     d.return_lift_ns = frame_time(motion, lift);
@@ -170,7 +165,7 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   }
   const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(corners, kNumPoints);
   const double h = std::max(m.com_position_m.z() - sole_z, cfg.min_pendulum_height_m);
-  const double omega = std::sqrt(kGravity / h);
+  const double omega = std::sqrt(model::kGravity_m_s2 / h);
   const Vec2 xi = m.com_position_m.head<2>() + m.com_velocity_m_s.head<2>() / omega;
   st.last_outside_m = -signed_margin(support, xi);
 
