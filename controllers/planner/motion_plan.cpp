@@ -26,6 +26,11 @@ VelocityVector difference(const ConfigVector& qa, const ConfigVector& qb, double
   return v;
 }
 
+// Time since the motion's start, in frames.
+double frames_at(const MotionPlan& plan, hal::TimeNs t_ns) {
+  return static_cast<double>(t_ns - plan.start_ns) * 1e-9 * plan.rate_hz;
+}
+
 }  // namespace
 
 const char* motion_plan_finish(const MotionPlan& plan) {
@@ -48,28 +53,30 @@ double motion_plan_duration_s(const MotionPlan& plan) {
   return plan.frame_count > 0 ? static_cast<double>(plan.frame_count - 1) / plan.rate_hz : 0.0;
 }
 
+int motion_plan_frame_at(const MotionPlan& plan, hal::TimeNs t_ns) {
+  const int last = std::max(plan.frame_count - 1, 0);
+  const double s = frames_at(plan, t_ns);
+  if (!(s > 0.0)) return 0;
+  return s >= static_cast<double>(last) ? last : static_cast<int>(s);
+}
+
 void motion_plan_sample_rt(const model::Model& model, dynamics::Data& data, const MotionPlan& plan, hal::TimeNs t_ns,
                            PlanKnot& knot) {
   const int last = std::max(plan.frame_count - 1, 0);
-  const double s = static_cast<double>(t_ns - plan.start_ns) * 1e-9 * plan.rate_hz;  // in frames
+  const double s = frames_at(plan, t_ns);
+  const int i = motion_plan_frame_at(plan, t_ns);
   ConfigVector q;
   VelocityVector v;
-  int i = 0;
-  if (!(s > 0.0)) {
-    q = plan.q[0];
-    v.setZero();
-  } else if (s >= static_cast<double>(last)) {
-    i = last;
-    q = plan.q[last];
-    v.setZero();
-  } else {
-    i = static_cast<int>(s);
+  if (s > 0.0 && i < last) {
     const double a = s - static_cast<double>(i);
     const ConfigVector& q0 = plan.q[i];
     const ConfigVector& q1 = plan.q[i + 1];
     q = (1.0 - a) * q0 + a * q1;
     q.segment<4>(3) = orientation(q0).slerp(a, orientation(q1)).coeffs();
     v = (1.0 - a) * motion_plan_velocity(plan, i) + a * motion_plan_velocity(plan, i + 1);
+  } else {  // before the start or after the end: that frame, at rest
+    q = plan.q[i];
+    v.setZero();
   }
   ContactFlags flags{};
   for (int c = 0; c < kNumPoints; ++c) flags[c] = plan.foot_contact[i][c < kCornersPerFoot ? kLeftFoot : kRightFoot];

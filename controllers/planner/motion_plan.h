@@ -44,6 +44,10 @@ dynamics::VelocityVector motion_plan_velocity(const MotionPlan& plan, int i);
 
 double motion_plan_duration_s(const MotionPlan& plan);
 
+// The frame a sample at t_ns takes its contact flags from (the frame at or before t_ns;
+// 0 before the start, the last after the end). Real-time safe.
+int motion_plan_frame_at(const MotionPlan& plan, hal::TimeNs t_ns);
+
 // The knot at absolute time t_ns: q interpolated between the neighbouring frames
 // (joints and base position linearly, orientation by slerp), v linearly; before the
 // start the first frame, after the end the last, both at rest. Contact flags of the

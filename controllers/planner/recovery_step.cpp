@@ -39,12 +39,6 @@ Vec2 displacement_at(const FootDisplacement& d, hal::TimeNs t, double lift_heigh
 
 bool in_recovery_swing(const FootDisplacement& d, hal::TimeNs t) { return d.active && t >= d.lift_ns && t < d.land_ns; }
 
-int motion_frame(const MotionPlan& motion, hal::TimeNs t) {
-  const double s = static_cast<double>(t - motion.start_ns) * 1e-9 * motion.rate_hz;
-  if (!(s > 0.0)) return 0;
-  return std::min(static_cast<int>(s), motion.frame_count - 1);
-}
-
 hal::TimeNs frame_time(const MotionPlan& motion, int i) {
   return motion.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / motion.rate_hz * 1e9));
 }
@@ -54,8 +48,8 @@ hal::TimeNs frame_time(const MotionPlan& motion, int i) {
 // first frame back in contact; a motion that ends with that foot up keeps the displacement).
 void find_return(const MotionPlan& motion, int foot, hal::TimeNs after_ns, hal::TimeNs until_ns, FootDisplacement& d) {
   if (d.return_known) return;
-  const int first = motion_frame(motion, after_ns);
-  const int last = motion_frame(motion, until_ns);
+  const int first = motion_plan_frame_at(motion, after_ns);
+  const int last = motion_plan_frame_at(motion, until_ns);
   int lift = -1;
   for (int i = first; i <= last; ++i) {
     if (!motion.foot_contact[i][foot]) {
