@@ -263,8 +263,7 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   const int shift = shift_ns >= 0 && step_ns > 0 && shift_ns % step_ns == 0 ? static_cast<int>(shift_ns / step_ns) : -1;
   for (int k = 0; k < window.count; ++k) {
     PlanKnot& knot = window.knots[k];
-    RecoveryStepState::CachedKnot& key = st.key;  // scratch (a PlanKnot inside: not on the stack)
-    key.stamp_ns = knot.stamp_ns;
+    KnotRewrite rw;
     st.q[k] = knot.q;
     st.changed[k] = false;
     st.hit[k] = -1;
@@ -273,10 +272,10 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
     for (int foot = 0; foot < 2; ++foot) {
       double lift = 0.0;
       const Vec2 d = displacement_at(st.foot[foot], knot.stamp_ns, cfg.lift_height_m, lift);
-      key.d[foot] = d;
-      key.lift[foot] = lift;
-      key.swing[foot] = in_recovery_swing(st.foot[foot], knot.stamp_ns);
-      if (key.swing[foot]) {
+      rw.d[foot] = d;
+      rw.lift[foot] = lift;
+      rw.swing[foot] = in_recovery_swing(st.foot[foot], knot.stamp_ns);
+      if (rw.swing[foot]) {
         for (int i = 0; i < kCornersPerFoot; ++i) knot.in_contact[foot * kCornersPerFoot + i] = false;
         st.changed[k] = true;
       }
@@ -292,20 +291,17 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
     const int j = shift >= 0 ? k + shift : -1;
     if (st.changed[k] && j >= 0 && j < old_count && st.cache_valid[j]) {
       const RecoveryStepState::CachedKnot& e = st.cache[j];
-      if (e.stamp_ns == key.stamp_ns && e.motion_q == knot.q && e.motion_v == knot.v && e.d == key.d &&
-          e.lift == key.lift && e.swing == key.swing) {
+      if (e.stamp_ns == knot.stamp_ns && e.motion_q == knot.q && e.motion_v == knot.v && e.rewrite == rw) {
         st.q[k] = e.q;
         st.hit[k] = j;
       }
     }
     if (st.changed[k] && st.hit[k] < 0) solve_leg_ik(model, st.data, targets, st.q[k]);
     RecoveryStepState::CachedKnot& entry = st.cache[k];  // its .out is written below
-    entry.stamp_ns = key.stamp_ns;
+    entry.stamp_ns = knot.stamp_ns;
     entry.motion_q = knot.q;
     entry.motion_v = knot.v;
-    entry.d = key.d;
-    entry.lift = key.lift;
-    entry.swing = key.swing;
+    entry.rewrite = rw;
     entry.q = st.q[k];
     st.cache_valid[k] = st.changed[k];
   }

@@ -82,6 +82,15 @@ struct FootDisplacement {
   hal::TimeNs return_lift_ns = 0, return_land_ns = 0;
 };
 
+// What the displacements do to one knot, per foot: the sole's horizontal shift, the height
+// its swing arc adds, and whether it is out of contact for a recovery swing.
+struct KnotRewrite {
+  std::array<Eigen::Vector2d, 2> d{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  std::array<double, 2> lift{};
+  std::array<bool, 2> swing{};
+  bool operator==(const KnotRewrite& o) const { return d == o.d && lift == o.lift && swing == o.swing; }
+};
+
 struct RecoveryStepState {
   int outside_calls = 0;
   bool started = false;
@@ -105,14 +114,11 @@ struct RecoveryStepState {
     hal::TimeNs stamp_ns = 0;
     dynamics::ConfigVector motion_q = dynamics::ConfigVector::Zero();
     dynamics::VelocityVector motion_v = dynamics::VelocityVector::Zero();
-    std::array<Eigen::Vector2d, 2> d{};
-    std::array<double, 2> lift{};
-    std::array<bool, 2> swing{};
+    KnotRewrite rewrite;
     dynamics::ConfigVector q = dynamics::ConfigVector::Zero();  // re-solved
     PlanKnot out;                                                 // rewritten
   };
   std::array<CachedKnot, kMaxWindowKnots> cache{};
-  CachedKnot key;  // scratch
   std::array<bool, kMaxWindowKnots> cache_valid{};
   int cache_count = 0;
 };
