@@ -1071,5 +1071,91 @@ TEST(mocap_feasibility_repair, AttenuationScalesGesturesInsideItsRangeOnly) {
   EXPECT_NEAR(left, 0.4 / 101.0, 1e-6);
 }
 
+// A pelvis leaning 0.27 rad (15°, within the tilt bound) to the right while it shifts 9 cm to
+// the left over its feet, in double support: at the middle of the lean the legs cannot lay
+// the left foot flat on its foothold at that pelvis pose (hip roll and ankle roll at their
+// ranges' ends). The repair moves the pelvis towards standing over its feet there
+// (stance_reach: level, their heading, the standing pose's place) until the legs reach; checked by forward kinematics on the output (every stance corner on
+// its foothold, as expect_dancable does for every motion), against the same motion with the
+// repair forbidden (`forbid reach`), whose left foot stays centimetres off. The pelvis turns
+// towards level only, on every frame that needed it; frames far from the repair keep their
+// orientation; no step between frames.
+TEST(mocap_feasibility_repair, StanceFootOutOfReachMovesThePelvisToStanding) {
+  const int n = 200, a = 60, b = 140;
+  std::vector<ConfigVector> q;
+  std::vector<ContactLabel> labels(n, ContactLabel::kDoubleSupport);
+  ConfigVector guess = standing().q;
+  for (int i = 0; i < n; ++i) {
+    Keyframe k = stand_key();
+    k.base_shift.z() = -0.03;
+    if (i > a && i < b) {
+      const double s = std::sin(M_PI * (i - a) / (b - a));
+      k.base_lean = Vec3(0.27 * s, 0.0, 0.0);
+      k.base_shift.y() = 0.09 * s;
+    }
+    guess = frame_of(k, guess);  // the human's own legs do not matter: the repair re-solves them
+    q.push_back(guess);
+  }
+  const auto solve = [&](const std::vector<RepairOverride>& overrides) {
+    RepairedMotion r;
+    std::string error;
+    EXPECT_TRUE(repair_motion(robot(), q, labels, kRate_hz, {}, overrides, r, error)) << error;
+    return r;
+  };
+  std::vector<RepairOverride> forbid;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0 100 forbid reach\n", forbid, error)) << error;
+  const RepairedMotion kept = solve(forbid);
+  const RepairedMotion r = solve({});
+  SCOPED_TRACE(listing(r));
+  // The stance corners' largest distance from the floor, by forward kinematics.
+  const auto off_floor = [](const ConfigVector& x) {
+    double e = 0.0;
+    for (const Vec3& c : corners_of(x)) e = std::max(e, std::abs(c.z()));
+    return e;
+  };
+  double kept_worst = 0.0;
+  int first_off = -1, last_off = -1;
+  for (int i = 0; i < static_cast<int>(kept.q.size()); ++i) {
+    const double e = off_floor(kept.q[i]);
+    kept_worst = std::max(kept_worst, e);
+    if (e > 2e-3) {
+      if (first_off < 0) first_off = i;
+      last_off = i;
+    }
+  }
+  EXPECT_FALSE(has(kept, RepairKind::kStanceReach));
+  ASSERT_GT(kept_worst, 0.02) << "precondition: without the repair a stance foot is out of reach";
+
+  expect_dancable(r, n, {}, false, 2e-3);
+  const Repair* reach = first(r, RepairKind::kStanceReach);
+  ASSERT_NE(reach, nullptr);
+  EXPECT_LE(reach->start_s, first_off / kRate_hz + 1e-9);
+  EXPECT_GE(reach->end_s, (last_off + 1) / kRate_hz - 1e-9);
+  const auto rot_of = [](const ConfigVector& x) { return Eigen::Quaterniond(x[6], x[3], x[4], x[5]).normalized(); };
+  const auto tilt_of = [&](const ConfigVector& x) { return std::acos(std::clamp(rot_of(x).toRotationMatrix()(2, 2), -1.0, 1.0)); };
+  double least_turn = 10.0, step_out = 0.0, step_in = 0.0, far_change = 0.0;
+  for (int i = 0; i < static_cast<int>(r.q.size()); ++i) {
+    EXPECT_LE(tilt_of(r.q[i]), tilt_of(kept.q[i]) + 1e-9) << "frame " << i << " turned away from level";
+    const double turn = rot_of(r.q[i]).angularDistance(rot_of(kept.q[i]));
+    if (i >= first_off && i <= last_off) least_turn = std::min(least_turn, turn);
+    if (i + 1 < static_cast<int>(r.q.size())) {
+      step_out = std::max(step_out, rot_of(r.q[i]).angularDistance(rot_of(r.q[i + 1])));
+      step_in = std::max(step_in, rot_of(kept.q[i]).angularDistance(rot_of(kept.q[i + 1])));
+    }
+    // Far from the repair's range (beyond its ±0.25 s spread): the pelvis as it was.
+    const double t = i / kRate_hz;
+    if (t < reach->start_s - 0.3 || t > reach->end_s + 0.3) far_change = std::max(far_change, turn);
+  }
+  EXPECT_GT(least_turn, 0.01) << "every frame out of reach was turned";
+  EXPECT_LT(far_change, 1e-12);
+  // The lean itself turns by up to 0.011 rad a frame; the repair's turn, spread over ±0.25 s,
+  // adds less than that.
+  EXPECT_LT(step_out, 2.0 * step_in);
+  RecordProperty("off_floor_without_m", number(kept_worst));
+  RecordProperty("turn_step_rad", number(step_out));
+  RecordProperty("lean_step_rad", number(step_in));
+}
+
 }  // namespace
 }  // namespace kuavo::mocap

@@ -18,6 +18,9 @@
 //    the relative heading of the next touchdown is limited to the hip-yaw range, so the turn
 //    is carried out by the following steps (stepping turns);
 //  - arm and head accelerations beyond what their joints' torques give → smoothed;
+//  - a stance foot the legs cannot lay flat on its foothold at the human's pelvis pose (a
+//    torso leaning or twisted beyond the hip and ankle ranges) → the pelvis moves towards
+//    standing over its feet there (stance_reach);
 //  - a motion that does not start standing → a lead-in: the robot stands in double support
 //    on the dance's first footholds, then blends into the dance's first pose; a tail that
 //    ends in double support.
@@ -29,7 +32,7 @@
 //
 // Overrides (a text file, like the contact overrides): lines
 //   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, bounce, travel,
-//                                  attenuate, or all)
+//                                  attenuate, reach, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
 //   start_s end_s calm steps      (shorter strides and slower travel: RepairConfig::calm_*)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
@@ -145,6 +148,7 @@ enum class RepairKind : int {
   kTravel = 11,         // a step shortened so the dance travels no faster than the robot can
   kAttenuate = 12,      // the TO's result still over a leg's torque limits: gestures scaled down
   kBounce = 13,         // the pelvis's vertical acceleration limited (a bounce or a drop smoothed)
+  kStanceReach = 14,    // pelvis turned towards level where a stance foot could not lie flat
 };
 const char* to_string(RepairKind k);
 
