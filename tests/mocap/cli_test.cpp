@@ -81,10 +81,11 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   ASSERT_TRUE(report.contains("dynamic"));
   const auto& d = report["dynamic"];
   // The built-in dance dances in the closed-loop check on both grounds with each of the three
-  // noise seeds, in MuJoCo, and in the firmware loop on both grounds: no round of repair.
+  // noise seeds, in MuJoCo, in the firmware loop on both grounds, and on carpet with the show
+  // set's model errors of seeds 1001–1004: no round of repair.
   ASSERT_TRUE(d.contains("verification"));
   EXPECT_EQ(d["verification"]["rounds"], 0);
-  ASSERT_EQ(d["verification"]["runs"].size(), 9u);
+  ASSERT_EQ(d["verification"]["runs"].size(), 13u);
   EXPECT_EQ(d["verification"]["runs"][0]["engine"], "simbody");
   EXPECT_EQ(d["verification"]["runs"][1]["ground"], "carpet");
   EXPECT_EQ(d["verification"]["runs"][5]["seed"], 3);
@@ -93,6 +94,12 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
     EXPECT_EQ(d["verification"]["runs"][i]["engine"], "firmware");
     EXPECT_EQ(d["verification"]["runs"][i]["ground"], i == 7 ? "floor" : "carpet");
     EXPECT_EQ(d["verification"]["runs"][i]["seed"], 1);
+    EXPECT_FALSE(d["verification"]["runs"][i]["fell"].get<bool>());
+  }
+  for (const int i : {9, 10, 11, 12}) {
+    EXPECT_EQ(d["verification"]["runs"][i]["perturbation"], "show");
+    EXPECT_EQ(d["verification"]["runs"][i]["ground"], "carpet");
+    EXPECT_EQ(d["verification"]["runs"][i]["seed"], 1001 + (i - 9));
     EXPECT_FALSE(d["verification"]["runs"][i]["fell"].get<bool>());
   }
   EXPECT_TRUE(d["verification"]["danced"].get<bool>()) << d["verification"].dump();
@@ -212,14 +219,25 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   };
   EXPECT_EQ(kept, score(1) > score(0) ? 1 : 0) << v.dump();
   // Each round dances floor and carpet with noise seeds 1, 2, 3 in turn, then MuJoCo's floor,
-  // then the firmware loop's floor and carpet (seed 1), and stops at its first fall.
+  // then the firmware loop's floor and carpet (seed 1), then carpet with the show set's model
+  // errors (seeds 1001, 1002, ...), and stops at its first fall.
   const std::vector<std::pair<std::string, std::uint64_t>> order = {{"floor", 1}, {"carpet", 1}, {"floor", 2},
                                                                     {"carpet", 2}, {"floor", 3}, {"carpet", 3}};
   for (const auto& round : runs) {
+    std::uint64_t show_seed = 1001;
     for (std::size_t i = 0; i < round.size(); ++i) {
       if (i + 1 < round.size()) {
         EXPECT_FALSE(round[i]["fell"].get<bool>()) << v.dump();
       }
+      if (round[i].contains("perturbation")) {
+        EXPECT_EQ(round[i]["perturbation"], "show") << v.dump();
+        EXPECT_EQ(round[i]["engine"], "simbody") << v.dump();
+        EXPECT_EQ(round[i]["ground"], "carpet") << v.dump();
+        EXPECT_EQ(round[i]["seed"].get<std::uint64_t>(), show_seed++) << v.dump();
+        EXPECT_GT(i, order.size() + 2) << "after the nominal, MuJoCo and firmware runs: " << v.dump();
+        continue;
+      }
+      EXPECT_EQ(show_seed, 1001u) << "a nominal run after a model-error run: " << v.dump();
       if (round[i]["engine"] == "mujoco") {
         EXPECT_EQ(i, order.size()) << v.dump();
         continue;
@@ -255,7 +273,8 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
   const bool fw = last["engine"] == "firmware";
   const std::string where = " --ground " + last["ground"].get<std::string>() + " --seed " +
-                            std::to_string(last["seed"].get<std::uint64_t>()) + " --summary " + kOut +
+                            std::to_string(last["seed"].get<std::uint64_t>()) +
+                            (last.contains("perturbation") ? " --perturb show" : "") + " --summary " + kOut +
                             "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
                              : kBin + " simulate " + kOut + "_ver.motion --quiet --engine " + last["engine"].get<std::string>() + where;

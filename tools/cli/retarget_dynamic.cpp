@@ -13,6 +13,7 @@
 #include "controllers/motion/load_motion.h"
 #include "firmware/sitl/sitl_run.h"
 #include "sim/motion_loop.h"
+#include "sim/perturbation.h"
 #include "tools/cli/retarget_figures.h"
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/motion_file.h"
@@ -211,6 +212,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   double verify_sim_s = 0.0;
   std::vector<std::pair<int, int>> verify_ranges;  // dance-clock frames scaled so far
   bool calm_everywhere = false;
+  sim::PerturbationSet show_set;
+  sim::perturbation_set_by_name("show", show_set);
   int best_round = -1, best_passed = 0;
   double best_reached = 0.0;
   DynamicStageResult best;
@@ -233,6 +236,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       sim::Engine engine;
       std::uint64_t seed;
       bool firmware = false;
+      bool show_errors = false;  // the plant with the show set's model errors drawn from seed
     };
     std::vector<Check> checks;
     for (const std::uint64_t seed : options.verify_seeds) {
@@ -246,9 +250,12 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         checks.push_back({ground, sim::Engine::kSimbody, options.verify_seeds.front(), true});
       }
     }
+    for (const std::uint64_t seed : options.verify_show_seeds) {
+      checks.push_back({sim::kCarpet, sim::Engine::kSimbody, seed, false, true});
+    }
     std::uint64_t fell_seed = 0;
     int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
-    for (const auto& [ground, engine, seed, firmware] : checks) {
+    for (const auto& [ground, engine, seed, firmware, show_errors] : checks) {
       if (firmware) {
         firmware::sitl::SitlConfig fw;
         fw.loop.legs = firmware::sitl::kImageLegBinding;
@@ -290,6 +297,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       cfg.run.ground = ground;
       cfg.run.engine = engine;
       cfg.run.seed = seed;
+      if (show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, seed);
       const auto t0 = std::chrono::steady_clock::now();
       const sim::MotionSummary summary = sim::run_motion(robot, *plan, cfg);
       verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -297,6 +305,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},
                             {"seed", seed}};
+      if (show_errors) entry["perturbation"] = show_set.name;
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
         // without it, and says so.
@@ -313,7 +322,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       verification_runs.push_back(entry);
       if (summary.run.fell) {
         fell_at_s = summary.run.fell_at_s;
-        fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo" : std::string(ground.name);
+        fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo"
+                  : show_errors                  ? std::string(ground.name) + " with the show set's model errors"
+                                                 : std::string(ground.name);
         fell_seed = seed;
         break;
       }
