@@ -563,6 +563,17 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   // 4. Base and legs. The pelvis keeps the human's offset from its feet midpoint (bounded),
   // height, tilt (bounded) and yaw within the hip-yaw range of the stance feet; arms and
   // head as geometric; legs by IK to the feet.
+  // The mean heading of frame i's feet on the floor; false with none down.
+  const auto stance_yaw = [&](int i, double& yaw) {
+    double sc = 0.0, ss = 0.0;
+    for (int f = 0; f < kFeet; ++f) {
+      if (!on[i][f]) continue;
+      sc += std::cos(feet[i][f].yaw);
+      ss += std::sin(feet[i][f].yaw);
+    }
+    yaw = std::atan2(ss, sc);
+    return sc != 0.0 || ss != 0.0;
+  };
   std::vector<Vec3> base_pos(n);
   std::vector<Mat3> base_rot(n);
   std::vector<double> tilt_over(n, 0.0);  // the human's tilt where it was limited [rad]
@@ -588,14 +599,8 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       tilt_over[i] = tilt;
     }
     // Yaw within the stance feet's hip-yaw range (mean of the feet on the floor).
-    double sc = 0.0, ss = 0.0;
-    for (int f = 0; f < kFeet; ++f) {
-      if (!on[i][f]) continue;
-      sc += std::cos(feet[i][f].yaw);
-      ss += std::sin(feet[i][f].yaw);
-    }
-    if (sc != 0.0 || ss != 0.0) {
-      const double feet_yaw = std::atan2(ss, sc);
+    double feet_yaw = 0.0;
+    if (stance_yaw(i, feet_yaw)) {
       const double yaw = std::atan2(rot(1, 0), rot(0, 0));
       const double rel = wrap(yaw - feet_yaw);
       const double limit = 0.5 * cfg.max_relative_yaw_rad + 0.1;
@@ -806,13 +811,8 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     Vec3 pos;
   };
   const auto standing_over_feet = [&](int i) {
-    double sc = 0.0, ss = 0.0;
-    for (int f = 0; f < kFeet; ++f) {
-      if (!on[i][f]) continue;
-      sc += std::cos(feet[i][f].yaw);
-      ss += std::sin(feet[i][f].yaw);
-    }
-    const double yaw = std::atan2(ss, sc);
+    double yaw = 0.0;
+    stance_yaw(i, yaw);  // a frame with a stance foot: the solve only moves the pelvis for one
     BasePose p{rot_z(yaw), Vec3::Zero()};
     if (on[i][0] && on[i][1]) {
       p.pos = 0.5 * (feet[i][0].centre + feet[i][1].centre) + rot_z(yaw) * stand_base_from_mid;
