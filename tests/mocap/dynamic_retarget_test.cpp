@@ -586,5 +586,50 @@ TEST(mocap_dynamic_retarget, BaseDropEnvelopeCoversEveryFrameSmoothly) {
   for (int i = 0; i < n; ++i) EXPECT_GE(e[i], v[i] - 1e-15) << i;
 }
 
+// The swing-foot correction against its closed-form bounds: a stance, a swing of L = 31
+// frames, a stance with another correction, and a swing to the end. Stance frames keep their
+// own correction; through the swing it goes from the one before to the one after with steps
+// within 1.5·Δ/(L + 1) and second differences within 6·Δ/(L + 1)² (a smoothstep's slope and
+// curvature), monotonically, through their mean at the swing's middle (s = 1/2); the last
+// swing holds the last stance's. Switched in one frame (the old rule), the step is Δ.
+TEST(mocap_dynamic_retarget, SwingCorrectionsCarryTheStanceOnesSmoothly) {
+  const int a = 10, L = 31, b = a + L, n = b + 10 + 5;
+  std::vector<bool> stance(n, true);
+  std::vector<Vec3> held(n, Vec3::Zero());
+  for (int i = a; i < b; ++i) stance[i] = false;
+  for (int i = b + 10; i < n; ++i) stance[i] = false;
+  const Vec3 before(0.01, -0.004, 0.002), after(-0.02, 0.03, -0.005);
+  for (int i = 0; i < a; ++i) held[i] = before + Vec3(0.0, 0.0, 1e-4 * i);  // a stance foot's drift
+  for (int i = b; i < b + 10; ++i) held[i] = after;
+  for (int i = a; i < b; ++i) held[i] = Vec3(1.0, 1.0, 1.0);               // swing frames: ignored
+  for (int i = b + 10; i < n; ++i) held[i] = Vec3(1.0, 1.0, 1.0);
+  const std::vector<Vec3> c = swing_corrections(stance, held);
+  ASSERT_EQ(static_cast<int>(c.size()), n);
+  for (int i = 0; i < n; ++i) {
+    if (stance[i]) {
+      EXPECT_EQ(c[i], held[i]) << i;
+    }
+  }
+  const Vec3 from = held[a - 1];
+  const double delta = (after - from).norm();
+  double step = 0.0, curve = 0.0;
+  for (int i = a - 1; i <= b; ++i) {
+    step = std::max(step, (c[i + 1] - c[i]).norm());
+    if (i > a - 1) curve = std::max(curve, (c[i + 1] - 2.0 * c[i] + c[i - 1]).norm());
+    // On the segment from → after, moving forwards only.
+    const double s = (c[i] - from).dot(after - from) / (delta * delta);
+    EXPECT_NEAR((c[i] - from - s * (after - from)).norm(), 0.0, 1e-12) << i;
+    if (i >= a) {
+      EXPECT_GE(s, (c[i - 1] - from).dot(after - from) / (delta * delta) - 1e-12) << i;
+    }
+  }
+  EXPECT_LE(step, 1.5 * delta / (L + 1) + 1e-12);
+  EXPECT_LE(curve, 6.0 * delta / ((L + 1) * (L + 1)) + 1e-12);
+  EXPECT_NEAR((c[a + L / 2] - 0.5 * (from + after)).norm(), 0.0, 1e-12);
+  for (int i = b + 10; i < n; ++i) EXPECT_LT((c[i] - after).norm(), 1e-15) << i;
+  RecordProperty("step_mm", number(step * 1e3));
+  RecordProperty("one_frame_switch_mm", number(delta * 1e3));
+}
+
 }  // namespace
 }  // namespace kuavo::mocap

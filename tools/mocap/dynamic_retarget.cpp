@@ -540,26 +540,43 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   // smooth envelope of those drops. Lowered frame by frame, the base jumped by up to 1.7 cm
   // between frames and the stance knee by 0.2 rad (perfume at 25.86 s): an inverse-dynamics
   // torque 5.5× the hip-pitch limit that no motor could give.
+  // Swing feet follow the TO's swing, shifted by a correction carried smoothly from the stance
+  // before to the stance after (swing_corrections): switched in one frame, the legs jumped at
+  // lift-off and touchdown.
   std::vector<std::array<Vec3, model::kNumContactPoints>> targets(n);
-  std::vector<ConfigVector> start(n);
-  std::vector<double> need(n, 0.0);
+  std::vector<std::array<Vec3, model::kNumContactPoints>> fk(n);
+  std::array<std::vector<Vec3>, model::kNumContactPoints> correction;
+  for (auto& c : correction) c.assign(n, Vec3::Zero());
+  std::array<std::vector<bool>, 2> stance_of;
+  for (int f = 0; f < 2; ++f) {
+    stance_of[f].resize(n);
+    for (int i = 0; i < n; ++i) stance_of[f][i] = plan.foot_contact[i][f];
+  }
   for (int i = 0; i < n; ++i) {
     dynamics::forward_kinematics(robot, *data, plan.q[i]);
     std::array<Vec3, model::kNumContactPoints> reference;
     for (int c = 0; c < model::kNumContactPoints; ++c) reference[c] = dynamics::frame_position(robot, *data, c);
     dynamics::forward_kinematics(robot, *data, out.q[i]);
     for (int c = 0; c < model::kNumContactPoints; ++c) {
-      const Vec3 now = dynamics::frame_position(robot, *data, c);
-      const bool stance = plan.foot_contact[i][c / 4];
+      fk[i][c] = dynamics::frame_position(robot, *data, c);
+      if (!plan.foot_contact[i][c / 4]) continue;
       // The stage whose anchors hold this frame's stance (a touchdown between stages: the next).
       const double ts = i / plan.rate_hz / dt;
       const int ka = std::clamp(static_cast<int>(std::floor(ts)), 0, S);
       const int kb = std::min(ka + 1, S);
       const int kc = flags[ka][c] ? ka : kb;
       const Vec3 held = flags[kc][c] ? anchors[kc][c] : reference[c];
-      targets[i][c] = stance ? held : now;
-      if (stance) stats.foothold_correction_max_m = std::max(stats.foothold_correction_max_m, (now - targets[i][c]).norm());
+      correction[c][i] = held - fk[i][c];
+      stats.foothold_correction_max_m = std::max(stats.foothold_correction_max_m, correction[c][i].norm());
     }
+  }
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    const std::vector<Vec3> carried = swing_corrections(stance_of[c / 4], correction[c]);
+    for (int i = 0; i < n; ++i) targets[i][c] = fk[i][c] + carried[i];
+  }
+  std::vector<ConfigVector> start(n);
+  std::vector<double> need(n, 0.0);
+  for (int i = 0; i < n; ++i) {
     start[i] = out.q[i];
     double miss = leg_ik_lm(robot, *data, targets[i], out.q[i]);
     // The drop that reaches (or, out of reach even then, the one that comes nearest).
@@ -607,6 +624,29 @@ std::vector<double> smooth_envelope(const std::vector<double>& v, int w) {
     env.swap(tmp);
   }
   return env;
+}
+
+std::vector<Vec3> swing_corrections(const std::vector<bool>& stance, const std::vector<Vec3>& held) {
+  const int n = static_cast<int>(stance.size());
+  std::vector<Vec3> out(n, Vec3::Zero());
+  for (int i = 0; i < n;) {
+    if (stance[i]) {
+      out[i] = held[i];
+      ++i;
+      continue;
+    }
+    int b = i;  // the swing is [i, b)
+    while (b < n && !stance[b]) ++b;
+    const Vec3 from = i > 0 ? held[i - 1] : Vec3::Zero();
+    const Vec3 to = b < n ? held[b] : from;
+    for (int j = i; j < b; ++j) {
+      const double s = static_cast<double>(j - i + 1) / (b - i + 1);
+      const double w = s * s * (3.0 - 2.0 * s);
+      out[j] = (1.0 - w) * from + w * to;
+    }
+    i = b;
+  }
+  return out;
 }
 
 }  // namespace kuavo::mocap

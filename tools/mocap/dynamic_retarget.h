@@ -147,4 +147,13 @@ void stage_torque(const model::Model& robot, dynamics::Data& data, const mpc::St
 // (each smoothing pass bounds a first difference by H/(2·(w/2)+1)).
 std::vector<double> smooth_envelope(const std::vector<double>& v, int w);
 
+// One sole corner's foot-target correction (IK target − the TO's own corner) on every frame:
+// `held` on the frames where `stance` is set, carried through each swing [a, b) from the
+// correction its stance ended with, c(a−1), to the one the next begins with, c(b), by a
+// smoothstep in (j − a + 1)/(b − a + 1). A swing at the end keeps c(a−1); one at the start
+// begins from 0. Switching from the TO's foot to the held foothold in one frame made the legs
+// jump at lift-off and touchdown. Over a swing of L frames the step per frame stays within
+// 1.5·|c(b) − c(a−1)|/(L + 1) and the second difference within 6·|c(b) − c(a−1)|/(L + 1)².
+std::vector<dynamics::Vec3> swing_corrections(const std::vector<bool>& stance, const std::vector<dynamics::Vec3>& held);
+
 }  // namespace kuavo::mocap
