@@ -409,6 +409,10 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["base_drop_m_max"] = s.base_drop_max_m;
   d["foothold_miss_m_max"] = s.foothold_miss_max_m;
   d["foothold_miss_frames"] = s.foothold_miss_frames;
+  // The forces re-solved for the final frames (mocap/contact_forces.h).
+  d["forces"] = {{"frames_over_limit", s.forces.frames_over_limit},
+                 {"frames_base_wrench_out_of_cones", s.forces.frames_infeasible},
+                 {"max_excess_Nm", s.forces.max_excess_Nm}};
   d["qp_restarts"] = s.qp_failures;
   d["rejected_steps"] = s.rejected_steps;
   d["lead_in_frames"] = result.repaired.lead_frames;

@@ -20,7 +20,9 @@
 // motion's frame rate, and the legs re-solved so stance feet sit exactly where they landed
 // in the TO (the linearized constraint lets them creep over a stance; a leg that cannot
 // reach lowers the base up to 2 cm, along a smooth envelope of what each frame needs, and a
-// miss beyond that is reported, not hidden).
+// miss beyond that is reported, not hidden). Last, the contact forces are solved again for
+// those final frames (contact_forces.h), the TO's as the prior: the forces the result carries
+// produce its frames, within the friction pyramids.
 // Offline: allocates (the MPC workspace, ~15 MB, on the heap), not real-time.
 #pragma once
 
@@ -30,6 +32,7 @@
 
 #include "controllers/mpc/mpc.h"
 #include "controllers/planner/motion_plan.h"
+#include "tools/mocap/contact_forces.h"
 #include "tools/mocap/contact_label.h"
 
 namespace kuavo::mocap {
@@ -82,12 +85,15 @@ struct DynamicStats {
   double base_drop_max_m = 0.0;  // lowered so a stretched leg reaches its foothold
   double foothold_miss_max_m = 0.0;  // stance corner left off its foothold after the IK
   int foothold_miss_frames = 0;      // frames with a miss above 2 mm
+  ContactForceStats forces;          // the forces re-solved for the final frames
 };
 
 struct DynamicResult {
   std::vector<dynamics::ConfigVector> q;                     // frames at the plan's rate
   std::vector<ContactLabel> contacts;
-  std::vector<CornerForces> forces_N;  // per frame, world, on the robot's sole corners
+  // Per frame, world, on the robot's sole corners: the forces that produce the frames
+  // (contact_forces_for_motion, the TO's forces as the prior).
+  std::vector<CornerForces> forces_N;
   // The committed stage trajectory itself (S + 1 states, S inputs + a copy, dt = ocp.dt_s),
   // before the interpolation to frames and the foothold IK.
   std::vector<mpc::StateVector> stage_x;
