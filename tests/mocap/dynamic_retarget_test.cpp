@@ -631,5 +631,42 @@ TEST(mocap_dynamic_retarget, SwingCorrectionsCarryTheStanceOnesSmoothly) {
   RecordProperty("one_frame_switch_mm", number(delta * 1e3));
 }
 
+// smooth_stages against the closed form of [1 2 1]/4: a straight line plus a component
+// alternating every stage comes back as the line on every stage the fixed ends do not reach
+// (stages 2 … S−2 after two passes), the ends untouched, and a yaw running through ±π stays
+// on its line modulo 2π (averaged without the branch, it would land near 0).
+TEST(mocap_dynamic_retarget, StageSmoothingRemovesTheStageRateRingingAndKeepsLines) {
+  const int S = 40;
+  const double alt = 0.05;
+  std::vector<StateVector> xs(S + 1), line(S + 1);
+  for (int k = 0; k <= S; ++k) {
+    for (int i = 0; i < kNx; ++i) line[k][i] = 0.01 * i + 0.002 * (i + 1) * k;
+    const double yaw = M_PI - 0.3 + 0.03 * k;  // crosses π at k = 10
+    line[k][mpc::kXEuler] = std::remainder(yaw, 2.0 * M_PI);
+    xs[k] = line[k];
+    const double sign = k % 2 == 0 ? 1.0 : -1.0;
+    for (int i = 0; i < kNx; ++i) xs[k][i] += sign * alt * (1.0 + 0.1 * i);
+  }
+  std::vector<StateVector> once = xs;
+  smooth_stages(once, 0);
+  for (int k = 0; k <= S; ++k) EXPECT_EQ(once[k], xs[k]) << "0 passes change nothing";
+  std::vector<StateVector> out = xs;
+  smooth_stages(out, 2);
+  EXPECT_EQ(out[0], xs[0]);
+  EXPECT_EQ(out[S], xs[S]);
+  double worst = 0.0;
+  for (int k = 2; k <= S - 2; ++k) {
+    for (int i = 0; i < kNx; ++i) {
+      double d = out[k][i] - line[k][i];
+      if (i == mpc::kXEuler) d = std::remainder(d, 2.0 * M_PI);
+      worst = std::max(worst, std::abs(d));
+    }
+  }
+  RecordProperty("max_error", number(worst));
+  EXPECT_LT(worst, 1e-12);
+  // Stage 1 keeps a quarter of the end's alternating part (the end stays as it was).
+  EXPECT_NEAR(out[1][3] - line[1][3], 0.25 * alt * 1.3, 1e-12);
+}
+
 }  // namespace
 }  // namespace kuavo::mocap

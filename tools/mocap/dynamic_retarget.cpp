@@ -193,6 +193,10 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     error = std::string("dynamic retargeting: ") + why;
     return false;
   }
+  if (cfg.stage_smoothing_passes < 0 || cfg.stage_smoothing_passes > 8) {
+    error = "dynamic retargeting: stage_smoothing_passes must be within 0..8";
+    return false;
+  }
   if (cfg.commit_stages < 1 || cfg.max_sqp_iterations < 1 || !(cfg.step_tolerance > 0.0)) {
     error = "dynamic retargeting: commit_stages and max_sqp_iterations must be >= 1, step_tolerance > 0";
     return false;
@@ -491,6 +495,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   out.stage_head = heads;
   stats.sqp_iterations_mean = stats.windows > 0 ? static_cast<double>(iterations_total) / stats.windows : 0.0;
 
+  smooth_stages(xs, cfg.stage_smoothing_passes);
   // Stages → frames: Catmull-Rom through the stage poses (smooth accelerations for the
   // inverse dynamics), forces linear between nodes (node k carries u_{k−1}, see below).
   const int n = plan.frame_count;
@@ -630,6 +635,23 @@ std::vector<double> smooth_envelope(const std::vector<double>& v, int w) {
     env.swap(tmp);
   }
   return env;
+}
+
+void smooth_stages(std::vector<StateVector>& xs, int passes) {
+  const int S = static_cast<int>(xs.size()) - 1;
+  std::vector<StateVector> in;
+  for (int pass = 0; pass < passes && S >= 2; ++pass) {
+    in = xs;
+    for (int k = 1; k < S; ++k) {
+      StateVector a = in[k - 1], b = in[k + 1];
+      for (int e = 0; e < 3; ++e) {
+        const int i = mpc::kXEuler + e;
+        a[i] += 2.0 * M_PI * std::round((in[k][i] - a[i]) / (2.0 * M_PI));
+        b[i] += 2.0 * M_PI * std::round((in[k][i] - b[i]) / (2.0 * M_PI));
+      }
+      xs[k] = 0.25 * a + 0.5 * in[k] + 0.25 * b;
+    }
+  }
 }
 
 std::vector<Vec3> swing_corrections(const std::vector<bool>& stance, const std::vector<Vec3>& held) {
