@@ -29,6 +29,26 @@ DynamicsCheck oracle(const model::Model& m, const std::vector<ConfigVector>& q, 
   return out;
 }
 
+// The forces contact_forces_for_motion gives for the frames.
+std::vector<ForceVector> solve(const model::Model& m, const std::vector<ConfigVector>& q,
+                               const std::vector<ContactLabel>& l, const std::vector<ForceVector>& prior,
+                               ContactForceStats& stats) {
+  std::vector<ForceVector> out;
+  contact_forces_for_motion(m, q, l, kRate_hz, kMu, prior, out, stats);
+  return out;
+}
+
+// Standing on the left foot, the right one 5 cm up: the standing pose with the pelvis moved
+// over the left foot, then by `shift` (x ahead, y to the left, z up).
+ConfigVector on_left_foot(const Vec3& shift) {
+  const Standing& st = standing();
+  Keyframe k = stand_key();
+  k.right_down = false;
+  k.right.centre.z() = 0.05;
+  k.base_shift = Vec3(0.0, 0.5 * (st.feet[0].centre.y() - st.feet[1].centre.y()), 0.0) + shift;
+  return frame_of(k, st.q);
+}
+
 // A pure pitch couple on each foot, opposite on the two: +d on the left toes and the right
 // heels, −d on the left heels and the right toes. No net force, no net moment (the couples
 // cancel): the base wrench is unchanged, only the ankles and knees feel it.
@@ -49,9 +69,8 @@ TEST(mocap_contact_forces, AFeasiblePriorComesBackUnchanged) {
   const DynamicsCheck least_norm = oracle(robot(), q, labels, nullptr);
   ASSERT_EQ(least_norm.torque_violations, 0);
   ASSERT_EQ(least_norm.friction_violations, 0);
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(robot(), q, labels, kRate_hz, kMu, least_norm.forces_N, out, stats);
+  const std::vector<ForceVector> out = solve(robot(), q, labels, least_norm.forces_N, stats);
   ASSERT_EQ(out.size(), static_cast<std::size_t>(n));
   double worst = 0.0;
   for (int i = 0; i < n; ++i) worst = std::max(worst, (out[i] - least_norm.forces_N[i]).cwiseAbs().maxCoeff());
@@ -74,9 +93,8 @@ TEST(mocap_contact_forces, ForcesThatDoNotProduceTheMotionAreReplacedByOnesThatD
   const DynamicsCheck before = oracle(robot(), q, labels, &prior);
   ASSERT_GT(before.base_force_residual_N_max, 0.4 * weight_N());
   ASSERT_GT(before.friction_violations, 0);
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(robot(), q, labels, kRate_hz, kMu, prior, out, stats);
+  const std::vector<ForceVector> out = solve(robot(), q, labels, prior, stats);
   const DynamicsCheck after = oracle(robot(), q, labels, &out);
   RecordProperty("residual_N", number(after.base_force_residual_N_max));
   EXPECT_LT(after.base_force_residual_N_max, 1e-6 * weight_N());
@@ -104,9 +122,8 @@ TEST(mocap_contact_forces, DoubleSupportMovesTheLoadOffAJointBeyondItsLimit) {
   model::Model weak = robot();
   weak.limits.torque_Nm[kKneeLeft] = 0.5 * (even + uneven);
   ASSERT_GT(oracle(weak, q, labels, &prior).torque_violations, 0);
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(weak, q, labels, kRate_hz, kMu, prior, out, stats);
+  const std::vector<ForceVector> out = solve(weak, q, labels, prior, stats);
   const DynamicsCheck after = oracle(weak, q, labels, &out);
   RecordProperty("knee_Nm", number(std::abs(after.tau_Nm[0][kKneeLeft])));
   EXPECT_EQ(after.torque_violations, 0);
@@ -120,12 +137,7 @@ TEST(mocap_contact_forces, DoubleSupportMovesTheLoadOffAJointBeyondItsLimit) {
 // it, and the excess reported is the oracle's |τ| − limit.
 TEST(mocap_contact_forces, SingleSupportReportsTheExcessTheMotionNeeds) {
   const int n = 3;
-  const Standing& st = standing();
-  Keyframe k = stand_key();
-  k.right_down = false;
-  k.right.centre.z() = 0.05;
-  k.base_shift = Vec3(0.0, 0.5 * (st.feet[0].centre.y() - st.feet[1].centre.y()), -0.03);
-  const auto q = repeat(frame_of(k, st.q), n);
+  const auto q = repeat(on_left_foot(Vec3(0.0, 0.0, -0.03)), n);
   const std::vector<ContactLabel> labels(n, ContactLabel::kLeftSupport);
   const DynamicsCheck least_norm = oracle(robot(), q, labels, nullptr);
   ASSERT_EQ(least_norm.zmp_outside_m_max, 0.0);  // the CoM over the left sole
@@ -134,10 +146,9 @@ TEST(mocap_contact_forces, SingleSupportReportsTheExcessTheMotionNeeds) {
   ASSERT_GT(knee, 20.0);
   model::Model weak = robot();
   weak.limits.torque_Nm[kKneeLeft] = 5.0;
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(weak, q, labels, kRate_hz, kMu, std::vector<ForceVector>(n, ForceVector::Zero()), out,
-                            stats);
+  const std::vector<ForceVector> out =
+      solve(weak, q, labels, std::vector<ForceVector>(n, ForceVector::Zero()), stats);
   RecordProperty("excess_Nm", number(stats.max_excess_Nm));
   EXPECT_EQ(stats.frames_over_limit, n);
   EXPECT_EQ(stats.frames_infeasible, 0);
@@ -154,12 +165,7 @@ TEST(mocap_contact_forces, SingleSupportReportsTheExcessTheMotionNeeds) {
 // 27 N·m, and the excess reported is the oracle's worst motor's.
 TEST(mocap_contact_forces, AnAnkleBeyondItsMotorsIsReportedInMotorTorque) {
   const int n = 2;
-  const Standing& st = standing();
-  Keyframe k = stand_key();
-  k.right_down = false;
-  k.right.centre.z() = 0.05;
-  k.base_shift = Vec3(0.05, 0.5 * (st.feet[0].centre.y() - st.feet[1].centre.y()) + 0.035, -0.03);
-  const auto q = repeat(frame_of(k, st.q), n);
+  const auto q = repeat(on_left_foot(Vec3(0.05, 0.035, -0.03)), n);
   const std::vector<ContactLabel> labels(n, ContactLabel::kLeftSupport);
   const DynamicsCheck least_norm = oracle(robot(), q, labels, nullptr);
   ASSERT_EQ(least_norm.zmp_outside_m_max, 0.0);
@@ -169,10 +175,9 @@ TEST(mocap_contact_forces, AnAnkleBeyondItsMotorsIsReportedInMotorTorque) {
   const drivers::AnkleMotors motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot()));
   ASSERT_TRUE(motors.active);
   const double limit = motors.limit_Nm[0](worst - model::kLeftLegFirst - 4);
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(robot(), q, labels, kRate_hz, kMu, std::vector<ForceVector>(n, ForceVector::Zero()), out,
-                            stats);
+  const std::vector<ForceVector> out =
+      solve(robot(), q, labels, std::vector<ForceVector>(n, ForceVector::Zero()), stats);
   RecordProperty("excess_Nm", number(stats.max_excess_Nm));
   EXPECT_EQ(stats.frames_over_limit, n);
   EXPECT_NEAR(stats.max_excess_Nm, (least_norm.max_torque_ratio - 1.0) * limit, 1e-3);
@@ -184,10 +189,9 @@ TEST(mocap_contact_forces, AWrenchOutOfTheConesIsCountedAndStaysInThem) {
   const int n = 3;
   const auto q = repeat(standing().q, n);
   const std::vector<ContactLabel> labels(n, ContactLabel::kLeftSupport);
-  std::vector<ForceVector> out;
   ContactForceStats stats;
-  contact_forces_for_motion(robot(), q, labels, kRate_hz, kMu, std::vector<ForceVector>(n, ForceVector::Zero()), out,
-                            stats);
+  const std::vector<ForceVector> out =
+      solve(robot(), q, labels, std::vector<ForceVector>(n, ForceVector::Zero()), stats);
   EXPECT_EQ(stats.frames_infeasible, n);
   const DynamicsCheck after = oracle(robot(), q, labels, &out);
   EXPECT_EQ(after.friction_violations, 0);

@@ -5,14 +5,15 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "drivers/config/drivers_config.h"
 #include "drivers/transmission/ankle_motors.h"
-#include <cstdlib>
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/leg_ik_lm.h"
 
@@ -55,6 +56,16 @@ constexpr int kMaxRestarts = 3;
 // Step rejection: violation after a step above growth × before + slack (see the loop).
 constexpr double kViolationGrowth = 1.5;
 constexpr double kViolationSlack = 0.02;
+
+// x with its base Euler angles moved by whole turns onto the branch of `ref`'s (a yaw through
+// ±π would otherwise interpolate or average the long way round).
+StateVector on_branch_of(StateVector x, const StateVector& ref) {
+  for (int e = 0; e < 3; ++e) {
+    const int i = mpc::kXEuler + e;
+    x[i] += 2.0 * M_PI * std::round((ref[i] - x[i]) / (2.0 * M_PI));
+  }
+  return x;
+}
 
 // Uniform Catmull-Rom between p1 (s = 0) and p2 (s = 1).
 template <class V>
@@ -507,15 +518,9 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     const int k = std::clamp(static_cast<int>(std::floor(t / dt)), 0, S - 1);
     const double s = std::clamp(t / dt - k, 0.0, 1.0);
     const auto at = [&](int m) -> const StateVector& { return xs[std::clamp(m, 0, S)]; };
-    // The Euler angles of the four stages on one branch (a yaw through ±π would otherwise
-    // interpolate the long way round).
-    std::array<StateVector, 4> p = {at(k - 1), at(k), at(k + 1), at(k + 2)};
-    for (StateVector& pi : p) {
-      for (int e = 0; e < 3; ++e) {
-        const double d = p[1][mpc::kXEuler + e] - pi[mpc::kXEuler + e];
-        pi[mpc::kXEuler + e] += 2.0 * M_PI * std::round(d / (2.0 * M_PI));
-      }
-    }
+    // The four stages on one branch of their Euler angles.
+    const std::array<StateVector, 4> p = {on_branch_of(at(k - 1), at(k)), at(k), on_branch_of(at(k + 1), at(k)),
+                                          on_branch_of(at(k + 2), at(k))};
     const StateVector x = catmull_rom<StateVector>(p[0], p[1], p[2], p[3], s);
     const mpc::HeadVector head = heads[k] + s * (heads[k + 1] - heads[k]);
     out.q[i] = mpc::configuration_from_state(x, head);
@@ -611,7 +616,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   // The frames are final: the forces that produce them (contact_forces.h), the TO's as the
   // prior. The TO's own left the built-in dance's frames a base-wrench residual of 27 N on
   // average (860 N at a touchdown); these, 1.1 N.
-  const std::vector<CornerForces> prior = out.forces_N;
+  const std::vector<CornerForces> prior = std::move(out.forces_N);
   contact_forces_for_motion(robot_model, out.q, out.contacts, plan.rate_hz, ocp.friction_coefficient, prior,
                             out.forces_N, stats.forces);
   stats.solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
@@ -643,13 +648,7 @@ void smooth_stages(std::vector<StateVector>& xs, int passes) {
   for (int pass = 0; pass < passes && S >= 2; ++pass) {
     in = xs;
     for (int k = 1; k < S; ++k) {
-      StateVector a = in[k - 1], b = in[k + 1];
-      for (int e = 0; e < 3; ++e) {
-        const int i = mpc::kXEuler + e;
-        a[i] += 2.0 * M_PI * std::round((in[k][i] - a[i]) / (2.0 * M_PI));
-        b[i] += 2.0 * M_PI * std::round((in[k][i] - b[i]) / (2.0 * M_PI));
-      }
-      xs[k] = 0.25 * a + 0.5 * in[k] + 0.25 * b;
+      xs[k] = 0.25 * on_branch_of(in[k - 1], in[k]) + 0.5 * in[k] + 0.25 * on_branch_of(in[k + 1], in[k]);
     }
   }
 }
