@@ -150,6 +150,13 @@ bool reference_plan_finite(const planner::ReferencePlan& plan) noexcept {
   return true;
 }
 
+stack::StackConfig firmware_stack_config(const FirmwareConfig& fw_config) {
+  stack::StackConfig config;
+  config.planner = stack::PlannerKind::kMpc;
+  config.upper_body_delay_s = 1e-9 * static_cast<double>(fw_config.control_period_ns);
+  return config;
+}
+
 bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& channels, const model::Model& model,
                 const stack::StackConfig& config, const FirmwareConfig& fw_config, const planner::MotionPlan& motion,
                 const char*& error) {

@@ -142,6 +142,16 @@ struct DanceControl {
 
 // --- Start-up (not real-time) ---
 
+// The online stack as the robot image runs it, for kuavo_fw and kuavo_fw_sim alike: the MPC
+// planner, and the upper body planned for the moment its command acts -- the buses answer
+// the previous tick's command, so the joint readings the tick runs on are one control
+// period old (StackConfig::upper_body_delay_s). Measured in the firmware loop against
+// `kuavo simulate` (770acda's motions, carpet, seeds 2-4), arms RMS: cmu_05_07 +20/+20/+20 %
+// without, +13/+14/+14 % with it; perfume +15/+13/+14 → +10/+8/+9 %; cmu_05_20 +19/+19/+19
+// → +11/+11/+11 %; the legs within 0.0009 rad of before. 4 ms (the Ruiwo bus's 250 Hz
+// period) left cmu_05_07's arms at +15 %.
+stack::StackConfig firmware_stack_config(const FirmwareConfig& fw_config);
+
 // Binds the motion (finished and, if wanted, balance-filtered; read-only from here on) and
 // the channels, prepares both workspaces. The config's planner is normally kMpc. false with
 // a message if the stack's configuration or the motion is unusable.

@@ -228,8 +228,7 @@ int run(int argc, char** argv) {
     return 2;
   }
   // The dance: loaded, validated and balance-filtered before anything is sent.
-  kuavo::stack::StackConfig stack_config;
-  stack_config.planner = kuavo::stack::PlannerKind::kMpc;
+  const kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
   std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
     memory.reset(new (std::nothrow) DanceMemory);

@@ -27,6 +27,7 @@ const char* stack_validate_config(const StackConfig& config) {
   }
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
   if (!(config.plan_blend_s >= 0.0 && config.plan_blend_s <= config.plan_period_s)) return "plan blend outside [0, plan period]";
+  if (!(config.upper_body_delay_s >= 0.0 && config.upper_body_delay_s <= 0.02)) return "upper-body delay outside 0..0.02 s";
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
     if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
@@ -80,7 +81,19 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
   ++ws.ticks;
   if (ws.stage_clock != nullptr) ws.stamps.estimator_done_ns = ws.stage_clock();
-  const wbc::WbcStatus status = wbc::wbc_step_rt(model, config.wbc, ws.wbc, q, v, ws.reference, now_ns, command);
+  const dynamics::ConfigVector* q_wbc = &q;
+  if (config.upper_body_delay_s > 0.0) {
+    const double d = config.upper_body_delay_s;
+    ws.predicted_q = q;
+    for (int j = model::kLeftArmFirst; j < model::kNumJoints; ++j) {
+      ws.predicted_q[7 + j] += v[6 + j] * d;
+      const double a = ws.reference.joint_acceleration_rad_s2[j];
+      ws.reference.joint_position_rad[j] += (ws.reference.joint_velocity_rad_s[j] + 0.5 * a * d) * d;
+      ws.reference.joint_velocity_rad_s[j] += a * d;
+    }
+    q_wbc = &ws.predicted_q;
+  }
+  const wbc::WbcStatus status = wbc::wbc_step_rt(model, config.wbc, ws.wbc, *q_wbc, v, ws.reference, now_ns, command);
   if (ws.stage_clock != nullptr) ws.stamps.wbc_done_ns = ws.stage_clock();
   return status;
 }

@@ -72,8 +72,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     run.error = loop->error();
     return out;
   }
-  stack::StackConfig stack_config;
-  stack_config.planner = stack::PlannerKind::kMpc;  // as kuavo_fw runs it
+  const stack::StackConfig stack_config = firmware_stack_config(config.loop.firmware);  // as kuavo_fw runs it
   if (motion != nullptr && !loop->enable_dance(*motion, stack_config, config.plan_latency_ns)) {
     run.ok = false;
     run.error = "dance: " + loop->error();

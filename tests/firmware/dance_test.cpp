@@ -38,11 +38,8 @@ const planner::MotionPlan& standing_motion() {
   return *plan;
 }
 
-stack::StackConfig mpc_stack() {
-  stack::StackConfig c;
-  c.planner = stack::PlannerKind::kMpc;
-  return c;
-}
+// What the robot image runs (kuavo_fw, kuavo_fw_sim).
+stack::StackConfig mpc_stack() { return firmware_stack_config(FirmwareConfig{}); }
 
 // Static, as on the robot (the planner's MPC workspace is ~15 MB).
 DanceControl& control_side() {

@@ -55,11 +55,8 @@ const planner::MotionPlan& with_side_steps() {
   return *plan;
 }
 
-stack::StackConfig mpc_stack() {
-  stack::StackConfig c;
-  c.planner = stack::PlannerKind::kMpc;
-  return c;
-}
+// What the robot image runs (kuavo_fw, kuavo_fw_sim).
+stack::StackConfig mpc_stack() { return firmware_stack_config(FirmwareConfig{}); }
 
 void expect_clean_wire(const FirmwareLoop& loop) {
   EXPECT_EQ(loop.wire_check().bad_values, 0u) << loop.wire_check().first_bad;
