@@ -126,6 +126,21 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
     EXPECT_LE(r["end_s"].get<double>(), duration + 0.011);  // within one frame
     EXPECT_FALSE(r["reason"].get<std::string>().empty());
   }
+  // The CoM path each stage keeps: the whole motion's as the expressiveness figures have it,
+  // and per repair over its range (the lead-in's precedes the clip: no geometric path there).
+  const auto& path = d["com_path_m"];
+  EXPECT_DOUBLE_EQ(path["geometric"].get<double>(), d["geometric"]["expressiveness"]["com_path_m"].get<double>());
+  EXPECT_DOUBLE_EQ(path["dynamic"].get<double>(), d["dynamic"]["expressiveness"]["com_path_m"].get<double>());
+  EXPECT_DOUBLE_EQ(path["kept"].get<double>(), path["dynamic"].get<double>() / path["geometric"].get<double>());
+  EXPECT_GT(path["reference"].get<double>(), 1.0);
+  for (const auto& r : repairs) {
+    for (const char* stage : {"geometric", "reference", "dynamic"}) {
+      EXPECT_GE(r["com_path_m"][stage].get<double>(), 0.0) << r.dump();
+      EXPECT_LE(r["com_path_m"][stage].get<double>(), path[stage].get<double>() + 1e-9) << r.dump();
+    }
+  }
+  EXPECT_EQ(repairs[0]["com_path_m"]["geometric"].get<double>(), 0.0);
+  EXPECT_GT(repairs[0]["com_path_m"]["dynamic"].get<double>(), 0.0);  // the blend into the first pose moves
   // The built-in dance's steps survive (the repair may merge, not drop, most of them).
   EXPECT_GE(d["steps"]["robot"].get<int>(), 0.8 * d["steps"]["human"].get<int>());
   // The motion written loads: the loader refuses joints outside the limits, and the dynamic

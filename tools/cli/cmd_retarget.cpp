@@ -447,6 +447,13 @@ int run(int argc, char** argv) {
         d["dynamic"]["torque_violations"].get<int>(), d["geometric"]["torque_violations"].get<int>(),
         d["dynamic"]["friction_violations"].get<int>(), d["dynamic"]["zmp_outside_m_max"].get<double>(),
         d["geometric"]["zmp_outside_m_max"].get<double>());
+    {
+      // What the repairs and the optimization keep of the CoM path (per repair: the report).
+      const auto& p = d["com_path_m"];
+      std::printf("kuavo retarget: dynamic: CoM path geometric %.2f m, after the repairs %.2f m, dynamic %.2f m (%.0f %% kept)\n",
+                  p["geometric"].get<double>(), p["reference"].get<double>(), p["dynamic"].get<double>(),
+                  100.0 * p["kept"].get<double>());
+    }
     const auto& c = d["clamped_to_joint_limits"];
     if (c["samples"].get<int>() > 0) {
       std::printf("kuavo retarget: dynamic: %d joint samples put back within the position limits, up to %.4f rad (%s)\n",

@@ -430,9 +430,29 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["friction_violations"] = dyn_check.friction_violations;
   d["zmp_outside_m_max"] = dyn_check.zmp_outside_m_max;
   d["max_torque_ratio"] = dyn_check.max_torque_ratio;
+  // The CoM path each stage keeps, and where it goes: the geometric frames, the reference the
+  // repairs hand the optimization (result.repaired.q), the result. Output frame i shows
+  // geometric frame i − lead_frames; a repair's range is in the output clock.
+  const std::vector<dynamics::Vec3> com_geo = mocap::com_trajectory(robot, geometric.q);
+  const std::vector<dynamics::Vec3> com_ref = mocap::com_trajectory(robot, result.repaired.q);
+  const std::vector<dynamics::Vec3> com_dyn = mocap::com_trajectory(robot, result.q);
+  const int lead = result.repaired.lead_frames;
+  const auto paths = [&](int a, int b) {
+    return ordered_json{{"geometric", mocap::path_length(com_geo, a - lead, b - lead)},
+                        {"reference", mocap::path_length(com_ref, a, b)},
+                        {"dynamic", mocap::path_length(com_dyn, a, b)}};
+  };
+  {
+    ordered_json p = paths(0, static_cast<int>(result.q.size()) - 1);
+    const double g = p["geometric"].get<double>();
+    p["kept"] = g > 0.0 ? p["dynamic"].get<double>() / g : 1.0;
+    d["com_path_m"] = p;
+  }
   ordered_json repairs = ordered_json::array();
   for (const mocap::Repair& r : result.repaired.repairs) {
-    repairs.push_back({{"start_s", r.start_s}, {"end_s", r.end_s}, {"kind", mocap::to_string(r.kind)}, {"reason", r.reason}});
+    const int a = static_cast<int>(std::lround(r.start_s * rate)), b = static_cast<int>(std::lround(r.end_s * rate));
+    repairs.push_back({{"start_s", r.start_s}, {"end_s", r.end_s}, {"kind", mocap::to_string(r.kind)}, {"reason", r.reason},
+                       {"com_path_m", paths(a, b)}});
   }
   d["repairs"] = repairs;
   d["verification"] = {{"rounds", verify_round},

@@ -8,6 +8,26 @@
 
 namespace kuavo::mocap {
 
+std::vector<dynamics::Vec3> com_trajectory(const model::Model& robot, const std::vector<dynamics::ConfigVector>& q) {
+  std::vector<dynamics::Vec3> out;
+  out.reserve(q.size());
+  auto data = std::make_unique<dynamics::Data>();
+  for (const dynamics::ConfigVector& qi : q) {
+    dynamics::forward_kinematics(robot, *data, qi);
+    dynamics::crba(robot, *data);
+    out.push_back(data->com_m);
+  }
+  return out;
+}
+
+double path_length(const std::vector<dynamics::Vec3>& p, int a, int b) {
+  a = std::max(a, 0);
+  b = std::min(b, static_cast<int>(p.size()) - 1);
+  double length = 0.0;
+  for (int i = a + 1; i <= b; ++i) length += (p[i] - p[i - 1]).norm();
+  return length;
+}
+
 void motion_metrics(const model::Model& robot, const HumanTargets& targets, const std::vector<dynamics::ConfigVector>& q,
                     const std::vector<ContactLabel>& contacts, double rate_hz, int first_frame, MotionMetrics& out) {
   out = MotionMetrics{};
@@ -31,15 +51,11 @@ void motion_metrics(const model::Model& robot, const HumanTargets& targets, cons
   } hands, feet, pelvis;
   const int kp_hands[] = {kKpLeftHand, kKpRightHand};
   const int kp_feet[] = {kKpLeftAnkle, kKpRightAnkle};
-  Vec3 com_prev = Vec3::Zero();
+  out.com_path_m = path_length(com_trajectory(robot, q), 0, n - 1);
   for (int i = 0; i < n; ++i) {
-    dynamics::forward_kinematics(robot, *data, q[i]);
-    dynamics::crba(robot, *data);
-    const Vec3 com = data->com_m;
-    if (i > 0) out.com_path_m += (com - com_prev).norm();
-    com_prev = com;
     const int d = i - first_frame;
     if (d < 0 || d >= static_cast<int>(targets.frames.size())) continue;
+    dynamics::forward_kinematics(robot, *data, q[i]);
     const TargetFrame& t = targets.frames[d];
     for (int kp : kp_hands) {
       if (targets.present[kp]) hands.add((point(kp) - t.position_m[kp]).norm());

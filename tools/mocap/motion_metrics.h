@@ -22,6 +22,13 @@ struct MotionMetrics {
   double duration_s = 0.0;
 };
 
+// The CoM of every frame (forward kinematics and the bodies' masses), world axes [m].
+std::vector<dynamics::Vec3> com_trajectory(const model::Model& robot, const std::vector<dynamics::ConfigVector>& q);
+
+// Length of the polyline through p[a] … p[b] (indices clamped to p; 0 if the range is empty
+// after clamping). Additive: path_length(p, a, m) + path_length(p, m, b) = path_length(p, a, b).
+double path_length(const std::vector<dynamics::Vec3>& p, int a, int b);
+
 // q[first_frame + d] shows targets.frames[d] (first_frame: the frames the motion adds in
 // front, e.g. a lead-in). Keypoint errors over the overlap; speeds, CoM path and steps over
 // all frames.
