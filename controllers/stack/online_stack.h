@@ -101,8 +101,8 @@ struct ControlWorkspace {
   hal::TimeNs blend_start_ns = 0;
   bool blend_pending = false;  // a plan was applied; the blend starts at the next tick
   bool blending = false;
-  wbc::WbcReference reference;    // this tick's, interpolated
-  dynamics::ConfigVector predicted_q = dynamics::ConfigVector::Zero();  // config.upper_body_delay_s
+  wbc::WbcReference reference;    // this tick's, interpolated (upper body advanced by config.upper_body_delay_s)
+  dynamics::ConfigVector predicted_q = dynamics::ConfigVector::Zero();  // with a delay: the state the WBC ran on
   std::array<double, model::kNumContactPoints> planned_contact_s{};  // how long each corner has been planned in contact
   estimator::ContactFlags estimator_contact{};
   hal::TimeNs last_tick_ns = 0;
