@@ -45,11 +45,12 @@ int contacts_of_foot(const planner::ContactFlags& flags, int foot) {
   return n;
 }
 
-// u_ref forces: the least-norm stance forces that carry the weight with no moment about the
-// CoM, f = Aᵀ(AAᵀ)⁻¹[m g; 0] with Aᵢ = [I; [cᵢ − r]×]. With the CoM over the support that
-// is the static solution itself (an equal split would put a moment on the robot and bias the
-// optimum toward leaning). Zero in flight.
-void reference_forces(const planner::PlanKnot& knot, double mg, InputVector& u_ref) {
+// u_ref forces: the least-norm stance forces that carry the wrench w = [Σf; Σ(cᵢ − r) × fᵢ],
+// f = Aᵀ(AAᵀ)⁻¹ w with Aᵢ = [I; [cᵢ − r]×]: by default w = [m g; 0], the weight with no
+// moment about the CoM -- with the CoM over the support the static solution itself (an
+// equal split would put a moment on the robot and bias the optimum toward leaning); with
+// MpcConfig::reference_forces_from_motion the reference's own wrench. Zero in flight.
+void reference_forces(const planner::PlanKnot& knot, const Vec6& w, InputVector& u_ref) {
   u_ref.segment<3 * kNumPoints>(kUForces).setZero();
   dynamics::Mat6 gram = dynamics::Mat6::Zero();
   int stance = 0;
@@ -65,8 +66,6 @@ void reference_forces(const planner::PlanKnot& knot, double mg, InputVector& u_r
   if (stance == 0) return;
   // Regularized: a line or point support leaves a moment direction without authority.
   gram.diagonal().array() += kReferenceForceRegularization;
-  Vec6 w = Vec6::Zero();
-  w[2] = mg;
   const Vec6 y = gram.ldlt().solve(w);
   for (int c = 0; c < kNumPoints; ++c) {
     if (!knot.in_contact[c]) continue;
@@ -543,6 +542,8 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
   // of the previous call are taken from the cache: slot k + s held the knot now at k when the
   // window moved s ≥ 0 stages (read before it is overwritten, k ascending).
   const double mg = model.total_mass_kg * model::kGravity_m_s2;
+  Vec6 weight = Vec6::Zero();
+  weight[2] = mg;
   const hal::TimeNs dt_ns = static_cast<hal::TimeNs>(std::llround(cfg.dt_s * 1e9));
   int s = -1;
   if (ws.reference_cached > 0 && dt_ns > 0) {
@@ -562,7 +563,7 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     } else {
       ws.reference_knot[k] = knot;
       state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.reference_state[k]);
-      reference_forces(knot, mg, ws.u_ref[k]);
+      reference_forces(knot, weight, ws.u_ref[k]);
       ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
     }
     ws.x_ref[k] = ws.reference_state[k];
@@ -572,6 +573,18 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     ws.head_rad[k] = knot.q.segment<2>(7 + kNumMpcJoints);
   }
   ws.reference_cached = T + 1;
+  if (cfg.reference_forces_from_motion) {
+    // The wrench the reference itself needs: m (r̈ + g) and ḣ, forward differences of its
+    // states (the last knot takes the difference before it).
+    for (int k = 0; k <= T; ++k) {
+      const int a = std::min(k, T - 1), b = a + 1;
+      Vec6 w = weight;
+      w.head<3>() += model.total_mass_kg / cfg.dt_s *
+                     (ws.reference_state[b].segment<3>(kXComVelocity) - ws.reference_state[a].segment<3>(kXComVelocity));
+      w.tail<3>() = (ws.reference_state[b].segment<3>(kXMomentum) - ws.reference_state[a].segment<3>(kXMomentum)) / cfg.dt_s;
+      reference_forces(reference.knots[k], w, ws.u_ref[k]);
+    }
+  }
 
   StateVector x0 = x_initial;
   x0[kXEuler] = ws.x_ref[0][kXEuler] + wrap_angle(x0[kXEuler] - ws.x_ref[0][kXEuler]);

@@ -436,3 +436,51 @@ TEST(MpcStep, YawAcrossThePiCutIsTheSmallDifference) {
 
 }  // namespace
 }  // namespace kuavo::test
+
+namespace kuavo::test {
+namespace {
+
+// MpcConfig::reference_forces_from_motion: the reference forces carry the reference's own
+// wrench. Oracle: a whole robot translating at a constant acceleration a (joints still, no
+// rotation) needs Σf = m (a + g e_z) and no moment about its CoM; the default (static) forces
+// carry m g e_z alone whatever the motion does.
+TEST(MpcReferenceForces, FromTheMotionTheyCarryItsAcceleration) {
+  const dynamics::Vec3 accel(0.6, -0.4, 0.3);
+  for (const bool from_motion : {false, true}) {
+    mpc::MpcConfig cfg;
+    cfg.reference_forces_from_motion = from_motion;
+    MpcFixture& f = mpc_fixture(cfg);
+    const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
+    const int count = mpc::mpc_num_stages(f.config) + 1;
+    f.window.count = count;
+    f.window.dt_s = f.config.dt_s;
+    for (int k = 0; k < count; ++k) {
+      const double t = k * f.config.dt_s;
+      dynamics::ConfigVector q = f.q0;
+      q.head<3>() += 0.5 * accel * t * t;
+      dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+      v.head<3>() = base.conjugate() * (accel * t);  // base twist in base axes
+      planner::plan_knot_from_state(f.model, f.data, q, v, all_contacts(), static_cast<hal::TimeNs>(std::llround(t * 1e9)),
+                                    f.window.knots[k]);
+    }
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.window.knots[0].q, f.window.knots[0].v, f.window),
+              MpcStatus::kOk);
+    const double m = f.model.total_mass_kg;
+    const dynamics::Vec3 expected =
+        m * ((from_motion ? accel : dynamics::Vec3::Zero()) + dynamics::Vec3(0.0, 0.0, model::kGravity_m_s2));
+    for (int k = 0; k < count - 1; k += 7) {
+      dynamics::Vec3 sum = dynamics::Vec3::Zero(), moment = dynamics::Vec3::Zero();
+      const planner::PlanKnot& knot = f.window.knots[k];
+      for (int c = 0; c < mpc::kNumPoints; ++c) {
+        const dynamics::Vec3 fc = f.ws.u_ref[k].segment<3>(3 * c);
+        sum += fc;
+        moment += (knot.point_position_m.segment<3>(3 * c) - knot.com_position_m).cross(fc);
+      }
+      EXPECT_LT((sum - expected).norm(), 1e-3) << (from_motion ? "motion" : "static") << " knot " << k << ": " << sum.transpose();
+      EXPECT_LT(moment.norm(), 1e-3) << (from_motion ? "motion" : "static") << " knot " << k << ": " << moment.transpose();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kuavo::test

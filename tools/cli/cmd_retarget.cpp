@@ -5,6 +5,7 @@
 //                  [--stage geometric|dynamic] [--horizon S] [--repairs FILE] [--dynamic-csv OUT.csv]
 //                  [--torque-weight W] [--attenuate ROUNDS] [--verify ROUNDS] [--figures DIR|none]
 //                  [--support-margin M] [--stage-smoothing PASSES] [--human-csv OUT.csv] [--duration S]
+//                  [--force-reference static|motion]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
@@ -14,7 +15,9 @@
 // dynamic_retarget.h). --support-margin M (0…0.04 m, default 0) plans the TO's centre of
 // pressure M inside the soles (DynamicRetargetConfig::support_margin_m). --stage-smoothing
 // PASSES (0…8, default 2): low-pass passes over the TO's stages before they become frames
-// (DynamicRetargetConfig::stage_smoothing_passes). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
+// (DynamicRetargetConfig::stage_smoothing_passes). --force-reference static|motion (default
+// static): the TO's reference forces carry the weight alone, or the reference motion's own
+// centroidal wrench (mpc::MpcConfig::reference_forces_from_motion). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
@@ -118,7 +121,7 @@ int run(int argc, char** argv) {
   double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, smoothing_passes = 0, verify_rounds = DynamicStageOptions{}.verify_rounds,
             verify_show = static_cast<long long>(DynamicStageOptions{}.verify_show_seeds.size());
-  std::string verify_mujoco = "on", verify_firmware = "on";
+  std::string verify_mujoco = "on", verify_firmware = "on", force_reference = "static";
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   args::Parser p("kuavo retarget");
@@ -137,6 +140,7 @@ int run(int argc, char** argv) {
   p.number("--torque-weight", "W", 0.0, 1e4, "", &torque_weight).modes = kDynamic;
   p.number("--support-margin", "M", 0.0, 0.04, "m", &support_margin_m).modes = kDynamic;
   p.integer("--stage-smoothing", "PASSES", 0, 8, "passes", &smoothing_passes).modes = kDynamic;
+  p.choice("--force-reference", {"static", "motion"}, &force_reference).modes = kDynamic;
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
   p.integer("--verify", "ROUNDS", 0, 16, "rounds", &verify_rounds).modes = kDynamic;
   p.choice("--verify-mujoco", {"on", "off"}, &verify_mujoco).modes = kDynamic;
@@ -180,6 +184,7 @@ int run(int argc, char** argv) {
   if (p.given("--torque-weight")) dyn_options.dynamic.torque_penalty_weight = torque_weight;
   if (p.given("--support-margin")) dyn_options.dynamic.support_margin_m = support_margin_m;
   if (p.given("--stage-smoothing")) dyn_options.dynamic.stage_smoothing_passes = static_cast<int>(smoothing_passes);
+  dyn_options.dynamic.ocp.reference_forces_from_motion = force_reference == "motion";
   dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);
   dyn_options.verify_rounds = static_cast<int>(verify_rounds);
   dyn_options.verify_mujoco = verify_mujoco == "on";

@@ -73,6 +73,18 @@ struct DynamicRetargetConfig {
   // 1295/879/1225/816 → 1108/636/747/622 → 1069/610/635/575, max |τ|/limit
   // 4.6/4.2/18.5/5.8 → 2.5/2.4/9.0/2.6 → 2.2/2.4/3.1/2.7; CoM path −1 to −2 %.
   int stage_smoothing_passes = 2;
+  // ocp.reference_forces_from_motion (`kuavo retarget --force-reference motion`, off by
+  // default): the input cost's reference forces carry the reference's own centroidal wrench
+  // instead of the static weight, which pulled every dynamic gesture toward standing. With
+  // `--verify 0` (built-in / perfume / cmu_05_07 / cmu_05_20), static → motion: CoM path kept
+  // 61/55/59/34 → 73/62/61/40 %; the oracle's torque violations 1069/610/635/575 →
+  // 575/435/663/476; friction 0 throughout. The built-in dance's whole closed-loop check then
+  // passes in round 0 (its 13 runs). But the CMU clips' frames whose base wrench no forces in
+  // the cones supply grow (330 → 474, 221 → 292), cmu_05_07's max |τ|/limit 3.1 → 13.4:
+  // the reference wrench of an infeasible reference is itself outside the cones (a next step:
+  // project it onto what the support can carry). Off until the clips' checks and the show
+  // campaign say more.
+
   // Called after each window with the share of the motion committed so far (0…1]; empty: none.
   std::function<void(double)> on_progress;
   static mpc::MpcConfig default_ocp();
