@@ -4,6 +4,9 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+
+#include "controllers/qp/dense_qp_solver.h"
 
 namespace kuavo::mpc {
 namespace {
@@ -72,6 +75,52 @@ void reference_forces(const planner::PlanKnot& knot, const Vec6& w, InputVector&
     const Mat3 s = skew_of(knot.point_position_m.segment<3>(3 * c) - knot.com_position_m);
     u_ref.segment<3>(kUForces + 3 * c) = y.head<3>() + s.transpose() * y.tail<3>();
   }
+}
+
+// u_ref forces for a wrench w the support may not carry (reference_forces_from_motion): the
+// stance corners' forces minimizing ½‖A f − w‖² + ½ε‖f‖² subject to the friction pyramids
+// |f_x|, |f_y| ≤ μ f_z and f_z ≥ 0 (A as in reference_forces; force rows in N and moment rows
+// in N·m weighted alike, a 1 m lever). A wrench inside what the feet can carry comes back
+// exactly, as its least-norm forces within the cones; one outside (a centre of pressure off
+// the feet, a pull on the ground, a push beyond friction, as an infeasible reference asks)
+// as the nearest wrench they can carry. False if the QP failed (u_ref is then left as is).
+bool reference_forces_in_cones(const planner::PlanKnot& knot, const Vec6& w, double mu, MpcWorkspace& ws,
+                               InputVector& u_ref) {
+  constexpr int kF = 3 * kNumPoints;
+  WrenchQp& qp = ws.wrench_qp;
+  Eigen::Matrix<double, 6, kF> a = Eigen::Matrix<double, 6, kF>::Zero();
+  qp.C.setZero();
+  qp.c_lower.setConstant(-qp::kInfinity);
+  qp.c_upper.setConstant(qp::kInfinity);
+  qp.x_lower.setConstant(-qp::kInfinity);
+  qp.x_upper.setConstant(qp::kInfinity);
+  bool any = false;
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (!knot.in_contact[c]) continue;  // its columns stay zero: the regularization keeps it at 0
+    any = true;
+    const int x = 3 * c, z = x + 2;
+    a.block<3, 3>(0, x).setIdentity();
+    a.block<3, 3>(3, x) = skew_of(knot.point_position_m.segment<3>(3 * c) - knot.com_position_m);
+    qp.x_lower[z] = 0.0;
+    for (int axis = 0; axis < 2; ++axis) {
+      const int r = 4 * c + 2 * axis;
+      qp.C(r, x + axis) = 1.0, qp.C(r, z) = -mu, qp.c_upper[r] = 0.0;              // f_t − μ f_z ≤ 0
+      qp.C(r + 1, x + axis) = 1.0, qp.C(r + 1, z) = mu, qp.c_lower[r + 1] = 0.0;   // f_t + μ f_z ≥ 0
+    }
+  }
+  u_ref.segment<kF>(kUForces).setZero();
+  if (!any) return true;
+  qp.H.noalias() = a.transpose() * a;
+  qp.H.diagonal().array() += kReferenceForceRegularization;
+  qp.g.noalias() = -a.transpose() * w;
+  if (qp::solve_dense_qp(qp, qp::DenseQpSettings{}, ws.wrench_qp_workspace, ws.wrench_qp_solution) !=
+      qp::QpStatus::kSolved) {
+    return false;
+  }
+  for (int c = 0; c < kNumPoints; ++c) {
+    if (knot.in_contact[c]) u_ref.segment<3>(kUForces + 3 * c) = ws.wrench_qp_solution.x.segment<3>(3 * c);
+  }
+  return true;
 }
 
 void fill_weights(const model::Model& model, const MpcConfig& c, MpcWorkspace& ws) {
@@ -559,12 +608,14 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
         ws.reference_knot[k] = ws.reference_knot[j];
         ws.reference_state[k] = ws.reference_state[j];
         ws.u_ref[k] = ws.u_ref[j];
+        ws.reference_wrench[k] = ws.reference_wrench[j];
       }
     } else {
       ws.reference_knot[k] = knot;
       state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.reference_state[k]);
       reference_forces(knot, weight, ws.u_ref[k]);
       ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
+      ws.reference_wrench[k].setConstant(std::numeric_limits<double>::quiet_NaN());  // never equal: solved below
     }
     ws.x_ref[k] = ws.reference_state[k];
     if (k > 0) {
@@ -575,14 +626,21 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
   ws.reference_cached = T + 1;
   if (cfg.reference_forces_from_motion) {
     // The wrench the reference itself needs: m (r̈ + g) and ḣ, forward differences of its
-    // states (the last knot takes the difference before it).
+    // states (the last knot takes the difference before it), carried by forces within the
+    // pyramids. A knot whose wrench is the one its cached forces were solved for keeps them
+    // (within a window's SQP iterations, all of them).
     for (int k = 0; k <= T; ++k) {
       const int a = std::min(k, T - 1), b = a + 1;
       Vec6 w = weight;
       w.head<3>() += model.total_mass_kg / cfg.dt_s *
                      (ws.reference_state[b].segment<3>(kXComVelocity) - ws.reference_state[a].segment<3>(kXComVelocity));
       w.tail<3>() = (ws.reference_state[b].segment<3>(kXMomentum) - ws.reference_state[a].segment<3>(kXMomentum)) / cfg.dt_s;
-      reference_forces(reference.knots[k], w, ws.u_ref[k]);
+      if (w == ws.reference_wrench[k]) continue;
+      if (!reference_forces_in_cones(reference.knots[k], w, cfg.friction_coefficient, ws, ws.u_ref[k])) {
+        reference_forces(reference.knots[k], w, ws.u_ref[k]);
+        ++ws.reference_wrench_failures;
+      }
+      ws.reference_wrench[k] = w;
     }
   }
 

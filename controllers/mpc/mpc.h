@@ -63,6 +63,7 @@
 #include "controllers/hal/types.h"
 #include "controllers/mpc/centroidal_model.h"
 #include "controllers/planner/plan_knot.h"
+#include "controllers/qp/dense_qp.h"
 #include "controllers/qp/ocp_solver.h"
 #include "controllers/wbc/wbc_reference.h"
 
@@ -157,9 +158,11 @@ struct MpcConfig {
   // u_ref's forces: false, the least-norm stance forces carrying the weight with no moment
   // about the CoM; true, those carrying the reference's own centroidal wrench (m (r̈ + g) and
   // ḣ of the reference states), so the input cost stops pulling a dynamic reference toward
-  // static forces. Offline only for now (`kuavo retarget --force-reference motion`): with it
-  // the built-in dance's TO keeps 73 % of the geometric CoM path (61 % without) and the
-  // oracle's torque violations fall 1069 → 579; see tools/mocap/dynamic_retarget.h.
+  // static forces. Those forces are the nearest within the friction pyramids (a small QP per
+  // knot, solved again only when its wrench changes): an infeasible reference's own wrench
+  // lies outside the cones. Offline only for now (`kuavo retarget --force-reference motion`):
+  // with it the built-in dance's TO keeps 67 % of the geometric CoM path (61 % without) and
+  // the oracle's torque violations fall 1069 → 388; see tools/mocap/dynamic_retarget.h.
   bool reference_forces_from_motion = false;
 };
 
@@ -195,6 +198,11 @@ struct MpcPlan {  // a value type: copied through a triple buffer to the 500 Hz 
 using Ocp = qp::OcpQp<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
 using OcpWorkspace = qp::OcpWorkspace<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
 using OcpSolution = qp::OcpSolution<kNx, kNu, kMaxStages, kMaxEqualities, 0>;
+// The reference forces carrying a wrench inside the friction pyramids (reference_forces_from_motion):
+// the 8 corners' forces, 4 pyramid rows each.
+using WrenchQp = qp::DenseQp<3 * kNumPoints, 0, 4 * kNumPoints>;
+using WrenchQpWorkspace = qp::DenseQpWorkspace<3 * kNumPoints, 0, 4 * kNumPoints>;
+using WrenchQpSolution = qp::DenseQpSolution<3 * kNumPoints, 0, 4 * kNumPoints>;
 
 // Everything, ~15 MB: static storage only.
 struct MpcWorkspace {
@@ -217,6 +225,13 @@ struct MpcWorkspace {
   std::array<planner::PlanKnot, kMaxStages + 1> reference_knot{};
   std::array<StateVector, kMaxStages + 1> reference_state{};
   int reference_cached = 0;
+  // reference_forces_from_motion: the wrench each knot's u_ref forces were solved for (kept
+  // with the knot, so a knot whose wrench is unchanged is not solved again) and the QP.
+  std::array<Vec6, kMaxStages + 1> reference_wrench{};
+  WrenchQp wrench_qp;
+  WrenchQpWorkspace wrench_qp_workspace;
+  WrenchQpSolution wrench_qp_solution;
+  int reference_wrench_failures = 0;  // QPs that failed (their knot took the least-norm split)
   bool warm = false;
   hal::TimeNs last_stamp_ns = 0;
 

@@ -482,5 +482,80 @@ TEST(MpcReferenceForces, FromTheMotionTheyCarryItsAcceleration) {
   }
 }
 
+// A reference accelerating sideways at 1.6 μ g asks the feet for more than friction gives:
+// its forces must stay inside every corner's pyramid, and they are the best such forces
+// (KKT of ½‖A f − w‖² + ½ε‖f‖² checked here from A and w built anew, with the solver's
+// multipliers), so their sideways sum reaches the cone's edge, μ Σf_z, and no further.
+TEST(MpcReferenceForces, AWrenchBeyondFrictionComesBackInsideThePyramids) {
+  mpc::MpcConfig cfg;
+  cfg.reference_forces_from_motion = true;
+  MpcFixture& f = mpc_fixture(cfg);
+  const double mu = cfg.friction_coefficient;
+  const dynamics::Vec3 accel(0.0, 1.6 * mu * model::kGravity_m_s2, 0.0);
+  const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
+  const int count = mpc::mpc_num_stages(f.config) + 1;
+  f.window.count = count;
+  f.window.dt_s = f.config.dt_s;
+  for (int k = 0; k < count; ++k) {
+    const double t = k * f.config.dt_s;
+    dynamics::ConfigVector q = f.q0;
+    q.head<3>() += 0.5 * accel * t * t;
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    v.head<3>() = base.conjugate() * (accel * t);
+    planner::plan_knot_from_state(f.model, f.data, q, v, all_contacts(), static_cast<hal::TimeNs>(std::llround(t * 1e9)),
+                                  f.window.knots[k]);
+  }
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.window.knots[0].q, f.window.knots[0].v, f.window),
+            MpcStatus::kOk);
+  EXPECT_EQ(f.ws.reference_wrench_failures, 0);
+  const double m = f.model.total_mass_kg;
+  for (int k = 0; k < count; k += 5) {
+    dynamics::Vec3 sum = dynamics::Vec3::Zero();
+    for (int c = 0; c < mpc::kNumPoints; ++c) {
+      const dynamics::Vec3 fc = f.ws.u_ref[k].segment<3>(3 * c);
+      sum += fc;
+      EXPECT_GE(fc.z(), -1e-9) << "knot " << k << " corner " << c;
+      EXPECT_LE(std::abs(fc.x()), mu * fc.z() + 1e-6) << "knot " << k << " corner " << c;
+      EXPECT_LE(std::abs(fc.y()), mu * fc.z() + 1e-6) << "knot " << k << " corner " << c;
+    }
+    // The wrench asked for is m (a + g) sideways beyond the cone: the sum stops at its edge.
+    EXPECT_NEAR(sum.y(), mu * sum.z(), 1e-3 * m) << "knot " << k;
+    EXPECT_LT(sum.y(), m * accel.y() - 0.2 * m * model::kGravity_m_s2) << "knot " << k;
+  }
+  // KKT of the last knot's QP (the last solved): stationarity from the problem's own data.
+  const planner::PlanKnot& last = f.window.knots[count - 1];
+  constexpr int kF = 3 * mpc::kNumPoints;
+  Eigen::Matrix<double, 6, kF> a = Eigen::Matrix<double, 6, kF>::Zero();
+  for (int c = 0; c < mpc::kNumPoints; ++c) {
+    a.block<3, 3>(0, 3 * c).setIdentity();
+    const dynamics::Vec3 r = last.point_position_m.segment<3>(3 * c) - last.com_position_m;
+    a.block<3, 3>(3, 3 * c) << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
+  }
+  const Eigen::Matrix<double, kF, 1> x = f.ws.wrench_qp_solution.x;
+  const auto& z = f.ws.wrench_qp_solution.z_ineq;
+  const auto& zb = f.ws.wrench_qp_solution.z_bound;
+  const Eigen::Matrix<double, 6, 1> w = f.ws.reference_wrench[count - 1];
+  EXPECT_NEAR(w[1], m * accel.y(), 1e-6 * m);
+  Eigen::Matrix<double, kF, 1> grad = a.transpose() * (a * x - w) + 1e-6 * x;
+  grad += f.ws.wrench_qp.C.transpose() * z + zb;
+  EXPECT_LT(grad.lpNorm<Eigen::Infinity>(), 1e-6 * m) << grad.transpose();
+  // Signs: z ≥ 0 only on a row at its upper side, ≤ 0 only at its lower side.
+  const Eigen::Matrix<double, 4 * mpc::kNumPoints, 1> cx = f.ws.wrench_qp.C * x;
+  for (int r = 0; r < 4 * mpc::kNumPoints; ++r) {
+    if (z[r] > 1e-9) {
+      EXPECT_NEAR(cx[r], f.ws.wrench_qp.c_upper[r], 1e-6) << r;
+    }
+    if (z[r] < -1e-9) {
+      EXPECT_NEAR(cx[r], f.ws.wrench_qp.c_lower[r], 1e-6) << r;
+    }
+  }
+  for (int i = 0; i < kF; ++i) {
+    if (zb[i] < -1e-9) {
+      EXPECT_NEAR(x[i], 0.0, 1e-6) << i;
+    }
+    EXPECT_LE(zb[i], 1e-9) << i;  // only f_z ≥ 0 is bounded, from below
+  }
+}
+
 }  // namespace
 }  // namespace kuavo::test

@@ -17,7 +17,8 @@
 // PASSES (0…8, default 2): low-pass passes over the TO's stages before they become frames
 // (DynamicRetargetConfig::stage_smoothing_passes). --force-reference static|motion (default
 // static): the TO's reference forces carry the weight alone, or the reference motion's own
-// centroidal wrench (mpc::MpcConfig::reference_forces_from_motion). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
+// centroidal wrench, the nearest within the friction pyramids
+// (mpc::MpcConfig::reference_forces_from_motion). --attenuate ROUNDS (0…5, default 0): rounds of the oracle's second
 // pass (retarget_dynamic.h: gestures scaled down where the result still asks a stance leg for
 // more than 1.5× its torque limits, then repair and TO again). --verify ROUNDS (0…16, default
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
