@@ -75,15 +75,16 @@ struct DynamicRetargetConfig {
   int stage_smoothing_passes = 2;
   // ocp.reference_forces_from_motion (`kuavo retarget --force-reference motion`, off by
   // default): the input cost's reference forces carry the reference's own centroidal wrench
-  // instead of the static weight, which pulled every dynamic gesture toward standing. With
-  // `--verify 0` (built-in / perfume / cmu_05_07 / cmu_05_20), static → motion: CoM path kept
-  // 61/55/59/34 → 73/62/61/40 %; the oracle's torque violations 1069/610/635/575 →
-  // 575/435/663/476; friction 0 throughout. The built-in dance's whole closed-loop check then
-  // passes in round 0 (its 13 runs). But the CMU clips' frames whose base wrench no forces in
-  // the cones supply grow (330 → 474, 221 → 292), cmu_05_07's max |τ|/limit 3.1 → 13.4:
-  // the reference wrench of an infeasible reference is itself outside the cones (a next step:
-  // project it onto what the support can carry). Off until the clips' checks and the show
-  // campaign say more.
+  // instead of the static weight, which pulled every dynamic gesture toward standing; since
+  // 0171760 the nearest such forces within the friction pyramids (an infeasible reference's
+  // own wrench lies outside the cones: least-norm, cmu_05_07's frames whose base wrench no
+  // forces in the cones supply grew 330 → 474 and its max |τ|/limit 3.1 → 13.4). Measured
+  // (built-in / perfume / cmu_05_07 / cmu_05_20), static → motion in the pyramids, with the
+  // whole closed-loop check: kept round 0/0/9/6 → 0/0/8/6; CoM path kept 61/55/46/25 →
+  // 67/58/39/24 %; the oracle's torque violations 1069/610/470/278 → 388/394/383/252. But
+  // the show campaign (carpet, `show` set, a 10 N·s push, seeds 1–60) falls more with every
+  // one of them: 1/22/12/2 → 2/31/22/15 (perfume's mostly in its last 1.5 s). A plan that
+  // follows the reference's accelerations leaves the online stack less to balance with. Off.
 
   // Called after each window with the share of the motion committed so far (0…1]; empty: none.
   std::function<void(double)> on_progress;
