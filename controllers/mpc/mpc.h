@@ -141,7 +141,11 @@ struct MpcConfig {
   // leg joint cost alone. Leju: 500. In closed loop with the estimator (the built-in dance,
   // tests/loop/mpc_loop_test.cpp) 500 and 150 pin the feet so hard that the robot cannot step
   // out of trouble and falls (at 13.5 s on the floor, 13.9 s on carpet); 50 and 0 dance both
-  // grounds to the end. 50 keeps the touchdown spot loosely tied to the plan.
+  // grounds to the end. 50 keeps the touchdown spot loosely tied to the plan. Loose enough to
+  // cross the legs under a push (perfume's show campaign); a quadratic hinge keeping the swing
+  // sole at least 0.10–0.15 m to its side of the stance sole, relative to where the reference
+  // has it, was tried and made the show worse (perfume 35 and 32 falls in 60 against 22): the
+  // real feet drift from the plan's by up to 0.18 m, so it pulled on ordinary swings.
   double weight_swing_xy = 50.0;
 
   // Stance feet: the sole centre's velocity row becomes v = k (foothold − position), which
