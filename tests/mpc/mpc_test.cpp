@@ -440,6 +440,25 @@ TEST(MpcStep, YawAcrossThePiCutIsTheSmallDifference) {
 namespace kuavo::test {
 namespace {
 
+// The standing pose translating at constant acceleration `accel` (no rotation), all feet in
+// contact, one knot per MPC stage over the whole horizon. Returns the knot count.
+int accelerating_window(MpcFixture& f, const dynamics::Vec3& accel) {
+  const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
+  const int count = mpc::mpc_num_stages(f.config) + 1;
+  f.window.count = count;
+  f.window.dt_s = f.config.dt_s;
+  for (int k = 0; k < count; ++k) {
+    const double t = k * f.config.dt_s;
+    dynamics::ConfigVector q = f.q0;
+    q.head<3>() += 0.5 * accel * t * t;
+    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+    v.head<3>() = base.conjugate() * (accel * t);  // base twist in base axes
+    planner::plan_knot_from_state(f.model, f.data, q, v, all_contacts(), static_cast<hal::TimeNs>(std::llround(t * 1e9)),
+                                  f.window.knots[k]);
+  }
+  return count;
+}
+
 // MpcConfig::reference_forces_from_motion: the reference forces carry the reference's own
 // wrench. Oracle: a whole robot translating at a constant acceleration a (joints still, no
 // rotation) needs Σf = m (a + g e_z) and no moment about its CoM; the default (static) forces
@@ -450,19 +469,7 @@ TEST(MpcReferenceForces, FromTheMotionTheyCarryItsAcceleration) {
     mpc::MpcConfig cfg;
     cfg.reference_forces_from_motion = from_motion;
     MpcFixture& f = mpc_fixture(cfg);
-    const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
-    const int count = mpc::mpc_num_stages(f.config) + 1;
-    f.window.count = count;
-    f.window.dt_s = f.config.dt_s;
-    for (int k = 0; k < count; ++k) {
-      const double t = k * f.config.dt_s;
-      dynamics::ConfigVector q = f.q0;
-      q.head<3>() += 0.5 * accel * t * t;
-      dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
-      v.head<3>() = base.conjugate() * (accel * t);  // base twist in base axes
-      planner::plan_knot_from_state(f.model, f.data, q, v, all_contacts(), static_cast<hal::TimeNs>(std::llround(t * 1e9)),
-                                    f.window.knots[k]);
-    }
+    const int count = accelerating_window(f, accel);
     ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.window.knots[0].q, f.window.knots[0].v, f.window),
               MpcStatus::kOk);
     const double m = f.model.total_mass_kg;
@@ -492,19 +499,7 @@ TEST(MpcReferenceForces, AWrenchBeyondFrictionComesBackInsideThePyramids) {
   MpcFixture& f = mpc_fixture(cfg);
   const double mu = cfg.friction_coefficient;
   const dynamics::Vec3 accel(0.0, 1.6 * mu * model::kGravity_m_s2, 0.0);
-  const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
-  const int count = mpc::mpc_num_stages(f.config) + 1;
-  f.window.count = count;
-  f.window.dt_s = f.config.dt_s;
-  for (int k = 0; k < count; ++k) {
-    const double t = k * f.config.dt_s;
-    dynamics::ConfigVector q = f.q0;
-    q.head<3>() += 0.5 * accel * t * t;
-    dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
-    v.head<3>() = base.conjugate() * (accel * t);
-    planner::plan_knot_from_state(f.model, f.data, q, v, all_contacts(), static_cast<hal::TimeNs>(std::llround(t * 1e9)),
-                                  f.window.knots[k]);
-  }
+  const int count = accelerating_window(f, accel);
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.window.knots[0].q, f.window.knots[0].v, f.window),
             MpcStatus::kOk);
   EXPECT_EQ(f.ws.reference_wrench_failures, 0);
