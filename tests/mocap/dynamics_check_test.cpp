@@ -309,6 +309,23 @@ TEST(mocap_dynamics_check, TorqueBeyondTheLimitIsCounted) {
   EXPECT_NEAR(out.max_torque_ratio, worst_ratio, 1e-6);
   EXPECT_EQ(out.max_torque_ratio_joint, worst);
   EXPECT_LT(worst, 2 * model::kLegJoints) << "the worst joint is a leg joint";
+  // Where: each slot over its limit counts once per frame, every frame has some, none on one foot.
+  EXPECT_TRUE(out.ankle_slots_are_motors);
+  for (int j = 0; j < model::kNumJoints; ++j) {
+    EXPECT_EQ(out.torque_violations_by_slot[j], ratio[j] > 1.0 ? n : 0) << "slot " << j;
+  }
+  EXPECT_EQ(out.torque_violation_frames, n);
+  EXPECT_EQ(out.torque_violations_single_support, 0);
+
+  // The same push on the left foot alone in the middle frame: only that frame counts as one
+  // foot's (the right corners carry no force either way, so the torques are the same).
+  std::vector<ContactLabel> labels(n, ContactLabel::kDoubleSupport);
+  labels[1] = ContactLabel::kLeftSupport;
+  DynamicsCheck single;
+  check_dynamics(robot(), repeat(q, n), labels, kRate_hz, &forces, kMu, single);
+  EXPECT_EQ(single.torque_violations, n * over);
+  EXPECT_EQ(single.torque_violations_single_support, over);
+  EXPECT_EQ(single.torque_violation_frames, n);
 }
 
 }  // namespace

@@ -50,6 +50,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tools/cli/args.h"
@@ -453,6 +454,21 @@ int run(int argc, char** argv) {
         d["dynamic"]["torque_violations"].get<int>(), d["geometric"]["torque_violations"].get<int>(),
         d["dynamic"]["friction_violations"].get<int>(), d["dynamic"]["zmp_outside_m_max"].get<double>(),
         d["geometric"]["zmp_outside_m_max"].get<double>());
+    if (d["dynamic"]["torque_violations"].get<int>() > 0) {
+      // Where the oracle's torque violations are: the four slots with the most.
+      std::vector<std::pair<int, std::string>> slots;
+      for (const auto& [name, count] : d["dynamic"]["torque_violations_by_slot"].items()) {
+        slots.emplace_back(count.get<int>(), name);
+      }
+      std::stable_sort(slots.begin(), slots.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      std::printf("kuavo retarget: dynamic: torque violations in %d frames, %d of the samples on one foot; most at",
+                  d["dynamic"]["torque_violation_frames"].get<int>(),
+                  d["dynamic"]["torque_violations_single_support"].get<int>());
+      for (std::size_t k = 0; k < slots.size() && k < 4; ++k) {
+        std::printf("%s %s %d", k == 0 ? "" : ",", slots[k].second.c_str(), slots[k].first);
+      }
+      std::printf("\n");
+    }
     {
       // What the repairs and the optimization keep of the CoM path (per repair: the report).
       const auto& p = d["com_path_m"];

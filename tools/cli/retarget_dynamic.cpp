@@ -28,6 +28,20 @@ using nlohmann::ordered_json;
 ordered_json check_json(const mocap::DynamicsCheck& c, const model::Model& robot) {
   ordered_json j;
   j["torque_violations"] = c.torque_violations;
+  j["torque_violation_frames"] = c.torque_violation_frames;
+  j["torque_violations_single_support"] = c.torque_violations_single_support;
+  // Per slot, those with any; an ankle's pitch and roll slots are its motors A and B.
+  ordered_json by_slot = ordered_json::object();
+  for (int s = 0; s < model::kNumJoints; ++s) {
+    if (c.torque_violations_by_slot[s] == 0) continue;
+    std::string name = model::joint_name(robot, s);
+    const int in_leg = s >= model::kRightLegFirst ? s - model::kRightLegFirst : s - model::kLeftLegFirst;
+    if (c.ankle_slots_are_motors && s < model::kLeftLegFirst + 2 * model::kLegJoints && in_leg >= 4) {
+      name += in_leg == 4 ? " (motor A)" : " (motor B)";
+    }
+    by_slot[name] = c.torque_violations_by_slot[s];
+  }
+  j["torque_violations_by_slot"] = by_slot;
   j["friction_violations"] = c.friction_violations;
   j["zmp_outside_m_max"] = c.zmp_outside_m_max;
   j["max_torque_ratio"] = c.max_torque_ratio;

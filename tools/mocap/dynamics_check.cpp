@@ -67,6 +67,7 @@ void check_dynamics(const model::Model& robot, const std::vector<ConfigVector>& 
   std::array<dynamics::FrameJacobian, kPoints> jac;
   double force_sum = 0.0, moment_sum = 0.0;
   const drivers::AnkleMotors ankle_motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot));
+  out.ankle_slots_are_motors = ankle_motors.active;
   for (int i = 0; i < n; ++i) {
     dynamics::forward_kinematics(robot, *data, q[i]);
     dynamics::forward_velocities(robot, *data, v[i]);
@@ -114,14 +115,22 @@ void check_dynamics(const model::Model& robot, const std::vector<ConfigVector>& 
       }
       for (int k = 0; k < 2; ++k) ratios[j + k] = std::abs(motor[k]) / ankle_motors.limit_Nm[leg](k);
     }
+    const bool single_support = left_in_contact(contacts[i]) != right_in_contact(contacts[i]);
+    int frame_violations = 0;
     for (int j = 0; j < model::kNumJoints; ++j) {
       const double ratio = ratios[j];
-      if (ratio > 1.0) ++out.torque_violations;
+      if (ratio > 1.0) {
+        ++out.torque_violations;
+        ++out.torque_violations_by_slot[j];
+        ++frame_violations;
+        if (single_support) ++out.torque_violations_single_support;
+      }
       if (ratio > out.max_torque_ratio) {
         out.max_torque_ratio = ratio;
         out.max_torque_ratio_joint = j;
       }
     }
+    if (frame_violations > 0) ++out.torque_violation_frames;
     // Friction and the ZMP of the contact wrench.
     std::array<Eigen::Vector2d, kPoints> pts{};
     int np = 0;

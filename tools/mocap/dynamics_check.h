@@ -13,6 +13,7 @@
 // contact wrench against the support polygon of the stance corners. Offline; allocates.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "controllers/dynamics/rigid_body.h"
@@ -31,6 +32,13 @@ struct DynamicsCheck {
   // (frame, joint) samples with |τ| above the model's limit; the ankle pitch and roll slots
   // count their motors A and B against the drives' clamps (drivers/transmission/ankle_motors.h)
   int torque_violations = 0;
+  // Where they are: per slot (the ankle pitch / roll slots: motor A / motor B of that ankle
+  // when ankle_slots_are_motors), the frames with at least one, and the samples of frames on
+  // one foot (where the contact wrench is fixed by the motion: no force distribution helps).
+  std::array<int, model::kNumJoints> torque_violations_by_slot{};
+  int torque_violation_frames = 0;
+  int torque_violations_single_support = 0;
+  bool ankle_slots_are_motors = false;
   int friction_violations = 0;  // (frame, stance corner) samples outside the pyramid
   double zmp_outside_m_max = 0.0;
   double max_torque_ratio = 0.0;  // max over frames and joints (ankles: motors) of |τ| / limit
