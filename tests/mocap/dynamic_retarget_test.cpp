@@ -6,12 +6,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
 
 #include "controllers/mpc/centroidal_model.h"
+#include "drivers/config/drivers_config.h"
+#include "drivers/transmission/ankle_motors.h"
 #include "tests/mocap/motion_fixture.h"
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/feasibility_repair.h"
@@ -666,6 +669,80 @@ TEST(mocap_dynamic_retarget, StageSmoothingRemovesTheStageRateRingingAndKeepsLin
   EXPECT_LT(worst, 1e-12);
   // Stage 1 keeps a quarter of the end's alternating part (the end stays as it was).
   EXPECT_NEAR(out[1][3] - line[1][3], 0.25 * alt * 1.3, 1e-12);
+}
+
+
+// ---- the ankle-motor hinge (DynamicRetargetConfig::ankle_motor_weight) ----
+
+// The largest ankle-motor torque the plan's own stages ask of the stance foot, quasi-static
+// (stage_torque: g(q) − J_cᵀf of the stage's forces) through the linkage map at the stage's
+// ankle angles (drivers/transmission/ankle_motors.h), over the left-foot-only stages from
+// from_s on.
+double max_left_stance_motor(const DynamicResult& r, double dt, double from_s) {
+  const drivers::AnkleMotors motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot()));
+  EXPECT_TRUE(motors.active);
+  double worst = 0.0;
+  for (std::size_t k = 0; k + 1 < r.stage_x.size(); ++k) {
+    if (k * dt < from_s) continue;
+    // Left only: the right sole's corners carry no force in the plan (swing).
+    if (r.stage_u[k].segment<12>(12).norm() > 1e-9) continue;
+    planner::ContactFlags left{};
+    for (int c = 0; c < 4; ++c) left[c] = true;
+    const TauVector tau = torque_at(r.stage_x[k], r.stage_u[k], r.stage_head[k], left);
+    const int j = 4;  // left ankle pitch, roll
+    Eigen::Vector2d m;
+    const Eigen::Vector2d q(r.stage_x[k][mpc::kXJoints + j], r.stage_x[k][mpc::kXJoints + j + 1]);
+    if (!drivers::ankle_motor_torques_rt(motors, 0, q, Eigen::Vector2d(tau[j], tau[j + 1]), m)) continue;
+    worst = std::max(worst, m.cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+// Standing on the left foot with the CoM 3.5 cm ahead of the ankle and 3.5 cm outside it:
+// pitch and roll each stay within the MPC's ankle box (0.9 × 27 N·m), but together they ask
+// one ankle motor for more than its 27 N·m clamp (pitch ≈ τ_A + τ_B, roll ≈ 0.46 (τ_A − τ_B)).
+// Without the hinge the plan keeps the CoM there; with it the plan's motors stay within
+// the clamp (the hinge starts at ankle_motor_share = 0.9 of it).
+TEST(mocap_dynamic_retarget, AnkleMotorHingeKeepsTheStanceMotorsWithinTheirClamp) {
+  const Standing& st = standing();
+  dynamics::forward_kinematics(robot(), scratch(), st.q);
+  dynamics::crba(robot(), scratch());
+  const Vec3 mid = 0.5 * (st.feet[0].centre + st.feet[1].centre);
+  const Vec3 com_from_mid = scratch().com_m - mid;
+  // The left ankle axis: the sole centre is 0.049 m ahead of it (toe +0.171, heel −0.073).
+  const Vec3 ankle = st.feet[0].centre - Vec3(0.049, 0.0, 0.0);
+  const Vec3 target = ankle + Vec3(0.035, 0.055, 0.0);
+  Vec3 shift = target - mid - com_from_mid;
+  shift.z() = 0.0;
+  const int n = 251;
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    const double s = std::min(1.0, i / 100.0), w = s * s * (3.0 - 2.0 * s);
+    k.base_shift = w * shift;
+    if (i >= 110) {
+      const double l = std::min(1.0, (i - 110) / 20.0);
+      k.right.centre.z() = 0.03 * l * l * (3.0 - 2.0 * l);
+      k.right_down = false;
+    }
+    return k;
+  });
+  ASSERT_LT(m.worst_ik_error_m, 1e-5);
+  const auto plan = plan_of(m.q, m.labels);
+  DynamicRetargetConfig cfg;
+  cfg.max_sqp_iterations = 60;
+  DynamicResult off, on;
+  std::string error;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, cfg, off, error)) << error;
+  cfg.ankle_motor_weight = 10.0;
+  ASSERT_TRUE(dynamic_retarget(robot(), *plan, cfg, on, error)) << error;
+  const double dt = cfg.ocp.dt_s;
+  const double worst_off = max_left_stance_motor(off, dt, 1.6), worst_on = max_left_stance_motor(on, dt, 1.6);
+  RecordProperty("motor_off_Nm", number(worst_off));
+  RecordProperty("motor_on_Nm", number(worst_on));
+  ASSERT_GT(worst_off, 28.0) << "the precondition: the reference asks a motor beyond its clamp";
+  EXPECT_LE(worst_on, 27.0);
+  EXPECT_GT(off.stats.stages_over_ankle_motors, 0);
+  EXPECT_EQ(on.stats.stages_over_ankle_motors, 0);
 }
 
 }  // namespace

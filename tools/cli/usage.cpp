@@ -33,6 +33,7 @@ constexpr CommandHelp kHelp[] = {
      "                      [--torque-weight W] [--attenuate ROUNDS] [--verify ROUNDS] [--figures DIR|none]\n"
      "                      [--verify-mujoco on|off] [--verify-firmware on|off] [--support-margin M]\n"
      "                      [--verify-show SEEDS] [--human-csv OUT.csv] [--force-reference static|motion]\n"
+     "                      [--ankle-motor-weight W]   (the TO's hinge on the stance ankles' motor torques; 0: off)\n"
      "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
      "                      (--verify-show: carpet runs with the show set's model errors, 0..16 seeds, default 4)\n"

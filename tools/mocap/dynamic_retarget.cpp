@@ -269,6 +269,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   anchors[0] = anchor;
 
   const auto& lim = robot.limits;
+  const drivers::AnkleMotors ankle_motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot_model));
   const Eigen::Matrix<double, kNumMpcJoints, 1> soft_start = cfg.torque_soft_start * lim.torque_Nm.head<kNumMpcJoints>();
   Eigen::Matrix<double, kNumMpcJoints, 1> vel_limit = lim.velocity_rad_s.head<kNumMpcJoints>();
   std::vector<Eigen::Matrix<double, kNumMpcJoints, 1>> lag(T + 1);
@@ -396,6 +397,37 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
           }
           ws->swing_block_written[k] = true;  // the next build clears Q's joint block
         }
+        if (cfg.ankle_motor_weight > 0.0 && ankle_motors.active) {
+          bool stance_leg[2] = {false, false};
+          for (int c = 0; c < model::kNumContactPoints; ++c) stance_leg[c < 4 ? 0 : 1] = stance_leg[c < 4 ? 0 : 1] || contact[c];
+          if (stance_leg[0] || stance_leg[1]) {
+            Eigen::Matrix<double, kNumMpcJoints, 1> tq;
+            Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
+            quasi_static_torques(robot, *data, mpc::configuration_from_state(ws->x[k], ws->head_rad[k]), ws->u[k], contact, tq, &d_df);
+            std::array<Eigen::Vector2d, 2> ang;
+            for (int leg = 0; leg < 2; ++leg) {
+              const int j = leg * model::kLegJoints + 4;
+              ang[leg] = Eigen::Vector2d(ws->x[k][mpc::kXJoints + j], ws->x[k][mpc::kXJoints + j + 1]);
+            }
+            hal::AnkleMotorLimits map;
+            if (drivers::map_ankle_motors_rt(ankle_motors, ang, map)) {
+              for (int leg = 0; leg < 2; ++leg) {
+                if (!stance_leg[leg]) continue;
+                const int j = leg * model::kLegJoints + 4;
+                for (int mo = 0; mo < 2; ++mo) {
+                  const double a = map.joint_to_motor[leg](mo, 0), b = map.joint_to_motor[leg](mo, 1);
+                  const double m = a * tq[j] + b * tq[j + 1];
+                  const double excess = std::abs(m) - cfg.ankle_motor_share * map.limit_Nm[leg](mo);
+                  if (excess <= 0.0) continue;
+                  const Eigen::Matrix<double, kForces, 1> gm = a * d_df.row(j).transpose() + b * d_df.row(j + 1).transpose();
+                  const double w = dt * cfg.ankle_motor_weight;
+                  stage.R.topLeftCorner<kForces, kForces>().noalias() += w * gm * gm.transpose();
+                  stage.r.head<kForces>().noalias() += (w * excess * (m > 0.0 ? 1.0 : -1.0)) * gm;
+                }
+              }
+            }
+          }
+        }
         for (int j = 0; j < kNumMpcJoints; ++j) {
           const int col = mpc::kUJointVelocity + j;
           const double w = ws->u[k][col];
@@ -504,6 +536,24 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   out.stage_x = xs;
   out.stage_u = us;
   out.stage_head = heads;
+  // The plan's own ankle motor torques, stage by stage (quasi-static, the stage's forces): what
+  // the optimization asked of the motors, before the frames (the oracle) add the dynamics.
+  for (int k = 0; k < S && ankle_motors.active; ++k) {
+    Eigen::Matrix<double, kNumMpcJoints, 1> tau;
+    quasi_static_torques(robot, *data, mpc::configuration_from_state(xs[k], heads[k]), us[k], flags[k], tau, nullptr);
+    bool over = false;
+    for (int leg = 0; leg < 2; ++leg) {
+      const int j = leg * model::kLegJoints + 4;
+      Eigen::Vector2d motor;
+      if (!drivers::ankle_motor_torques_rt(ankle_motors, leg,
+                                           Eigen::Vector2d(xs[k][mpc::kXJoints + j], xs[k][mpc::kXJoints + j + 1]),
+                                           Eigen::Vector2d(tau[j], tau[j + 1]), motor)) {
+        continue;
+      }
+      for (int m = 0; m < 2; ++m) over = over || std::abs(motor[m]) > ankle_motors.limit_Nm[leg](m);
+    }
+    if (over) ++stats.stages_over_ankle_motors;
+  }
   stats.sqp_iterations_mean = stats.windows > 0 ? static_cast<double>(iterations_total) / stats.windows : 0.0;
 
   smooth_stages(xs, cfg.stage_smoothing_passes);

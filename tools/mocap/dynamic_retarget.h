@@ -55,6 +55,22 @@ struct DynamicRetargetConfig {
   // fails at 4.3 s; `kuavo retarget --torque-weight W` turns it on for experiments.
   double torque_soft_start = 0.85;
   double torque_penalty_weight = 0.0;
+  // Each stance ankle's two motors (drivers/transmission/ankle_motors.h, mapped at the stage's
+  // own ankle angles) as a quadratic hinge ½ w (|τ_motor| − s·L)² above s·L on the stage's
+  // quasi-static joint torques, Gauss-Newton on the forces (exact: τ is linear in them). The
+  // MPC's leg-torque barrier bounds pitch and roll each at a share of the planning model's
+  // ankle box (27 N·m), which lets both be large together: perfume's finale then planned one
+  // motor at 40–51 N·m for 0.5 s of single support (and in the show runs that fell there the
+  // motors sat at their clamp). Measured (built-in / perfume / cmu_05_07 / cmu_05_20,
+  // `--verify 0`), off → w = 10: the plan's stages over a motor 486/452/267/342 → 0 (of
+  // 1640/1763/636/596); the oracle's ankle-motor samples 973/577/401/484 → 575/390/233/199
+  // (the frames' rigid-body dynamics are not the stages' quasi-static torques); CoM path kept
+  // 61/55/59/34 → 61/61/60/39 %; TO 8.1/5.2/6.2/3.3 → 14.3/9.7/8.6/7.9 s. But perfume's
+  // closed-loop check then fails all 12 rounds (on carpet at 34.0 s, its finale; its
+  // `--verify 0` motion falls on the floor at 34.6 s after losing 0.45 m of CoM tracking in
+  // the spin at 24 s), where without the hinge it passes in round 0. Off (0).
+  double ankle_motor_weight = 0.0;   // (N·m)⁻² s⁻¹
+  double ankle_motor_share = 0.9;    // s: the WBC's share of the motors (wbc_config.h)
   double velocity_barrier_mu = 0.01;
   double velocity_barrier_delta_rad_s = 0.1;
   // The plan keeps its centre of pressure this far inside each foot's sole (planning_model;
@@ -107,6 +123,9 @@ struct DynamicStats {
   double base_drop_max_m = 0.0;  // lowered so a stretched leg reaches its foothold
   double foothold_miss_max_m = 0.0;  // stance corner left off its foothold after the IK
   int foothold_miss_frames = 0;      // frames with a miss above 2 mm
+  // Committed stages whose own plan (quasi-static torques of the stage's forces) asks an
+  // ankle motor for more than its clamp.
+  int stages_over_ankle_motors = 0;
   ContactForceStats forces;          // the forces re-solved for the final frames
 };
 
