@@ -9,6 +9,7 @@
 #include <limits>
 #include <cmath>
 #include <memory>
+#include <type_traits>
 #include <utility>
 
 #include "controllers/dynamics/rigid_body.h"
@@ -49,6 +50,7 @@ constexpr double kContraction = 0.8;
 // oracle checks the arms. The gradient is capped (Huber: linear past the cap) so a wild
 // warm-start guess at a window's tail cannot throw the step.
 constexpr int kLegs = 2 * model::kLegJoints;
+constexpr int kAnklePitchInLeg = 4;  // a leg's joints: hip roll, yaw, pitch, knee, ankle pitch, roll
 constexpr double kTorqueExcessCap_Nm = 20.0;
 constexpr double kMinStep = 1.0 / 64.0;
 // Cold restarts of one window after a failed QP before the retargeting gives up.
@@ -91,6 +93,43 @@ void quasi_static_torques(const model::Model& robot, dynamics::Data& data, const
     const auto jl = j.topRows<3>().middleCols<kNumMpcJoints>(6);
     tau.noalias() -= jl.transpose() * u.segment<3>(mpc::kUForces + 3 * c);
     if (d_df) d_df->middleCols<3>(3 * c) = -jl.transpose();
+  }
+}
+
+
+// The ankle-motor hinge of one stage (DynamicRetargetConfig::ankle_motor_weight; w_dt its
+// weight × the stage length): per stance ankle and motor, ½ w (|τ_motor| − s·L)² above s·L on
+// the quasi-static joint torques mapped at the stage's ankle angles, Gauss-Newton on the forces.
+using Stage = std::remove_reference_t<decltype(std::declval<mpc::Ocp&>().stages[0])>;
+void add_ankle_motor_hinge(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
+                           double w_dt, double share, const StateVector& x, const InputVector& u,
+                           const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, Stage& stage) {
+  constexpr int kPointsPerFoot = model::kNumContactPoints / 2;
+  std::array<bool, 2> stance{};
+  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / kPointsPerFoot] = stance[c / kPointsPerFoot] || contact[c];
+  if (!stance[0] && !stance[1]) return;
+  Eigen::Matrix<double, kNumMpcJoints, 1> tau;
+  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
+  quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, tau, &d_df);
+  std::array<Eigen::Vector2d, 2> ankle_rad;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int j = leg * model::kLegJoints + kAnklePitchInLeg;
+    ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
+  }
+  hal::AnkleMotorLimits map;
+  if (!drivers::map_ankle_motors_rt(motors, ankle_rad, map)) return;
+  for (int leg = 0; leg < 2; ++leg) {
+    if (!stance[leg]) continue;
+    const int j = leg * model::kLegJoints + kAnklePitchInLeg;
+    for (int m = 0; m < 2; ++m) {
+      const double a = map.joint_to_motor[leg](m, 0), b = map.joint_to_motor[leg](m, 1);
+      const double motor = a * tau[j] + b * tau[j + 1];
+      const double excess = std::abs(motor) - share * map.limit_Nm[leg](m);
+      if (excess <= 0.0) continue;
+      const Eigen::Matrix<double, kForces, 1> g = a * d_df.row(j).transpose() + b * d_df.row(j + 1).transpose();
+      stage.R.topLeftCorner<kForces, kForces>().noalias() += w_dt * g * g.transpose();
+      stage.r.head<kForces>().noalias() += (w_dt * excess * (motor > 0.0 ? 1.0 : -1.0)) * g;
+    }
   }
 }
 
@@ -398,35 +437,8 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
           ws->swing_block_written[k] = true;  // the next build clears Q's joint block
         }
         if (cfg.ankle_motor_weight > 0.0 && ankle_motors.active) {
-          bool stance_leg[2] = {false, false};
-          for (int c = 0; c < model::kNumContactPoints; ++c) stance_leg[c < 4 ? 0 : 1] = stance_leg[c < 4 ? 0 : 1] || contact[c];
-          if (stance_leg[0] || stance_leg[1]) {
-            Eigen::Matrix<double, kNumMpcJoints, 1> tq;
-            Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
-            quasi_static_torques(robot, *data, mpc::configuration_from_state(ws->x[k], ws->head_rad[k]), ws->u[k], contact, tq, &d_df);
-            std::array<Eigen::Vector2d, 2> ang;
-            for (int leg = 0; leg < 2; ++leg) {
-              const int j = leg * model::kLegJoints + 4;
-              ang[leg] = Eigen::Vector2d(ws->x[k][mpc::kXJoints + j], ws->x[k][mpc::kXJoints + j + 1]);
-            }
-            hal::AnkleMotorLimits map;
-            if (drivers::map_ankle_motors_rt(ankle_motors, ang, map)) {
-              for (int leg = 0; leg < 2; ++leg) {
-                if (!stance_leg[leg]) continue;
-                const int j = leg * model::kLegJoints + 4;
-                for (int mo = 0; mo < 2; ++mo) {
-                  const double a = map.joint_to_motor[leg](mo, 0), b = map.joint_to_motor[leg](mo, 1);
-                  const double m = a * tq[j] + b * tq[j + 1];
-                  const double excess = std::abs(m) - cfg.ankle_motor_share * map.limit_Nm[leg](mo);
-                  if (excess <= 0.0) continue;
-                  const Eigen::Matrix<double, kForces, 1> gm = a * d_df.row(j).transpose() + b * d_df.row(j + 1).transpose();
-                  const double w = dt * cfg.ankle_motor_weight;
-                  stage.R.topLeftCorner<kForces, kForces>().noalias() += w * gm * gm.transpose();
-                  stage.r.head<kForces>().noalias() += (w * excess * (m > 0.0 ? 1.0 : -1.0)) * gm;
-                }
-              }
-            }
-          }
+          add_ankle_motor_hinge(robot, *data, ankle_motors, cfg.ankle_motor_weight * dt, cfg.ankle_motor_share, ws->x[k],
+                                ws->u[k], ws->head_rad[k], contact, stage);
         }
         for (int j = 0; j < kNumMpcJoints; ++j) {
           const int col = mpc::kUJointVelocity + j;
@@ -543,7 +555,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     quasi_static_torques(robot, *data, mpc::configuration_from_state(xs[k], heads[k]), us[k], flags[k], tau, nullptr);
     bool over = false;
     for (int leg = 0; leg < 2; ++leg) {
-      const int j = leg * model::kLegJoints + 4;
+      const int j = leg * model::kLegJoints + kAnklePitchInLeg;
       Eigen::Vector2d motor;
       if (!drivers::ankle_motor_torques_rt(ankle_motors, leg,
                                            Eigen::Vector2d(xs[k][mpc::kXJoints + j], xs[k][mpc::kXJoints + j + 1]),
