@@ -256,6 +256,18 @@ TEST(mocap_dynamic_retarget, RefusesABadConfig) {
   error.clear();
   EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
   EXPECT_NE(error.find("support_margin_m"), std::string::npos) << error;
+  for (const double w : {-1.0, std::numeric_limits<double>::infinity()}) {
+    cfg = DynamicRetargetConfig{};
+    cfg.ankle_motor_weight = w;
+    error.clear();
+    EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+    EXPECT_NE(error.find("ankle_motor_weight"), std::string::npos) << error;
+  }
+  cfg = DynamicRetargetConfig{};
+  cfg.ankle_motor_share = 1.5;
+  error.clear();
+  EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+  EXPECT_NE(error.find("ankle_motor_share"), std::string::npos) << error;
 }
 
 // The planning model's sole corners: each moved in by the margin in x and in y (FACTS.md's

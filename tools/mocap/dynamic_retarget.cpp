@@ -237,6 +237,11 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     error = "dynamic retargeting: support_margin_m must be within 0..0.04 m (the sole is 0.095 m wide)";
     return false;
   }
+  if (!(cfg.ankle_motor_weight >= 0.0 && std::isfinite(cfg.ankle_motor_weight)) ||
+      !(cfg.ankle_motor_share > 0.0 && cfg.ankle_motor_share <= 1.0)) {
+    error = "dynamic retargeting: ankle_motor_weight must be finite and >= 0, ankle_motor_share within (0, 1]";
+    return false;
+  }
   const model::Model robot = planning_model(robot_model, cfg.support_margin_m);
   const auto t_start = std::chrono::steady_clock::now();
   if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
