@@ -21,6 +21,8 @@ inline constexpr int kRightArmFirst = 19;
 inline constexpr int kHeadFirst = 26;
 inline constexpr int kLegJoints = 6;
 inline constexpr int kArmJoints = 7;
+// Inside a leg: hip roll, hip yaw, hip pitch, knee, ankle pitch, ankle roll.
+inline constexpr int kAnklePitchInLeg = 4;  // ankle roll follows it
 
 // Frame ids: contact points first, in this order per foot: toe +y, toe -y, heel +y, heel -y.
 inline constexpr int kFrameLeftHand = 8;

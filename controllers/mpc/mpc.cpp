@@ -19,7 +19,6 @@ constexpr double kDtTolerance_s = 1e-9;
 constexpr double kReferenceForceRegularization = 1e-6;
 
 // Ankle pitch within a leg (roll follows): the ankle pair the motor map covers.
-constexpr int kAnklePitch = 4;
 
 Mat3 skew_of(const Vec3& a) { return dynamics::skew(a); }
 
@@ -424,9 +423,9 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
         tau += gc.dot(ws.u[k].segment<3>(kUForces + 3 * c));
       }
       barrier(g, tau, cfg.stance_leg_torque_share * model.limits.torque_Nm[j]);
-      if (joint >= kAnklePitch) {
-        ankle_g[joint - kAnklePitch] = g;
-        ankle_tau[joint - kAnklePitch] = tau;
+      if (joint >= model::kAnklePitchInLeg) {
+        ankle_g[joint - model::kAnklePitchInLeg] = g;
+        ankle_tau[joint - model::kAnklePitchInLeg] = tau;
       }
     }
     if (!motors.active) continue;

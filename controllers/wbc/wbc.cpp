@@ -15,7 +15,6 @@ constexpr int kForce0 = kNumAccelerations;  // index of the first force variable
 constexpr int kMotorRow0 = kNumFrictionRows;
 constexpr int kSerialRow0 = kNumFrictionRows + kNumAnkleMotorRows;
 constexpr int kTorqueRow0 = kSerialRow0 + kNumSerialDriveRows;
-constexpr int kAnklePitch = 4;  // within a leg; roll follows
 constexpr int kPointsPerFoot = kNumPoints / 2;  // points [0, 4) left foot, [4, 8) right
 // Torque bounds are planned this far inside the limit. A solution on a bound meets it only to
 // roundoff, and the firmware recomputes the motor torques from the same numbers in another
@@ -206,7 +205,7 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
   // below) is part of the motor's command: its q̈ part joins the row, the rest the bounds.
   const AnkleMotorLimits& motors = ws.ankle_motor_limits;
   for (int leg = 0; leg < 2; ++leg) {
-    const int jp = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + kAnklePitch;
+    const int jp = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
     const Eigen::Matrix2d velocity_map = motors.joint_to_motor[leg].transpose().inverse();
     const Eigen::Vector2d v_ref(ref.joint_velocity_rad_s[jp], ref.joint_velocity_rad_s[jp + 1]);
     for (int k = 0; k < 2; ++k) {

@@ -36,8 +36,8 @@ ordered_json check_json(const mocap::DynamicsCheck& c, const model::Model& robot
     if (c.torque_violations_by_slot[s] == 0) continue;
     std::string name = model::joint_name(robot, s);
     const int in_leg = s >= model::kRightLegFirst ? s - model::kRightLegFirst : s - model::kLeftLegFirst;
-    if (c.ankle_slots_are_motors && s < model::kLeftLegFirst + 2 * model::kLegJoints && in_leg >= 4) {
-      name += in_leg == 4 ? " (motor A)" : " (motor B)";
+    if (c.ankle_slots_are_motors && s < model::kLeftLegFirst + 2 * model::kLegJoints && in_leg >= model::kAnklePitchInLeg) {
+      name += in_leg == model::kAnklePitchInLeg ? " (motor A)" : " (motor B)";
     }
     by_slot[name] = c.torque_violations_by_slot[s];
   }

@@ -50,7 +50,6 @@ constexpr double kContraction = 0.8;
 // oracle checks the arms. The gradient is capped (Huber: linear past the cap) so a wild
 // warm-start guess at a window's tail cannot throw the step.
 constexpr int kLegs = 2 * model::kLegJoints;
-constexpr int kAnklePitchInLeg = 4;  // a leg's joints: hip roll, yaw, pitch, knee, ankle pitch, roll
 constexpr double kTorqueExcessCap_Nm = 20.0;
 constexpr double kMinStep = 1.0 / 64.0;
 // Cold restarts of one window after a failed QP before the retargeting gives up.
@@ -104,23 +103,22 @@ using Stage = std::remove_reference_t<decltype(std::declval<mpc::Ocp&>().stages[
 void add_ankle_motor_hinge(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
                            double w_dt, double share, const StateVector& x, const InputVector& u,
                            const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, Stage& stage) {
-  constexpr int kPointsPerFoot = model::kNumContactPoints / 2;
   std::array<bool, 2> stance{};
-  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / kPointsPerFoot] = stance[c / kPointsPerFoot] || contact[c];
+  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / mpc::kPointsPerFoot] = stance[c / mpc::kPointsPerFoot] || contact[c];
   if (!stance[0] && !stance[1]) return;
   Eigen::Matrix<double, kNumMpcJoints, 1> tau;
   Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
   quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, tau, &d_df);
   std::array<Eigen::Vector2d, 2> ankle_rad;
   for (int leg = 0; leg < 2; ++leg) {
-    const int j = leg * model::kLegJoints + kAnklePitchInLeg;
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
     ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
   }
   hal::AnkleMotorLimits map;
   if (!drivers::map_ankle_motors_rt(motors, ankle_rad, map)) return;
   for (int leg = 0; leg < 2; ++leg) {
     if (!stance[leg]) continue;
-    const int j = leg * model::kLegJoints + kAnklePitchInLeg;
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
     for (int m = 0; m < 2; ++m) {
       const double a = map.joint_to_motor[leg](m, 0), b = map.joint_to_motor[leg](m, 1);
       const double motor = a * tau[j] + b * tau[j + 1];
@@ -200,7 +198,7 @@ model::Model planning_model(const model::Model& robot, double support_margin_m) 
   const drivers::AnkleMotors motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot));
   model::Model planning = robot;
   for (int leg = 0; leg < 2 && motors.active; ++leg) {
-    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
     for (int k = 0; k < 2; ++k) {
       planning.limits.torque_Nm[j + k] = std::min(planning.limits.torque_Nm[j + k], motors.limit_Nm[leg].minCoeff());
     }
@@ -560,7 +558,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     quasi_static_torques(robot, *data, mpc::configuration_from_state(xs[k], heads[k]), us[k], flags[k], tau, nullptr);
     bool over = false;
     for (int leg = 0; leg < 2; ++leg) {
-      const int j = leg * model::kLegJoints + kAnklePitchInLeg;
+      const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
       Eigen::Vector2d motor;
       if (!drivers::ankle_motor_torques_rt(ankle_motors, leg,
                                            Eigen::Vector2d(xs[k][mpc::kXJoints + j], xs[k][mpc::kXJoints + j + 1]),

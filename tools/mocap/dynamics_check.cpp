@@ -107,7 +107,7 @@ void check_dynamics(const model::Model& robot, const std::vector<ConfigVector>& 
     std::array<double, model::kNumJoints> ratios;
     for (int j = 0; j < model::kNumJoints; ++j) ratios[j] = std::abs(tau[6 + j]) / robot.limits.torque_Nm[j];
     for (int leg = 0; leg < 2 && ankle_motors.active; ++leg) {  // the ankle slots: their motors
-      const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + 4;
+      const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
       Eigen::Vector2d motor;
       if (!drivers::ankle_motor_torques_rt(ankle_motors, leg, Eigen::Vector2d(q[i][7 + j], q[i][8 + j]),
                                            Eigen::Vector2d(tau[6 + j], tau[7 + j]), motor)) {
