@@ -401,6 +401,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.mpc_failures = planner_ws->mpc_failures;
   out.plan_positions_on_a_stop = planner_ws->plan_positions_on_a_stop;
   out.recovery_steps = planner_ws->recovery.steps;
+  out.recovery_declined = planner_ws->recovery.declined;
   return out;
 }
 
@@ -428,14 +429,15 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"wbc_qp_iterations\": {\"p50\": %.0f, \"p99\": %.0f, \"max\": %.0f},\n"
                 "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
-                "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n"
+                "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.com_path_m, s.com_path_plan_m, s.steps, s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
-                static_cast<unsigned long long>(s.plan_positions_on_a_stop), static_cast<unsigned long long>(s.recovery_steps), s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
+                static_cast<unsigned long long>(s.plan_positions_on_a_stop), static_cast<unsigned long long>(s.recovery_steps),
+                static_cast<unsigned long long>(s.recovery_declined), s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
   std::string json = base + buf;
   if (!s.perturbation_json.empty()) {
     json.resize(json.rfind('}'));

@@ -87,6 +87,9 @@ struct MotionSummary {
   std::uint64_t mpc_failures = 0;      // MPC iterations replaced by the kinematic plan
   std::uint64_t plan_positions_on_a_stop = 0;  // MPC knot joint positions put on a stop
   std::uint64_t recovery_steps = 0;            // steps the motion did not plan (recovery_step.h)
+  // planner calls whose capture point had left the support (the step's trigger) where no
+  // step within the reach box would have captured: none taken (recovery_step.h, "choose")
+  std::uint64_t recovery_declined = 0;
   double estimator_velocity_rms_m_s = 0.0;  // base velocity (world) vs truth
   double estimator_position_drift_m = 0.0;  // final horizontal base position error
   double estimator_position_err_m_max = 0.0;

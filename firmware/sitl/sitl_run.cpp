@@ -225,6 +225,8 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.plans_skipped = dc.counters.plans_rejected + dc.counters.plans_old_epoch;
   ms.mpc_failures = FirmwareLoop::planner().ws.mpc_failures;
   ms.plan_positions_on_a_stop = FirmwareLoop::planner().ws.plan_positions_on_a_stop;
+  ms.recovery_steps = FirmwareLoop::planner().ws.recovery.steps;
+  ms.recovery_declined = FirmwareLoop::planner().ws.recovery.declined;
 
   out.final_mode = to_string(f.mode.mode);
   if (dance_requested && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);

@@ -48,6 +48,20 @@ TEST(RecoveryStepLoop, ABackwardPushBeyondTheAnklesIsCaughtByOneStep) {
   EXPECT_EQ(on.mpc_failures, 0u);
 }
 
+// Beyond what one step within the reach box captures the step is declined, and the summary
+// says so: the robot falls as without it, with no step taken and the declined triggers counted.
+TEST(RecoveryStepLoop, APushBeyondOneStepIsDeclinedAndCounted) {
+  const sim::MotionSummary on = push_standing(36.0, 180.0, true);
+  std::printf("36 N.s backwards: fell %d at %.2f s, %llu step(s), %llu declined trigger(s)\n", on.run.fell,
+              on.run.fell_at_s, static_cast<unsigned long long>(on.recovery_steps),
+              static_cast<unsigned long long>(on.recovery_declined));
+  ASSERT_TRUE(on.run.ok);
+  EXPECT_TRUE(on.run.fell);
+  EXPECT_EQ(on.recovery_steps, 0u);
+  EXPECT_GT(on.recovery_declined, 0u);
+  EXPECT_NE(sim::motion_summary_json(on).find("\"recovery_declined\": "), std::string::npos);
+}
+
 // A push the ankles hold takes no step: the run is the one without the recovery step, bit for bit.
 TEST(RecoveryStepLoop, APushTheAnklesHoldTakesNoStep) {
   const sim::MotionSummary off = push_standing(14.0, 180.0, false);
@@ -55,6 +69,7 @@ TEST(RecoveryStepLoop, APushTheAnklesHoldTakesNoStep) {
   ASSERT_TRUE(off.run.ok && on.run.ok);
   EXPECT_FALSE(on.run.fell);
   EXPECT_EQ(on.recovery_steps, 0u);
+  EXPECT_EQ(on.recovery_declined, 0u);
   EXPECT_FALSE(on.run.log_sha256.empty());
   EXPECT_EQ(on.run.log_sha256, off.run.log_sha256);
 }
