@@ -187,6 +187,7 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   planner_task.join();
   report.control_overruns = control_task.perf().overruns;
   report.planner_overruns = planner_task.perf().overruns;
+  report.control_skipped_periods = control_task.perf().skipped_periods;
   report.max_wake_latency_us = 1e-3 * static_cast<double>(control_task.perf().max_wake_latency_ns);
 
   report.fault = firmware.mode.latched;
@@ -219,8 +220,10 @@ std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, h
   row("output", r.output, control_period_ns);
   row("cycle", r.cycle, control_period_ns);
   row("mpc", r.mpc, planner_period_ns);
-  std::snprintf(line, sizeof line, "control task: %llu overruns, worst wake latency %.1f us; planning task: %llu overruns\n",
-                static_cast<unsigned long long>(r.control_overruns), r.max_wake_latency_us,
+  std::snprintf(line, sizeof line,
+                "control task: %llu overruns (%llu periods skipped), worst wake latency %.1f us; planning task: %llu overruns\n",
+                static_cast<unsigned long long>(r.control_overruns),
+                static_cast<unsigned long long>(r.control_skipped_periods), r.max_wake_latency_us,
                 static_cast<unsigned long long>(r.planner_overruns));
   out += line;
   return out;

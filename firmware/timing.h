@@ -46,6 +46,9 @@ struct TimingReport {
   // rtos_shim's loop counters: control-task cycles that ended past the next release (body
   // plus wake latency; with evict_caches the eviction is in the body) and the worst wake latency.
   std::uint64_t control_overruns = 0, planner_overruns = 0;
+  // Control-task release times dropped to recover from its overruns (each one a tick the
+  // dance did not run: the stack follows the clock, not a tick count).
+  std::uint64_t control_skipped_periods = 0;
   double max_wake_latency_us = 0.0;
   bool danced_to_end = false;  // the dance ran to its finish without a fault
   Fault fault = Fault::kNone;

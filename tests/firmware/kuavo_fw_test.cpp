@@ -329,11 +329,17 @@ TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
   EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.output;
   EXPECT_NE(r.output.find("dance ran to its end"), std::string::npos) << r.output;
   // 2 s at 500 Hz is 1750 ticks with the stack; on a loaded machine an overrun of the control
-  // task skips ticks (measured in a parallel CI run: 1 overrun, 1748 ticks), which is a timing
-  // figure, not an error here: every stage counts the same ticks, within 2 % of 1750.
+  // task skips release times, and with them ticks (a noisy phase of the VM: 125 overruns, 1545
+  // ticks), which is a timing figure, not an error here: the ticks run plus the periods the
+  // task reports skipped (over the whole run, bring-up included) cover the 1750, and every
+  // stage counts the same ticks.
   const int ticks = stage_samples(r.output, "cycle");
+  const std::size_t at = r.output.find(" periods skipped)");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const std::size_t open = r.output.rfind('(', at);
+  const long skipped = std::strtol(r.output.c_str() + open + 1, nullptr, 10);
   EXPECT_LE(ticks, 1750);
-  EXPECT_GE(ticks, 1715);
+  EXPECT_GE(ticks + skipped, 1748) << "ticks " << ticks << ", skipped " << skipped;
   for (const char* stage : {"drivers", "estimator", "wbc", "output"}) EXPECT_EQ(stage_samples(r.output, stage), ticks) << stage;
   EXPECT_NEAR(stage_samples(r.output, "mpc"), 175, 5);
   EXPECT_EQ(r.exit_code == 3, r.output.find("deadline misses") != std::string::npos) << r.output;
