@@ -398,14 +398,18 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.mpc_ms = percentiles(plan_ms);
   out.plans_applied = sched.stats().plans_applied;
   out.plans_skipped = sched.stats().plans_skipped;
-  out.mpc_failures = planner_ws->mpc_failures;
-  out.plan_positions_on_a_stop = planner_ws->plan_positions_on_a_stop;
-  out.recovery_steps = planner_ws->recovery.steps;
-  out.recovery_declined = planner_ws->recovery.declined;
+  copy_planner_counters(*planner_ws, out);
   return out;
 }
 
 }  // namespace
+
+void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out) {
+  out.mpc_failures = ws.mpc_failures;
+  out.plan_positions_on_a_stop = ws.plan_positions_on_a_stop;
+  out.recovery_steps = ws.recovery.steps;
+  out.recovery_declined = ws.recovery.declined;
+}
 
 MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
                          MotionTrace* trace) {

@@ -95,6 +95,11 @@ struct MotionSummary {
   double estimator_position_err_m_max = 0.0;
 };
 
+// The planning task's counters (MPC fallbacks, knots put on a stop, recovery steps taken and
+// declined) into a summary: `kuavo simulate` and `kuavo_fw_sim` read the same workspace, so one
+// copy keeps their summaries from drifting apart (kuavo_fw_sim once left recovery_steps at 0).
+void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out);
+
 // Decimated traces for the report's plots (every `stride` control ticks).
 struct MotionTrace {
   int stride = 5;

@@ -223,10 +223,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.wbc_not_ok_ticks = dc.counters.wbc_not_ok_ticks;
   ms.plans_applied = dc.counters.plans_taken;
   ms.plans_skipped = dc.counters.plans_rejected + dc.counters.plans_old_epoch;
-  ms.mpc_failures = FirmwareLoop::planner().ws.mpc_failures;
-  ms.plan_positions_on_a_stop = FirmwareLoop::planner().ws.plan_positions_on_a_stop;
-  ms.recovery_steps = FirmwareLoop::planner().ws.recovery.steps;
-  ms.recovery_declined = FirmwareLoop::planner().ws.recovery.declined;
+  sim::copy_planner_counters(FirmwareLoop::planner().ws, ms);
 
   out.final_mode = to_string(f.mode.mode);
   if (dance_requested && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);
