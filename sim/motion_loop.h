@@ -90,6 +90,10 @@ struct MotionSummary {
   // planner calls whose capture point had left the support (the step's trigger) where no
   // step within the reach box would have captured: none taken (recovery_step.h, "choose")
   std::uint64_t recovery_declined = 0;
+  // Lift-offs the planner held (liftoff_hold.h), those let go at the hold's limit, and how
+  // far the motion's clock fell behind (most, and at the end of the run) [s].
+  std::uint64_t liftoff_holds = 0, liftoff_released = 0;
+  double motion_lag_s_max = 0.0, motion_lag_s_end = 0.0;
   double estimator_velocity_rms_m_s = 0.0;  // base velocity (world) vs truth
   double estimator_position_drift_m = 0.0;  // final horizontal base position error
   double estimator_position_err_m_max = 0.0;

@@ -239,7 +239,7 @@ void recovery_step_reset(RecoveryStepState& state) {
 
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
                       const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window) {
+                      PlanWindow& window, hal::TimeNs motion_lag_ns) {
   if (!cfg.enabled || window.count < 2 || motion.frame_count < 1) return;
   const hal::TimeNs now = window.knots[0].stamp_ns;
   const hal::TimeNs end = window.knots[window.count - 1].stamp_ns;
@@ -251,7 +251,11 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   maybe_trigger(model, cfg, st, q, v, window);
   for (int foot = 0; foot < 2; ++foot) {
     FootDisplacement& d = st.foot[foot];
-    if (d.active && end > d.land_ns) find_return(motion, foot, std::max(now, d.land_ns), end, d);
+    if (d.active && end > d.land_ns && !d.return_known) {
+      // The motion's times are the knots' minus the lag.
+      find_return(motion, foot, std::max(now, d.land_ns) - motion_lag_ns, end - motion_lag_ns, d);
+      if (d.return_known) d.return_lift_ns += motion_lag_ns, d.return_land_ns += motion_lag_ns;
+    }
   }
   if (!st.foot[0].active && !st.foot[1].active) return;
 

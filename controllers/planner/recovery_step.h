@@ -126,9 +126,10 @@ struct RecoveryStepState {
 void recovery_step_reset(RecoveryStepState& state);
 
 // q, v: the measured state at window.knots[0]. motion: what the window was sampled from
-// (the motion's next swings of a displaced foot). Rewrites window in place. Real-time safe.
+// (the motion's next swings of a displaced foot), motion_lag_ns behind the knots' stamps
+// (liftoff_hold.h). Rewrites window in place. Real-time safe.
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& config, RecoveryStepState& state,
                       const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window);
+                      PlanWindow& window, hal::TimeNs motion_lag_ns = 0);
 
 }  // namespace kuavo::planner

@@ -32,6 +32,7 @@ const char* stack_validate_config(const StackConfig& config) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
     if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
     if (const char* why = planner::recovery_step_validate(config.recovery)) return why;
+    if (const char* why = planner::liftoff_hold_validate(config.liftoff_hold)) return why;
   }
   return wbc::wbc_validate_config(config.wbc);
 }
@@ -103,8 +104,10 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
                    const dynamics::VelocityVector& v, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
   if (config.planner == PlannerKind::kMpc) {
     const int stages = mpc::mpc_num_stages(config.mpc);
-    planner::motion_plan_window_rt(model, ws.data, motion, t_state_ns, config.mpc.dt_s, stages + 1, ws.window);
-    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window);
+    const bool recovering = ws.recovery.foot[0].active || ws.recovery.foot[1].active;
+    planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, q, v, t_state_ns, config.mpc.dt_s,
+                                    stages + 1, !recovering, ws.window);
+    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window, ws.liftoff.lag_ns);
     ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
       out.stamp_ns = ws.mpc_plan.stamp_ns;
@@ -140,6 +143,7 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
     planner_ws.mpc_failures = 0;
     planner_ws.plan_positions_on_a_stop = 0;
     planner::recovery_step_reset(planner_ws.recovery);
+    planner::liftoff_hold_reset(planner_ws.liftoff);
   }
   control.started = false;
   return true;
@@ -176,6 +180,7 @@ void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws) {
   if (config.planner == PlannerKind::kMpc) {
     mpc::mpc_reset(ws.mpc);
     planner::recovery_step_reset(ws.recovery);
+    planner::liftoff_hold_reset(ws.liftoff);
   }
 }
 

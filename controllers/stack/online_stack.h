@@ -18,6 +18,7 @@
 
 #include "controllers/estimator/estimator.h"
 #include "controllers/mpc/mpc.h"
+#include "controllers/planner/liftoff_hold.h"
 #include "controllers/planner/recovery_step.h"
 #include "controllers/planner/reference_plan.h"
 #include "controllers/wbc/wbc.h"
@@ -66,6 +67,9 @@ struct StackConfig {
   // MPC planner only: a step the motion did not plan when the capture point leaves the
   // support in double support (recovery_step.h).
   planner::RecoveryStepConfig recovery{};
+  // MPC planner only: a planned lift-off waits while the capture point is not over the
+  // foot that will stand (liftoff_hold.h).
+  planner::LiftoffHoldConfig liftoff_hold{};
   estimator::EstimatorConfig estimator = dance_estimator_config();
 
   // Leju's IMU low-pass corners (gyro 20 Hz, accelerometer 12 Hz) lag a dancing robot:
@@ -125,6 +129,7 @@ struct PlannerWorkspace {
   // refuses as garbage); the plan handed to the WBC holds the hard limits.
   std::uint64_t plan_positions_on_a_stop = 0;
   planner::RecoveryStepState recovery;  // its count: recovery.steps
+  planner::LiftoffHoldState liftoff;    // lift-offs held, the motion's lag
 };
 
 // The state the control tick runs on: the estimator's, or (simulation only, for

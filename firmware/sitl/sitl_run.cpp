@@ -124,7 +124,9 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     if (f.mode.mode == Mode::kDance && motion != nullptr) {
       qp_iterations.push_back(dc.stack.wbc.diagnostics.qp_iterations);
       if (!run.fell) {
-        planner::motion_plan_sample_rt(m, *metrics_data, *motion, loop->now_ns() - dc.start_ns, knot);
+        // The motion at its own clock: behind by the planner's lift-off hold lag (liftoff_hold.h).
+        planner::motion_plan_sample_rt(m, *metrics_data, *motion,
+                                       loop->now_ns() - dc.start_ns - FirmwareLoop::planner().ws.liftoff.lag_ns, knot);
         const auto e = (truth.q.tail<model::kNumJoints>() - knot.q.tail<model::kNumJoints>()).eval();
         sq_legs += e.head<2 * model::kLegJoints>().squaredNorm() / (2 * model::kLegJoints);
         sq_arms += e.segment<2 * model::kArmJoints>(model::kLeftArmFirst).squaredNorm() / (2 * model::kArmJoints);

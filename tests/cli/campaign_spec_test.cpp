@@ -52,6 +52,18 @@ TEST(CampaignSpec, RejectsBadSpecs) {
   EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":[],"grounds":["floor"],"perturbations":["none"],"seeds":1})", s, error));
   EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1,"sedes":2})", s, error));
   EXPECT_NE(error.find("sedes"), std::string::npos);
+  EXPECT_FALSE(cli::parse_campaign_spec(R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1,"liftoff_hold":"yes"})", s, error));
+  EXPECT_NE(error.find("liftoff_hold"), std::string::npos);
+}
+
+TEST(CampaignSpec, LiftoffHoldIsOptIn) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_FALSE(s.liftoff_hold);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"liftoff_hold":true})", s, error)) << error;
+  EXPECT_TRUE(s.liftoff_hold);
 }
 
 // A push is the impulse over its duration, starts inside the window, and depends only on

@@ -51,7 +51,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
-                                      "first_seed", "planner", "duration_s", "push"};
+                                      "first_seed", "planner", "liftoff_hold", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -89,6 +89,13 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   if (s.planner != "mpc" && s.planner != "kinematic") {
     error = "\"planner\" must be mpc or kinematic";
     return false;
+  }
+  if (j.contains("liftoff_hold")) {
+    if (!j["liftoff_hold"].is_boolean()) {
+      error = "\"liftoff_hold\" must be true or false";
+      return false;
+    }
+    s.liftoff_hold = j["liftoff_hold"].get<bool>();
   }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {

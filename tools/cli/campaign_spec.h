@@ -9,6 +9,7 @@
 //   "perturbations"  [set name (none, show) | PATH.json, ...] (kuavo simulate --perturb)
 //   "seeds"          runs per cell; "first_seed" (default 1)
 //   "planner"        "mpc" | "kinematic" (default mpc)
+//   "liftoff_hold"   true: kuavo simulate --liftoff-hold on (default false)
 //   "duration_s"     0 or absent: each motion's length plus the settling second
 //   "push"           {"impulse_Ns", "duration_s", "start_after_s", "end_before_s"}: one
 //                    horizontal push a run, direction uniform in [0, 2π) and start uniform
@@ -48,6 +49,7 @@ struct CampaignSpec {
   int seeds = 0;
   std::uint64_t first_seed = 1;
   std::string planner = "mpc";
+  bool liftoff_hold = false;
   double duration_s = 0.0;
   PushSpec push;
 };
