@@ -13,37 +13,28 @@ constexpr int kCornersPerFoot = kNumPoints / 2;
 
 hal::TimeNs to_ns(double s) { return static_cast<hal::TimeNs>(std::llround(s * 1e9)); }
 
-hal::TimeNs frame_time(const MotionPlan& motion, int i) {
-  return motion.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / motion.rate_hz * 1e9));
+// Signed margin of the knot's capture point inside the hull of its sole corners
+// [first, first + N) (positive inside), over those corners' mean height.
+template <int N>
+double capture_point_margin(const LiftoffHoldConfig& cfg, const PlanKnot& knot, int first) {
+  std::array<Vec2, N> corners;
+  double sole_z = 0.0;
+  for (int i = 0; i < N; ++i) {
+    corners[i] = knot.point_position_m.segment<2>(3 * (first + i));
+    sole_z += knot.point_position_m[3 * (first + i) + 2] / N;
+  }
+  const Vec2 xi = capture_point(knot, sole_z, cfg.min_pendulum_height_m).xi;
+  return signed_margin(convex_hull<N>(corners, N), xi);
 }
 
 // Distance of the knot's capture point outside the sole of `foot` (negative: inside).
 double capture_point_outside(const LiftoffHoldConfig& cfg, const PlanKnot& knot, int foot) {
-  std::array<Vec2, kCornersPerFoot> corners;
-  double sole_z = 0.0;
-  for (int i = 0; i < kCornersPerFoot; ++i) {
-    const int c = foot * kCornersPerFoot + i;
-    corners[i] = knot.point_position_m.segment<2>(3 * c);
-    sole_z += knot.point_position_m[3 * c + 2] / kCornersPerFoot;
-  }
-  const double h = std::max(knot.com_position_m.z() - sole_z, cfg.min_pendulum_height_m);
-  const double omega = std::sqrt(model::kGravity_m_s2 / h);
-  const Vec2 xi = knot.com_position_m.head<2>() + knot.com_velocity_m_s.head<2>() / omega;
-  return -signed_margin(convex_hull<kCornersPerFoot>(corners, kCornersPerFoot), xi);
+  return -capture_point_margin<kCornersPerFoot>(cfg, knot, foot * kCornersPerFoot);
 }
 
 // The knot's capture point inside the convex hull of both soles.
 bool capture_point_inside_both(const LiftoffHoldConfig& cfg, const PlanKnot& knot) {
-  std::array<Vec2, kNumPoints> corners;
-  double sole_z = 0.0;
-  for (int c = 0; c < kNumPoints; ++c) {
-    corners[c] = knot.point_position_m.segment<2>(3 * c);
-    sole_z += knot.point_position_m[3 * c + 2] / kNumPoints;
-  }
-  const double h = std::max(knot.com_position_m.z() - sole_z, cfg.min_pendulum_height_m);
-  const double omega = std::sqrt(model::kGravity_m_s2 / h);
-  const Vec2 xi = knot.com_position_m.head<2>() + knot.com_velocity_m_s.head<2>() / omega;
-  return signed_margin(convex_hull<kNumPoints>(corners, kNumPoints), xi) > 0.0;
+  return capture_point_margin<kNumPoints>(cfg, knot, 0) > 0.0;
 }
 
 // The motion's first lift-off of a foot in (tau, tau + ahead] with the other foot down until
@@ -121,7 +112,7 @@ void liftoff_hold_window_rt(const model::Model& model, const LiftoffHoldConfig& 
       ContactFlags all{};
       all.fill(true);
       plan_knot_from_state(model, s.data, q, v, all, t_ns, s.measured);
-      motion_plan_sample_rt(model, s.data, motion, frame_time(motion, lift), s.at_lift);
+      motion_plan_sample_rt(model, s.data, motion, motion_plan_frame_time(motion, lift), s.at_lift);
       // A non-finite state fails the comparison: no hold from it (the MPC refuses it).
       s.last_excess_m = capture_point_outside(cfg, s.measured, stance) -
                         std::max(capture_point_outside(cfg, s.at_lift, stance), 0.0);

@@ -60,6 +60,10 @@ int motion_plan_frame_at(const MotionPlan& plan, hal::TimeNs t_ns) {
   return s >= static_cast<double>(last) ? last : static_cast<int>(s);
 }
 
+hal::TimeNs motion_plan_frame_time(const MotionPlan& plan, int i) {
+  return plan.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / plan.rate_hz * 1e9));
+}
+
 void motion_plan_sample_rt(const model::Model& model, dynamics::Data& data, const MotionPlan& plan, hal::TimeNs t_ns,
                            PlanKnot& knot) {
   const int last = std::max(plan.frame_count - 1, 0);

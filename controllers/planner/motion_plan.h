@@ -48,6 +48,9 @@ double motion_plan_duration_s(const MotionPlan& plan);
 // 0 before the start, the last after the end). Real-time safe.
 int motion_plan_frame_at(const MotionPlan& plan, hal::TimeNs t_ns);
 
+// The instant frame i is due (start_ns + i / rate). Real-time safe.
+hal::TimeNs motion_plan_frame_time(const MotionPlan& plan, int i);
+
 // The knot at absolute time t_ns: q interpolated between the neighbouring frames
 // (joints and base position linearly, orientation by slerp), v linearly; before the
 // start the first frame, after the end the last, both at rest. Contact flags of the

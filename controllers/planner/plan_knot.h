@@ -9,7 +9,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "controllers/dynamics/data.h"
 #include "controllers/hal/types.h"
@@ -34,6 +36,20 @@ struct PlanKnot {
   Vec3 com_position_m = Vec3::Zero();
   Vec3 com_velocity_m_s = Vec3::Zero();
 };
+
+// The linear inverted pendulum's capture point of a knot's CoM over soles at height sole_z:
+// ξ = c + ċ/ω (horizontal), ω = √(g/h), h = c_z − sole_z but at least min_height_m.
+struct CapturePoint {
+  Eigen::Vector2d xi = Eigen::Vector2d::Zero();
+  double omega = 0.0;
+};
+inline CapturePoint capture_point(const PlanKnot& knot, double sole_z, double min_height_m) {
+  const double h = std::max(knot.com_position_m.z() - sole_z, min_height_m);
+  CapturePoint out;
+  out.omega = std::sqrt(model::kGravity_m_s2 / h);
+  out.xi = knot.com_position_m.head<2>() + knot.com_velocity_m_s.head<2>() / out.omega;
+  return out;
+}
 
 // 1.4 s (the longest MPC horizon) at 50 Hz, plus the terminal knot, plus slack for a
 // 0.01 s step at 0.6 s.

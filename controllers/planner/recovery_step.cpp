@@ -39,10 +39,6 @@ Vec2 displacement_at(const FootDisplacement& d, hal::TimeNs t, double lift_heigh
 
 bool in_recovery_swing(const FootDisplacement& d, hal::TimeNs t) { return d.active && t >= d.lift_ns && t < d.land_ns; }
 
-hal::TimeNs frame_time(const MotionPlan& motion, int i) {
-  return motion.start_ns + static_cast<hal::TimeNs>(std::llround(static_cast<double>(i) / motion.rate_hz * 1e9));
-}
-
 // The motion's next swing of `foot` after `after_ns`, its lift-off searched up to `until_ns`
 // (the window's end): fills the return interval once a lift-off is found (touchdown: the
 // first frame back in contact; a motion that ends with that foot up keeps the displacement).
@@ -62,8 +58,8 @@ void find_return(const MotionPlan& motion, int foot, hal::TimeNs after_ns, hal::
   while (land < motion.frame_count - 1 && !motion.foot_contact[land][foot]) ++land;
   if (motion.foot_contact[land][foot]) {
     d.return_known = true;
-    d.return_lift_ns = frame_time(motion, lift);
-    d.return_land_ns = frame_time(motion, land);
+    d.return_lift_ns = motion_plan_frame_time(motion, lift);
+    d.return_land_ns = motion_plan_frame_time(motion, land);
   }
 }
 
@@ -158,9 +154,9 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
     sole_z += m.point_position_m[3 * c + 2] / kNumPoints;
   }
   const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(corners, kNumPoints);
-  const double h = std::max(m.com_position_m.z() - sole_z, cfg.min_pendulum_height_m);
-  const double omega = std::sqrt(model::kGravity_m_s2 / h);
-  const Vec2 xi = m.com_position_m.head<2>() + m.com_velocity_m_s.head<2>() / omega;
+  const CapturePoint cp = capture_point(m, sole_z, cfg.min_pendulum_height_m);
+  const double omega = cp.omega;
+  const Vec2 xi = cp.xi;
   st.last_outside_m = -signed_margin(support, xi);
 
   if (!st.started) {
