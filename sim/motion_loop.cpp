@@ -415,6 +415,9 @@ void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out
   out.liftoff_released = ws.liftoff.released;
   out.motion_lag_s_max = 1e-9 * static_cast<double>(ws.liftoff.lag_max_ns);
   out.motion_lag_s_end = 1e-9 * static_cast<double>(ws.liftoff.lag_ns);
+  out.anchor_reanchors = ws.anchor.reanchors;
+  out.anchor_refused = ws.anchor.refused;
+  out.anchor_offset_m_max = ws.anchor.offset_max_m;
 }
 
 MotionSummary run_motion(const model::Model& model, const planner::MotionPlan& motion, const MotionRunConfig& config,
@@ -441,6 +444,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
                 "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n"
                 "  \"liftoff_holds\": %llu,\n  \"liftoff_released\": %llu,\n  \"motion_lag_s\": {\"max\": %.3f, \"end\": %.3f},\n"
+                "  \"plan_anchor\": {\"reanchors\": %llu, \"refused\": %llu, \"offset_m_max\": %.4f},\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.com_path_m, s.com_path_plan_m, s.steps, s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
@@ -449,7 +453,9 @@ std::string motion_summary_json(const MotionSummary& s) {
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
                 static_cast<unsigned long long>(s.plan_positions_on_a_stop), static_cast<unsigned long long>(s.recovery_steps),
                 static_cast<unsigned long long>(s.recovery_declined), static_cast<unsigned long long>(s.liftoff_holds),
-                static_cast<unsigned long long>(s.liftoff_released), s.motion_lag_s_max, s.motion_lag_s_end, s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
+                static_cast<unsigned long long>(s.liftoff_released), s.motion_lag_s_max, s.motion_lag_s_end,
+                static_cast<unsigned long long>(s.anchor_reanchors), static_cast<unsigned long long>(s.anchor_refused),
+                s.anchor_offset_m_max, s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);
   std::string json = base + buf;
   if (!s.perturbation_json.empty()) {
     json.resize(json.rfind('}'));

@@ -33,6 +33,7 @@ const char* stack_validate_config(const StackConfig& config) {
     if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
     if (const char* why = planner::recovery_step_validate(config.recovery)) return why;
     if (const char* why = planner::liftoff_hold_validate(config.liftoff_hold)) return why;
+    if (const char* why = planner::plan_anchor_validate(config.anchor)) return why;
   }
   return wbc::wbc_validate_config(config.wbc);
 }
@@ -108,6 +109,7 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
     planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, q, v, t_state_ns, config.mpc.dt_s,
                                     stages + 1, !recovering, ws.window);
     planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window, ws.liftoff.lag_ns);
+    planner::plan_anchor_rt(model, config.anchor, ws.anchor, q, v, t_state_ns, ws.window);
     ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
       out.stamp_ns = ws.mpc_plan.stamp_ns;
@@ -144,6 +146,7 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
     planner_ws.plan_positions_on_a_stop = 0;
     planner::recovery_step_reset(planner_ws.recovery);
     planner::liftoff_hold_reset(planner_ws.liftoff);
+    planner::plan_anchor_reset(planner_ws.anchor);
   }
   control.started = false;
   return true;
@@ -181,6 +184,7 @@ void stack_reset_planner_rt(const StackConfig& config, PlannerWorkspace& ws) {
     mpc::mpc_reset(ws.mpc);
     planner::recovery_step_reset(ws.recovery);
     planner::liftoff_hold_reset(ws.liftoff);
+    planner::plan_anchor_reset(ws.anchor);
   }
 }
 

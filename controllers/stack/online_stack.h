@@ -19,6 +19,7 @@
 #include "controllers/estimator/estimator.h"
 #include "controllers/mpc/mpc.h"
 #include "controllers/planner/liftoff_hold.h"
+#include "controllers/planner/plan_anchor.h"
 #include "controllers/planner/recovery_step.h"
 #include "controllers/planner/reference_plan.h"
 #include "controllers/wbc/wbc.h"
@@ -70,6 +71,8 @@ struct StackConfig {
   // MPC planner only: a planned lift-off waits while the capture point is not over the
   // foot that will stand (liftoff_hold.h).
   planner::LiftoffHoldConfig liftoff_hold{};
+  // MPC planner only: the window shifted to where the stance foot measures (plan_anchor.h).
+  planner::PlanAnchorConfig anchor{};
   estimator::EstimatorConfig estimator = dance_estimator_config();
 
   // Leju's IMU low-pass corners (gyro 20 Hz, accelerometer 12 Hz) lag a dancing robot:
@@ -130,6 +133,7 @@ struct PlannerWorkspace {
   std::uint64_t plan_positions_on_a_stop = 0;
   planner::RecoveryStepState recovery;  // its count: recovery.steps
   planner::LiftoffHoldState liftoff;    // lift-offs held, the motion's lag
+  planner::PlanAnchorState anchor;      // the plan's offset to the measured stance foot
 };
 
 // The state the control tick runs on: the estimator's, or (simulation only, for

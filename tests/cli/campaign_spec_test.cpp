@@ -66,6 +66,23 @@ TEST(CampaignSpec, LiftoffHoldIsOptIn) {
   EXPECT_TRUE(s.liftoff_hold);
 }
 
+TEST(CampaignSpec, PlanAnchorKeysPassThroughOnlyWhenGiven) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_FALSE(s.plan_anchor.has_value());
+  EXPECT_FALSE(s.plan_anchor_home.has_value());
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"plan_anchor":false,"plan_anchor_home":0.25})", s, error)) << error;
+  ASSERT_TRUE(s.plan_anchor.has_value());
+  EXPECT_FALSE(*s.plan_anchor);
+  EXPECT_EQ(s.plan_anchor_home.value_or(-1.0), 0.25);
+  EXPECT_FALSE(cli::parse_campaign_spec(head + R"(,"plan_anchor":1})", s, error));
+  EXPECT_NE(error.find("plan_anchor"), std::string::npos);
+  EXPECT_FALSE(cli::parse_campaign_spec(head + R"(,"plan_anchor_home":0.7})", s, error));
+  EXPECT_NE(error.find("plan_anchor_home"), std::string::npos);
+}
+
 // A push is the impulse over its duration, starts inside the window, and depends only on
 // the seed; its directions cover the circle.
 // A spec's push and run length within what `kuavo simulate` takes (sim/push_option.h): refused

@@ -51,7 +51,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
-                                      "first_seed", "planner", "liftoff_hold", "duration_s", "push"};
+                                      "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -96,6 +96,22 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
       return false;
     }
     s.liftoff_hold = j["liftoff_hold"].get<bool>();
+  }
+  if (j.contains("plan_anchor")) {
+    if (!j["plan_anchor"].is_boolean()) {
+      error = "\"plan_anchor\" must be true or false";
+      return false;
+    }
+    s.plan_anchor = j["plan_anchor"].get<bool>();
+  }
+  if (j.contains("plan_anchor_home")) {
+    double home = 0.0;
+    if (!number(j, "plan_anchor_home", home, error)) return false;
+    if (!(home >= 0.0 && home <= 0.5)) {
+      error = "\"plan_anchor_home\" must be 0..0.5";
+      return false;
+    }
+    s.plan_anchor_home = home;
   }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {

@@ -10,6 +10,8 @@
 //   "seeds"          runs per cell; "first_seed" (default 1)
 //   "planner"        "mpc" | "kinematic" (default mpc)
 //   "liftoff_hold"   true: kuavo simulate --liftoff-hold on (default false)
+//   "plan_anchor"    true | false: kuavo simulate --plan-anchor on | off (absent: simulate's default)
+//   "plan_anchor_home"  SHARE: --plan-anchor-home SHARE (absent: simulate's default)
 //   "duration_s"     0 or absent: each motion's length plus the settling second
 //   "push"           {"impulse_Ns", "duration_s", "start_after_s", "end_before_s"}: one
 //                    horizontal push a run, direction uniform in [0, 2π) and start uniform
@@ -18,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +53,8 @@ struct CampaignSpec {
   std::uint64_t first_seed = 1;
   std::string planner = "mpc";
   bool liftoff_hold = false;
+  std::optional<bool> plan_anchor;
+  std::optional<double> plan_anchor_home;
   double duration_s = 0.0;
   PushSpec push;
 };

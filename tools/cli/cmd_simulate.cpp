@@ -4,7 +4,7 @@
 //                [--engine simbody|mujoco|both]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]
-//                [--liftoff-hold on|off]
+//                [--liftoff-hold on|off] [--plan-anchor on|off] [--plan-anchor-home SHARE]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
 //                --log run.csv --summary run.json
 // --stand runs the standing controller; MOTION (a .motion file from `kuavo retarget`) and
@@ -58,7 +58,7 @@ int run_simulate(int argc, char** argv) {
   long long steps = 0, latency_ticks = cfg.command_latency_ticks;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
-  std::string summary_path, balance = "off", recovery = "on", liftoff_hold = "off", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
+  std::string summary_path, balance = "off", recovery = "on", liftoff_hold = "off", anchor = "on", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
   std::string integrator = "cvode", variant_name = "s45", perturb, engine = "simbody";
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
@@ -76,6 +76,11 @@ int run_simulate(int argc, char** argv) {
   p.choice("--recovery-step", {"on", "off"}, &recovery).modes = kMotionRun | kStepRun;
   // The MPC planner's lift-off hold (controllers/planner/liftoff_hold.h), opt-in; off: lift-offs on the motion's clock.
   p.choice("--liftoff-hold", {"on", "off"}, &liftoff_hold).modes = kMotionRun | kStepRun;
+  // The MPC planner's plan anchor (controllers/planner/plan_anchor.h), on by default; off: the
+  // motion's world footholds.
+  p.choice("--plan-anchor", {"on", "off"}, &anchor).modes = kMotionRun | kStepRun;
+  // Its homing: the share of the offset each step gives back (plan_anchor.h, home_share).
+  p.number("--plan-anchor-home", "SHARE", 0.0, 0.5, "", &motion_cfg.stack.anchor.home_share).modes = kMotionRun | kStepRun;
   // The online MPC's window: mpc_validate_config's range with plan output (checked again there).
   p.number("--horizon", "SECONDS", 0.6, 1.4, "s", &motion_cfg.stack.mpc.horizon_s).modes = kMotionRun | kStepRun;
   p.choice("--sensors", {"mti", "ideal"}, &sensors).modes = kMotionRun | kStepRun;
@@ -135,6 +140,7 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.use_truth_state = state == "truth";
   motion_cfg.stack.recovery.enabled = recovery == "on";
   motion_cfg.stack.liftoff_hold.enabled = liftoff_hold == "on";
+  motion_cfg.stack.anchor.enabled = anchor == "on";
   motion_cfg.ideal_sensors = sensors == "ideal";
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
   if (!stack::parse_planner(planner.c_str(), motion_cfg.stack.planner) || !sim::parse_ground(ground.c_str(), cfg.ground) ||
