@@ -94,7 +94,7 @@ struct MotionSummary {
   // far the motion's clock fell behind (most, and at the end of the run) [s].
   std::uint64_t liftoff_holds = 0, liftoff_released = 0;
   double motion_lag_s_max = 0.0, motion_lag_s_end = 0.0;
-  // The plan anchor (plan_anchor.h): targets taken, targets refused (beyond its bound), and
+  // The plan anchor (plan_anchor.h): targets taken, planner calls that refused one (beyond its bound), and
   // the largest offset applied [m].
   std::uint64_t anchor_reanchors = 0, anchor_refused = 0;
   double anchor_offset_m_max = 0.0;

@@ -29,7 +29,9 @@
 //                foot it sets down off the plan (the built-in dance on the floor, nominal
 //                plant: 9 cm to the left by 28 s, a centimetre or two a step, always the same
 //                way); the price is β of the error back between the CoM and the stance foot.
-// A target beyond max_offset_m is not followed (the offset stays; counted in `refused`).
+// A target beyond max_offset_m is not followed (the offset stays; the calls that met one are
+// counted in `refused`). A recovery step (recovery_step.h) runs before this and aims its
+// landing at a measured point: it takes the offset off (recovery_step_rt's plan_offset).
 //
 // On by default (`kuavo simulate --plan-anchor off` for the world footholds). Measured (show
 // campaign: carpet, `show` set, one 10 N·s push; the built-in dance, seeds 1–100): without it
@@ -69,7 +71,7 @@ struct PlanAnchorState {
   Eigen::Vector2d to = Eigen::Vector2d::Zero();      // … and end
   hal::TimeNs ramp_start_ns = 0;
   std::uint64_t reanchors = 0;  // targets taken
-  std::uint64_t refused = 0;    // targets beyond max_offset_m
+  std::uint64_t refused = 0;    // calls whose target was beyond max_offset_m
   double offset_max_m = 0.0;    // largest |offset| applied since the reset
   dynamics::Data data;          // scratch
   PlanKnot measured;            // scratch

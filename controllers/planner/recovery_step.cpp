@@ -98,7 +98,7 @@ struct StepCandidate {
 // the support the step makes, by capture_margin_m.
 StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& st, const PlanKnot& m,
                         const PlanKnot& k0, const std::array<Vec2, kNumPoints>& corners, const Vec2& xi,
-                        double omega, int swing) {
+                        double omega, int swing, const Vec2& plan_offset) {
   StepCandidate out;
   out.swing = swing;
   const int stance = 1 - swing;
@@ -124,11 +124,12 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
   const FootDisplacement& d = st.foot[swing];
   double unused = 0.0;
   out.current = d.active ? displacement_at(d, k0.stamp_ns, 0.0, unused) : Vec2::Zero();
-  out.step = target - (foot_centre(k0, swing) + out.current);
+  // The window is moved by plan_offset after this call (plan_anchor.h); target is measured.
+  out.step = target - plan_offset - (foot_centre(k0, swing) + out.current);
   if (out.step.norm() > cfg.max_step_m) out.step *= cfg.max_step_m / out.step.norm();
 
   // The support after touchdown: the stance sole and the swing sole moved to its landing.
-  const Vec2 shift = foot_centre(k0, swing) + out.current + out.step - foot_centre(m, swing);
+  const Vec2 shift = foot_centre(k0, swing) + out.current + out.step + plan_offset - foot_centre(m, swing);
   std::array<Vec2, kNumPoints> after = corners;
   for (int i = 0; i < kCornersPerFoot; ++i) after[swing * kCornersPerFoot + i] += shift;
   out.margin_m = signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
@@ -139,7 +140,7 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
 // Decides and starts a recovery step if the measured state calls for one.
 void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
                    const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                   const PlanWindow& window) {
+                   const PlanWindow& window, const Vec2& plan_offset) {
   const PlanKnot& k0 = window.knots[0];
   const hal::TimeNs now = k0.stamp_ns;
   ContactFlags all{};
@@ -184,7 +185,7 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   // Each foot as the swing foot: where it must land, and whether that captures.
   StepCandidate best;
   for (int swing = 0; swing < 2; ++swing) {
-    const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing);
+    const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing, plan_offset);
     if (c.captures && (!best.captures || c.margin_m > best.margin_m)) best = c;
   }
   if (!best.captures) {
@@ -235,7 +236,7 @@ void recovery_step_reset(RecoveryStepState& state) {
 
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
                       const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window, hal::TimeNs motion_lag_ns) {
+                      PlanWindow& window, hal::TimeNs motion_lag_ns, const Eigen::Vector2d& plan_offset) {
   if (!cfg.enabled || window.count < 2 || motion.frame_count < 1) return;
   const hal::TimeNs now = window.knots[0].stamp_ns;
   const hal::TimeNs end = window.knots[window.count - 1].stamp_ns;
@@ -244,7 +245,7 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   for (FootDisplacement& d : st.foot) {
     if (d.active && d.return_known && now >= d.return_land_ns) d = FootDisplacement{};
   }
-  maybe_trigger(model, cfg, st, q, v, window);
+  maybe_trigger(model, cfg, st, q, v, window, plan_offset);
   for (int foot = 0; foot < 2; ++foot) {
     FootDisplacement& d = st.foot[foot];
     if (d.active && end > d.land_ns && !d.return_known) {

@@ -127,9 +127,13 @@ void recovery_step_reset(RecoveryStepState& state);
 
 // q, v: the measured state at window.knots[0]. motion: what the window was sampled from
 // (the motion's next swings of a displaced foot), motion_lag_ns behind the knots' stamps
-// (liftoff_hold.h). Rewrites window in place. Real-time safe.
+// (liftoff_hold.h). plan_offset: what the plan anchor (plan_anchor.h) will add to the
+// window's horizontal positions after this call; a new step's landing, chosen on the
+// measured state, has it taken off so that it lands where chosen. Rewrites window in place.
+// Real-time safe.
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& config, RecoveryStepState& state,
                       const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window, hal::TimeNs motion_lag_ns = 0);
+                      PlanWindow& window, hal::TimeNs motion_lag_ns = 0,
+                      const Eigen::Vector2d& plan_offset = Eigen::Vector2d::Zero());
 
 }  // namespace kuavo::planner

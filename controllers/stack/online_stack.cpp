@@ -108,7 +108,10 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
     const bool recovering = ws.recovery.foot[0].active || ws.recovery.foot[1].active;
     planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, q, v, t_state_ns, config.mpc.dt_s,
                                     stages + 1, !recovering, ws.window);
-    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window, ws.liftoff.lag_ns);
+    // The anchor's offset as the previous call left it: this call's differs by a ramp step at
+    // most, and not at all between re-anchorings.
+    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window, ws.liftoff.lag_ns,
+                              ws.anchor.offset);
     planner::plan_anchor_rt(model, config.anchor, ws.anchor, q, v, t_state_ns, ws.window);
     ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
@@ -130,6 +133,8 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
     }
     ++ws.mpc_failures;
     mpc::mpc_reset(ws.mpc);
+    // The fallback is the motion as it is: without the lift-off hold's lag, a recovery step's
+    // rewrite or the plan anchor's offset (up to its bound, 0.25 m), until the MPC is back.
   }
   // Kinematic planner: the state does not enter (the WBC closes the loop).
   planner::kinematic_reference_plan_rt(model, ws.data, motion, t_state_ns, config.plan_period_s, ws.window, out);

@@ -169,6 +169,28 @@ TEST(PlanAnchor, WithHomingItTakesItsShareOfTheError) {
   f.expect_shifted_by(0.8 * d, 1e-12);
 }
 
+TEST(PlanAnchor, ATargetMovingLessThanTheDeadbandIsNotTakenAndARampRestartsFromWhereItIs) {
+  Fixture f;
+  const Eigen::Vector2d d(0.02, 0.0);
+  for (int i = 0; i < 20; ++i) f.call(translated(d));
+  f.expect_shifted_by(d, 1e-12);
+  // 4 mm more: inside the 5 mm deadband, the offset stays.
+  for (int i = 0; i < 5; ++i) f.call(translated(d + Eigen::Vector2d(0.004, 0.0)));
+  f.expect_shifted_by(d, 1e-12);
+  EXPECT_EQ(f.state->reanchors, 1u);
+  // 3 cm more: a new ramp from d; halfway (0.1 s) it is midway, then a new target mid-ramp
+  // starts its ramp from the offset reached, not from d or the old target.
+  const Eigen::Vector2d e = d + Eigen::Vector2d(0.03, 0.0);
+  for (int i = 0; i < 6; ++i) f.call(translated(e));  // re-anchored on the first, 5 ramp steps
+  f.expect_shifted_by(0.5 * (d + e), 1e-12);
+  const Eigen::Vector2d g(0.0, 0.03);
+  f.call(translated(g));  // the new target; ramp share 0 on this call
+  f.expect_shifted_by(0.5 * (d + e), 1e-12);
+  f.call(translated(g));
+  f.expect_shifted_by(0.5 * (d + e) + 0.1 * (g - 0.5 * (d + e)), 1e-12);
+  EXPECT_EQ(f.state->reanchors, 3u);
+}
+
 TEST(PlanAnchor, ATargetBeyondTheBoundIsRefusedAndCounted) {
   Fixture f;
   const dynamics::ConfigVector q = translated(Eigen::Vector2d(0.3, 0.0));

@@ -86,11 +86,12 @@ struct Fixture {
     recovery_step_reset(*state);
   }
   // One planner call at t (s) with the robot standing and moving at `velocity`.
-  void call(double t, const Vec2& velocity) {
+  void call(double t, const Vec2& velocity, const Vec2& plan_offset = Vec2::Zero()) {
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), data, *motion, t_ns, kDt, kKnots, *window);
     *untouched = *window;
-    recovery_step_rt(s45_robot(), config, *state, *motion, standing_configuration(), translating(velocity), *window);
+    recovery_step_rt(s45_robot(), config, *state, *motion, standing_configuration(), translating(velocity), *window, 0,
+                     plan_offset);
   }
   bool window_unchanged() const {
     for (int k = 0; k < kKnots; ++k) {
@@ -222,6 +223,30 @@ TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
   // No second step while this one swings, however far out ξ stays.
   for (int i = 2; i < 10; ++i) f.call(1.0 + kDt * i, velocity);
   EXPECT_EQ(f.state->steps, 1u);
+}
+
+// The plan anchor adds its offset to the window after the step is written: the step's
+// landing (chosen on the measured state) has it taken off, so that window + offset lands
+// where the step without an offset lands, and the capture decision is the same.
+TEST(RecoveryStep, TheAnchorsOffsetIsTakenOffTheLanding) {
+  const Standing s = standing_geometry();
+  const Vec2 velocity = s.backwards(0.02);
+  const Vec2 offset(0.02, -0.01);
+  Fixture a, b;
+  for (int i = 0; i < 2; ++i) a.call(1.0 + kDt * i, velocity), b.call(1.0 + kDt * i, velocity, offset);
+  ASSERT_EQ(a.state->steps, 1u);
+  ASSERT_EQ(b.state->steps, 1u);
+  const int swing = a.state->foot[0].active ? 0 : 1;
+  ASSERT_TRUE(b.state->foot[swing].active);
+  const PlanKnot &la = a.window->knots[kKnots - 1], &lb = b.window->knots[kKnots - 1];
+  for (int c = 0; c < kNumPoints; ++c) {
+    const Vec2 expected = la.point_position_m.segment<2>(3 * c) - (c / kCornersPerFoot == swing ? offset : Vec2::Zero());
+    EXPECT_NEAR((lb.point_position_m.segment<2>(3 * c) - expected).norm(), 0.0, 1e-12) << c;
+  }
+  // The step (0.26 m) moved the foot by more than the offset: the comparison is not trivially met.
+  EXPECT_GT((la.point_position_m.segment<2>(3 * swing * kCornersPerFoot) -
+             a.untouched->knots[kKnots - 1].point_position_m.segment<2>(3 * swing * kCornersPerFoot)).norm(),
+            2.0 * offset.norm());
 }
 
 // ξ 4 cm beside the left foot: the right foot cannot land beyond it (it stays on its own

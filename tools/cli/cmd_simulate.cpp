@@ -79,7 +79,7 @@ int run_simulate(int argc, char** argv) {
   // The MPC planner's plan anchor (controllers/planner/plan_anchor.h), on by default; off: the
   // motion's world footholds.
   p.choice("--plan-anchor", {"on", "off"}, &anchor).modes = kMotionRun | kStepRun;
-  // Its homing: the share of the offset each step gives back (plan_anchor.h, home_share).
+  // Its homing: the share of the measured error it leaves for the MPC to pull back (plan_anchor.h, home_share).
   p.number("--plan-anchor-home", "SHARE", 0.0, 0.5, "", &motion_cfg.stack.anchor.home_share).modes = kMotionRun | kStepRun;
   // The online MPC's window: mpc_validate_config's range with plan output (checked again there).
   p.number("--horizon", "SECONDS", 0.6, 1.4, "s", &motion_cfg.stack.mpc.horizon_s).modes = kMotionRun | kStepRun;
