@@ -25,17 +25,14 @@ int anchor_foot(const PlanWindow& window) {
   return 2;
 }
 
-// Mean horizontal measured − planned over the foot's corners in contact at knot 0; false if none.
-bool foot_error(const PlanKnot& planned, const PlanKnot& measured, int foot, Eigen::Vector2d& sum, int& n) {
-  bool any = false;
+// Adds measured − planned (horizontal) of the foot's corners in contact at knot 0 to sum, their count to n.
+void foot_error(const PlanKnot& planned, const PlanKnot& measured, int foot, Eigen::Vector2d& sum, int& n) {
   for (int i = 0; i < kCornersPerFoot; ++i) {
     const int c = foot * kCornersPerFoot + i;
     if (!planned.in_contact[c]) continue;
     sum += measured.point_position_m.segment<2>(3 * c) - planned.point_position_m.segment<2>(3 * c);
     ++n;
-    any = true;
   }
-  return any;
 }
 
 }  // namespace

@@ -20,6 +20,7 @@ namespace {
 
 using kuavo::test::s45_robot;
 using kuavo::test::standing_configuration;
+using kuavo::test::stepping_motion;
 
 constexpr double kDt = 0.02;
 constexpr int kKnots = 61;
@@ -27,16 +28,6 @@ constexpr hal::TimeNs kMs = 1'000'000;
 constexpr hal::TimeNs kPeriod = 20 * kMs;
 constexpr int kLeft = 0, kRight = 1;
 
-// Standing 6 s at 100 Hz; the right foot up over [2.0, 2.4) s.
-std::unique_ptr<MotionPlan> stepping_motion() {
-  auto m = std::make_unique<MotionPlan>();
-  m->rate_hz = 100.0;
-  m->frame_count = 600;
-  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
-  for (int i = 200; i < 240; ++i) m->foot_contact[i][kRight] = false;
-  EXPECT_EQ(motion_plan_finish(*m), nullptr);
-  return m;
-}
 
 double omega_standing() {
   static dynamics::Data data;

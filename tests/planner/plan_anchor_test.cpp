@@ -20,6 +20,7 @@ namespace {
 
 using kuavo::test::s45_robot;
 using kuavo::test::standing_configuration;
+using kuavo::test::stepping_motion;
 
 constexpr double kDt = 0.02;
 constexpr int kKnots = 61;
@@ -28,15 +29,6 @@ constexpr hal::TimeNs kPeriod = 20 * kMs;
 constexpr int kRight = 1;
 constexpr int kCorners = kNumPoints / 2;
 
-std::unique_ptr<MotionPlan> stepping_motion() {
-  auto m = std::make_unique<MotionPlan>();
-  m->rate_hz = 100.0;
-  m->frame_count = 600;
-  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
-  for (int i = 200; i < 240; ++i) m->foot_contact[i][kRight] = false;
-  EXPECT_EQ(motion_plan_finish(*m), nullptr);
-  return m;
-}
 
 dynamics::ConfigVector translated(const Eigen::Vector2d& d) {
   dynamics::ConfigVector q = standing_configuration();

@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/planner/motion_plan.h"
 #include "controllers/standing/standing_controller.h"
 
 namespace kuavo::test {
@@ -22,6 +25,18 @@ inline dynamics::ConfigVector standing_configuration() {
   q.tail<model::kNumJoints>() = control::centred_standing_pose(s45_robot(), data, 0.78);
   control::place_on_ground(s45_robot(), data, q);
   return q;
+}
+
+// Standing 6 s at 100 Hz in standing_configuration(); the right foot up over [2.0, 2.4) s
+// (the planner tests' one step).
+inline std::unique_ptr<planner::MotionPlan> stepping_motion() {
+  auto m = std::make_unique<planner::MotionPlan>();
+  m->rate_hz = 100.0;
+  m->frame_count = 600;
+  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
+  for (int i = 200; i < 240; ++i) m->foot_contact[i][1] = false;
+  EXPECT_EQ(planner::motion_plan_finish(*m), nullptr);
+  return m;
 }
 
 }  // namespace kuavo::test
