@@ -96,9 +96,8 @@ void liftoff_hold_reset(LiftoffHoldState& s) {
 }
 
 void liftoff_hold_window_rt(const model::Model& model, const LiftoffHoldConfig& cfg, LiftoffHoldState& s,
-                            const MotionPlan& motion, const dynamics::ConfigVector& q,
-                            const dynamics::VelocityVector& v, hal::TimeNs t_ns, double dt_s, int count,
-                            bool gate, PlanWindow& window) {
+                            const MotionPlan& motion, const PlanKnot& measured, hal::TimeNs t_ns, double dt_s,
+                            int count, bool gate, PlanWindow& window) {
   const hal::TimeNs step = s.started && t_ns > s.last_call_ns ? t_ns - s.last_call_ns : 0;
   s.started = true;
   s.last_call_ns = t_ns;
@@ -109,16 +108,13 @@ void liftoff_hold_window_rt(const model::Model& model, const LiftoffHoldConfig& 
     bool hold = false;
     if (lift >= 0 && lift != s.released_frame) {
       const int stance = 1 - foot;
-      ContactFlags all{};
-      all.fill(true);
-      plan_knot_from_state(model, s.data, q, v, all, t_ns, s.measured);
       motion_plan_sample_rt(model, s.data, motion, motion_plan_frame_time(motion, lift), s.at_lift);
       // A non-finite state fails the comparison: no hold from it (the MPC refuses it).
-      s.last_excess_m = capture_point_outside(cfg, s.measured, stance) -
+      s.last_excess_m = capture_point_outside(cfg, measured, stance) -
                         std::max(capture_point_outside(cfg, s.at_lift, stance), 0.0);
       // Only while both feet still hold ξ: outside them, towards the swing foot's side (a
       // push), the step the motion is about to take is what catches it.
-      if (s.last_excess_m > cfg.tolerance_m && capture_point_inside_both(cfg, s.measured)) {
+      if (s.last_excess_m > cfg.tolerance_m && capture_point_inside_both(cfg, measured)) {
         if (s.held_ns + step <= to_ns(cfg.max_hold_s)) {
           if (s.held_ns == 0) ++s.holds;
           s.held_ns += step;

@@ -72,19 +72,18 @@ struct LiftoffHoldState {
   hal::TimeNs lag_max_ns = 0;
   double last_excess_m = 0.0;    // measured − motion's ξ distance outside the stance sole, last gate
   dynamics::Data data;           // scratch
-  PlanKnot measured;             // scratch
   PlanKnot at_lift;              // scratch: the motion at its lift-off
 };
 
 void liftoff_hold_reset(LiftoffHoldState& state);
 
 // The MPC's window at wall time t_ns (count knots dt_s apart), sampled from the motion at
-// t − lag after this call's gate and catch-up. q, v: the measured state at t_ns. With the
-// hold disabled (or no lag) it is motion_plan_window_rt exactly. Real-time safe.
+// t − lag after this call's gate and catch-up. measured: the measured state at t_ns as a knot
+// (plan_knot_measured). With the hold disabled (or no lag) it is motion_plan_window_rt
+// exactly. Real-time safe.
 // gate: false leaves the lag as it is (a recovery step under way: recovery_step.h).
 void liftoff_hold_window_rt(const model::Model& model, const LiftoffHoldConfig& config, LiftoffHoldState& state,
-                            const MotionPlan& motion, const dynamics::ConfigVector& q,
-                            const dynamics::VelocityVector& v, hal::TimeNs t_ns, double dt_s, int count,
-                            bool gate, PlanWindow& window);
+                            const MotionPlan& motion, const PlanKnot& measured, hal::TimeNs t_ns, double dt_s,
+                            int count, bool gate, PlanWindow& window);
 
 }  // namespace kuavo::planner

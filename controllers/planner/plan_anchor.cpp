@@ -63,8 +63,7 @@ void plan_anchor_reset(PlanAnchorState& s) {
   s.offset_max_m = 0.0;
 }
 
-void plan_anchor_rt(const model::Model& model, const PlanAnchorConfig& cfg, PlanAnchorState& s,
-                    const dynamics::ConfigVector& q, const dynamics::VelocityVector& v, hal::TimeNs t_ns,
+void plan_anchor_rt(const PlanAnchorConfig& cfg, PlanAnchorState& s, const PlanKnot& measured, hal::TimeNs t_ns,
                     PlanWindow& window) {
   if (!cfg.enabled || window.count <= 0) return;
   const double step_s = s.started && t_ns > s.last_call_ns ? static_cast<double>(t_ns - s.last_call_ns) * 1e-9 : 0.0;
@@ -78,12 +77,9 @@ void plan_anchor_rt(const model::Model& model, const PlanAnchorConfig& cfg, Plan
   bool settled = true;
   for (int f = first; f <= last; ++f) settled = settled && foot_down(now, f) && s.down_s[f] >= cfg.settle_s;
   if (settled) {
-    ContactFlags all{};
-    all.fill(true);
-    plan_knot_from_state(model, s.data, q, v, all, t_ns, s.measured);
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     int n = 0;
-    for (int f = first; f <= last; ++f) foot_error(now, s.measured, f, sum, n);
+    for (int f = first; f <= last; ++f) foot_error(now, measured, f, sum, n);
     if (n > 0) {
       const Eigen::Vector2d target = (1.0 - cfg.home_share) * sum / n;
       // A non-finite state gives a non-finite target: neither taken nor counted (the MPC

@@ -73,16 +73,13 @@ struct PlanAnchorState {
   std::uint64_t reanchors = 0;  // targets taken
   std::uint64_t refused = 0;    // calls whose target was beyond max_offset_m
   double offset_max_m = 0.0;    // largest |offset| applied since the reset
-  dynamics::Data data;          // scratch
-  PlanKnot measured;            // scratch
 };
 
 void plan_anchor_reset(PlanAnchorState& state);
 
-// Shifts window (its knot 0 at t_ns) by the anchor's offset. q, v: the measured state at t_ns.
-// Disabled: the window is left as it is. Real-time safe.
-void plan_anchor_rt(const model::Model& model, const PlanAnchorConfig& config, PlanAnchorState& state,
-                    const dynamics::ConfigVector& q, const dynamics::VelocityVector& v, hal::TimeNs t_ns,
-                    PlanWindow& window);
+// Shifts window (its knot 0 at t_ns) by the anchor's offset. measured: the measured state at
+// t_ns as a knot (plan_knot_measured). Disabled: the window is left as it is. Real-time safe.
+void plan_anchor_rt(const PlanAnchorConfig& config, PlanAnchorState& state, const PlanKnot& measured,
+                    hal::TimeNs t_ns, PlanWindow& window);
 
 }  // namespace kuavo::planner

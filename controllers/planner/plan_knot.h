@@ -71,4 +71,14 @@ void plan_knot_from_state(const model::Model& model, dynamics::Data& data, const
                           const dynamics::VelocityVector& v, const ContactFlags& in_contact, hal::TimeNs stamp_ns,
                           PlanKnot& knot);
 
+// The measured state as a knot: kinematics of (q, v) at stamp_ns with every sole corner
+// flagged in contact. The planner computes it once per call (stack_plan_rt) and the recovery
+// step, the plan anchor and the lift-off hold read its corners and CoM. Real-time safe.
+inline void plan_knot_measured(const model::Model& model, dynamics::Data& data, const dynamics::ConfigVector& q,
+                               const dynamics::VelocityVector& v, hal::TimeNs stamp_ns, PlanKnot& knot) {
+  ContactFlags all{};
+  all.fill(true);
+  plan_knot_from_state(model, data, q, v, all, stamp_ns, knot);
+}
+
 }  // namespace kuavo::planner

@@ -138,15 +138,10 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
 }
 
 // Decides and starts a recovery step if the measured state calls for one.
-void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
-                   const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                   const PlanWindow& window, const Vec2& plan_offset) {
+void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const PlanKnot& m, const PlanWindow& window,
+                   const Vec2& plan_offset) {
   const PlanKnot& k0 = window.knots[0];
   const hal::TimeNs now = k0.stamp_ns;
-  ContactFlags all{};
-  all.fill(true);
-  plan_knot_from_state(model, st.data, q, v, all, now, st.measured);
-  const PlanKnot& m = st.measured;
 
   std::array<Vec2, kNumPoints> corners;
   double sole_z = 0.0;
@@ -235,8 +230,7 @@ void recovery_step_reset(RecoveryStepState& state) {
 }
 
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
-                      const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window, hal::TimeNs motion_lag_ns, const Eigen::Vector2d& plan_offset) {
+                      const MotionPlan& motion, const PlanKnot& measured, PlanWindow& window, hal::TimeNs motion_lag_ns, const Eigen::Vector2d& plan_offset) {
   if (!cfg.enabled || window.count < 2 || motion.frame_count < 1) return;
   const hal::TimeNs now = window.knots[0].stamp_ns;
   const hal::TimeNs end = window.knots[window.count - 1].stamp_ns;
@@ -245,7 +239,7 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   for (FootDisplacement& d : st.foot) {
     if (d.active && d.return_known && now >= d.return_land_ns) d = FootDisplacement{};
   }
-  maybe_trigger(model, cfg, st, q, v, window, plan_offset);
+  maybe_trigger(cfg, st, measured, window, plan_offset);
   for (int foot = 0; foot < 2; ++foot) {
     FootDisplacement& d = st.foot[foot];
     if (d.active && end > d.land_ns && !d.return_known) {

@@ -100,7 +100,6 @@ struct RecoveryStepState {
   std::uint64_t declined = 0;              // triggers where no step would have captured
   double last_outside_m = 0.0;             // ξ's distance outside the support at the last call (< 0 inside)
   dynamics::Data data;                     // scratch
-  PlanKnot measured;                       // scratch: the measured state as a knot
   std::array<dynamics::ConfigVector, kMaxWindowKnots> q{};  // scratch: re-solved knots
   std::array<Eigen::Matrix<double, 12, 1>, kMaxWindowKnots> leg_delta{};  // scratch: re-solved − motion legs
   std::array<bool, kMaxWindowKnots> changed{};
@@ -125,15 +124,15 @@ struct RecoveryStepState {
 
 void recovery_step_reset(RecoveryStepState& state);
 
-// q, v: the measured state at window.knots[0]. motion: what the window was sampled from
+// measured: the measured state at window.knots[0] as a knot (plan_knot_measured). motion: what the window was sampled from
 // (the motion's next swings of a displaced foot), motion_lag_ns behind the knots' stamps
 // (liftoff_hold.h). plan_offset: what the plan anchor (plan_anchor.h) will add to the
 // window's horizontal positions after this call; a new step's landing, chosen on the
 // measured state, has it taken off so that it lands where chosen. Rewrites window in place.
 // Real-time safe.
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& config, RecoveryStepState& state,
-                      const MotionPlan& motion, const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
-                      PlanWindow& window, hal::TimeNs motion_lag_ns = 0,
+                      const MotionPlan& motion, const PlanKnot& measured, PlanWindow& window,
+                      hal::TimeNs motion_lag_ns = 0,
                       const Eigen::Vector2d& plan_offset = Eigen::Vector2d::Zero());
 
 }  // namespace kuavo::planner

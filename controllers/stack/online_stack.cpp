@@ -106,13 +106,17 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
   if (config.planner == PlannerKind::kMpc) {
     const int stages = mpc::mpc_num_stages(config.mpc);
     const bool recovering = ws.recovery.foot[0].active || ws.recovery.foot[1].active;
-    planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, q, v, t_state_ns, config.mpc.dt_s,
-                                    stages + 1, !recovering, ws.window);
+    // The measured state's kinematics, once for the three that read it.
+    if (config.liftoff_hold.enabled || config.recovery.enabled || config.anchor.enabled) {
+      planner::plan_knot_measured(model, ws.data, q, v, t_state_ns, ws.measured);
+    }
+    planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, ws.measured, t_state_ns,
+                                    config.mpc.dt_s, stages + 1, !recovering, ws.window);
     // The anchor's offset as the previous call left it: this call's differs by a ramp step at
     // most, and not at all between re-anchorings.
-    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, q, v, ws.window, ws.liftoff.lag_ns,
+    planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, ws.measured, ws.window, ws.liftoff.lag_ns,
                               ws.anchor.offset);
-    planner::plan_anchor_rt(model, config.anchor, ws.anchor, q, v, t_state_ns, ws.window);
+    planner::plan_anchor_rt(config.anchor, ws.anchor, ws.measured, t_state_ns, ws.window);
     ws.last_mpc_status = mpc::mpc_step_rt(model, config.mpc, ws.mpc, q, v, ws.window, ws.mpc_plan);
     if (ws.last_mpc_status == mpc::MpcStatus::kOk && ws.mpc_plan.count > 0) {
       out.stamp_ns = ws.mpc_plan.stamp_ns;

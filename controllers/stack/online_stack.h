@@ -120,6 +120,7 @@ struct ControlWorkspace {
 struct PlannerWorkspace {
   planner::PlanWindow window;
   dynamics::Data data;
+  planner::PlanKnot measured;  // the measured state's kinematics, this call's (plan_knot_measured)
   mpc::MpcWorkspace mpc;  // ~15 MB
   mpc::MpcPlan mpc_plan;
   mpc::MpcStatus last_mpc_status = mpc::MpcStatus::kNotInitialized;

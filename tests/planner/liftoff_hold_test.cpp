@@ -66,8 +66,9 @@ struct Fixture {
   }
   // One planner call at t_ns, then t_ns advances by a period.
   void call(double vy) {
-    liftoff_hold_window_rt(s45_robot(), config, *state, *motion, standing_configuration(), sideways(vy), t_ns, kDt,
-                           kKnots, true, *window);
+    liftoff_hold_window_rt(s45_robot(), config, *state, *motion,
+                           test::measured_knot(standing_configuration(), sideways(vy), t_ns), t_ns, kDt, kKnots, true,
+                           *window);
     t_ns += kPeriod;
   }
   // The window is the motion at (stamp − lag), stamped on the wall clock.
@@ -180,8 +181,9 @@ TEST(LiftoffHold, DisabledOrGatedOffItIsTheMotionsWindow) {
     Fixture f;
     f.config.enabled = enabled;
     for (int i = 0; i < 60; ++i) {
-      liftoff_hold_window_rt(s45_robot(), f.config, *f.state, *f.motion, standing_configuration(),
-                             sideways(-0.1 * omega_standing()), f.t_ns, kDt, kKnots, /*gate=*/false, *f.window);
+      liftoff_hold_window_rt(s45_robot(), f.config, *f.state, *f.motion,
+                             test::measured_knot(standing_configuration(), sideways(-0.1 * omega_standing()), f.t_ns),
+                             f.t_ns, kDt, kKnots, /*gate=*/false, *f.window);
       f.t_ns += kPeriod;
       f.expect_window_is_motion_lagged_by(0);
     }

@@ -60,7 +60,7 @@ struct Fixture {
       }
     }
     *window = *plain;
-    plan_anchor_rt(s45_robot(), config, *state, q, dynamics::VelocityVector::Zero(), t_ns, *window);
+    plan_anchor_rt(config, *state, test::measured_knot(q, dynamics::VelocityVector::Zero(), t_ns), t_ns, *window);
     t_ns += kPeriod;
   }
   // The window is the plain one with base, CoM and corners moved by d, the rest untouched.
@@ -97,6 +97,44 @@ TEST(PlanAnchor, ATranslatedRobotGetsThePlanMovedOntoItsFeet) {
     const Vec3 p = dynamics::frame_position(s45_robot(), f.data, c);
     EXPECT_NEAR((f.window->knots[0].point_position_m.segment<2>(3 * c) - p.head<2>()).norm(), 0.0, 1e-9) << c;
   }
+}
+
+// A reset (a new dance, a restart after a fault) forgets the offset: the next window is the
+// motion's until the foot has settled again, then the ramp starts from zero.
+TEST(PlanAnchor, AResetForgetsTheOffset) {
+  Fixture f;
+  const Eigen::Vector2d d(0.03, 0.0);
+  const dynamics::ConfigVector q = translated(d);
+  for (int i = 0; i < 30; ++i) f.call(q);
+  f.expect_shifted_by(d, 1e-12);
+  plan_anchor_reset(*f.state);
+  EXPECT_EQ(f.state->reanchors, 0u);
+  EXPECT_EQ(f.state->offset_max_m, 0.0);
+  for (int i = 0; i < 3; ++i) {
+    f.call(q);
+    f.expect_shifted_by(Eigen::Vector2d::Zero(), 0.0);
+  }
+  f.call(q);
+  f.expect_shifted_by(Eigen::Vector2d::Zero(), 0.0);  // the ramp's first call: share 0
+  f.call(q);
+  f.expect_shifted_by(0.02 / f.config.ramp_s * d, 1e-12);
+}
+
+// A non-finite measured state gives no target: the offset in force stays, nothing counted.
+TEST(PlanAnchor, ANonFiniteStateTakesNoTarget) {
+  Fixture f;
+  const Eigen::Vector2d d(0.0, -0.03);
+  for (int i = 0; i < 30; ++i) f.call(translated(d));
+  ASSERT_EQ(f.state->reanchors, 1u);
+  dynamics::ConfigVector bad = translated(d);
+  bad[0] = std::nan("");
+  for (int i = 0; i < 5; ++i) {
+    f.call(bad);
+    f.expect_shifted_by(d, 1e-12);
+  }
+  EXPECT_EQ(f.state->reanchors, 1u);
+  EXPECT_EQ(f.state->refused, 0u);
+  EXPECT_TRUE(f.state->offset.allFinite());
 }
 
 TEST(PlanAnchor, TheOffsetWaitsForTheFootToSettleThenRampsLinearly) {
@@ -205,8 +243,10 @@ TEST(PlanAnchor, DisabledItLeavesTheWindowAndEnabledItDoesNotAllocate) {
   f.config.enabled = true;
   f.call(q);
   test::AllocTrap trap;
-  for (int i = 0; i < 50; ++i) plan_anchor_rt(s45_robot(), f.config, *f.state, q, dynamics::VelocityVector::Zero(),
-                                              f.t_ns + i * kPeriod, *f.window);
+  for (int i = 0; i < 50; ++i) {
+    const hal::TimeNs t = f.t_ns + i * kPeriod;
+    plan_anchor_rt(f.config, *f.state, test::measured_knot(q, dynamics::VelocityVector::Zero(), t), t, *f.window);
+  }
   EXPECT_EQ(trap.count(), 0u);
 }
 

@@ -90,7 +90,8 @@ struct Fixture {
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), data, *motion, t_ns, kDt, kKnots, *window);
     *untouched = *window;
-    recovery_step_rt(s45_robot(), config, *state, *motion, standing_configuration(), translating(velocity), *window, 0,
+    recovery_step_rt(s45_robot(), config, *state, *motion,
+                     kuavo::test::measured_knot(standing_configuration(), translating(velocity), t_ns), *window, 0,
                      plan_offset);
   }
   bool window_unchanged() const {
@@ -329,7 +330,8 @@ TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
     fresh->cache_count = 0;
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
-    recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion, standing_configuration(), translating(v), *fresh_window);
+    recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion,
+                     kuavo::test::measured_knot(standing_configuration(), translating(v), t_ns), *fresh_window);
     {
       kuavo::test::AllocTrap trap;
       f.call(t, v);

@@ -27,6 +27,17 @@ inline dynamics::ConfigVector standing_configuration() {
   return q;
 }
 
+// The measured state (q, v) at t_ns as the planner's knot (planner::plan_knot_measured), as
+// stack_plan_rt hands it to the recovery step, the plan anchor and the lift-off hold. The
+// knot is static: one per call site's expression.
+inline const planner::PlanKnot& measured_knot(const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
+                                              hal::TimeNs t_ns) {
+  static dynamics::Data data;
+  static planner::PlanKnot knot;
+  planner::plan_knot_measured(s45_robot(), data, q, v, t_ns, knot);
+  return knot;
+}
+
 // Standing 6 s at 100 Hz in standing_configuration(); the right foot up over [2.0, 2.4) s
 // (the planner tests' one step).
 inline std::unique_ptr<planner::MotionPlan> stepping_motion() {

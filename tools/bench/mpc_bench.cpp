@@ -168,6 +168,7 @@ void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
   Fixture& f = fixture();
   static auto motion = std::make_unique<planner::MotionPlan>();
   static auto rs = std::make_unique<planner::RecoveryStepState>();
+  static auto measured = std::make_unique<planner::PlanKnot>();
   static planner::PlanWindow window;
   motion->rate_hz = 100.0;
   motion->frame_count = 600;
@@ -178,7 +179,9 @@ void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
   push[0] = -0.56;  // ξ = c + ċ/ω 0.16 m behind the CoM: 4 cm behind the heels
   const auto call = [&](int stage, const dynamics::VelocityVector& v) {
     planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
-    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, f.q0, v, window);
+    const hal::TimeNs t_ns = 1'000'000'000 + stage * 20'000'000LL;
+    planner::plan_knot_measured(f.robot, f.data, f.q0, v, t_ns, *measured);
+    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, *measured, window);
   };
   std::vector<double> us;
   int stage = 150;
@@ -196,7 +199,10 @@ void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
     if (cold) rs->cache_count = 0;
     planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
     const auto t0 = Clock::now();
-    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, f.q0, dynamics::VelocityVector::Zero(), window);
+    // The measured state's kinematics are timed with it (stack_plan_rt computes them once per call).
+    planner::plan_knot_measured(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(),
+                                1'000'000'000 + stage * 20'000'000LL, *measured);
+    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, *measured, window);
     us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
     ++stage;
   }
