@@ -37,8 +37,8 @@
 // firmware's side steps with the PD in the leg drives tracked the legs at 0.063 rad against
 // their 0.05 bound.
 //
-// Real-time: fixed-size state, no allocation; per call one knot sampled at the lift-off
-// and, for the gate, the measured state's kinematics.
+// Real-time: fixed-size state, no allocation; per call one knot sampled at the lift-off (the
+// measured state's kinematics come from the caller).
 #pragma once
 
 #include <cstdint>

@@ -41,7 +41,8 @@
 // with β = 0: 22/60 as without it (its falls are its last single support drifting sideways).
 // The whole ctest suite passes with it on (719 tests).
 //
-// Real-time: fixed-size state, no allocation; per call one forward kinematics of the state.
+// Real-time: fixed-size state, no allocation; no kinematics of its own (it reads the measured
+// knot stack_plan_rt computes once per call).
 #pragma once
 
 #include <cstdint>

@@ -230,7 +230,8 @@ void recovery_step_reset(RecoveryStepState& state) {
 }
 
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st,
-                      const MotionPlan& motion, const PlanKnot& measured, PlanWindow& window, hal::TimeNs motion_lag_ns, const Eigen::Vector2d& plan_offset) {
+                      const MotionPlan& motion, const PlanKnot& measured, PlanWindow& window,
+                      hal::TimeNs motion_lag_ns, const Eigen::Vector2d& plan_offset) {
   if (!cfg.enabled || window.count < 2 || motion.frame_count < 1) return;
   const hal::TimeNs now = window.knots[0].stamp_ns;
   const hal::TimeNs end = window.knots[window.count - 1].stamp_ns;

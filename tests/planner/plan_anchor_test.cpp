@@ -2,13 +2,14 @@
 // measured robot is the motion's pose translated by d (or the plan's right foot is moved
 // against the standing robot), so measured − planned is known in closed form per foot.
 // Oracles: the measured sole corners by forward kinematics (dynamics::frame_position, not the
-// anchor's own knot), the unshifted window from motion_plan_window_rt, and the ramp's and the
+// measured knot handed in), the unshifted window from motion_plan_window_rt, and the ramp's and the
 // choice's arithmetic.
 #include "controllers/planner/plan_anchor.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "controllers/planner/motion_plan.h"
@@ -120,21 +121,24 @@ TEST(PlanAnchor, AResetForgetsTheOffset) {
   f.expect_shifted_by(0.02 / f.config.ramp_s * d, 1e-12);
 }
 
-// A non-finite measured state gives no target: the offset in force stays, nothing counted.
+// A non-finite measured state gives no target: the offset in force stays, nothing counted
+// (an infinite base would otherwise be refused as beyond the bound, and counted).
 TEST(PlanAnchor, ANonFiniteStateTakesNoTarget) {
-  Fixture f;
-  const Eigen::Vector2d d(0.0, -0.03);
-  for (int i = 0; i < 30; ++i) f.call(translated(d));
-  ASSERT_EQ(f.state->reanchors, 1u);
-  dynamics::ConfigVector bad = translated(d);
-  bad[0] = std::nan("");
-  for (int i = 0; i < 5; ++i) {
-    f.call(bad);
-    f.expect_shifted_by(d, 1e-12);
+  for (const double x : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+    Fixture f;
+    const Eigen::Vector2d d(0.0, -0.03);
+    for (int i = 0; i < 30; ++i) f.call(translated(d));
+    ASSERT_EQ(f.state->reanchors, 1u);
+    dynamics::ConfigVector bad = translated(d);
+    bad[0] = x;
+    for (int i = 0; i < 5; ++i) {
+      f.call(bad);
+      f.expect_shifted_by(d, 1e-12);
+    }
+    EXPECT_EQ(f.state->reanchors, 1u) << x;
+    EXPECT_EQ(f.state->refused, 0u) << x;
+    EXPECT_TRUE(f.state->offset.allFinite()) << x;
   }
-  EXPECT_EQ(f.state->reanchors, 1u);
-  EXPECT_EQ(f.state->refused, 0u);
-  EXPECT_TRUE(f.state->offset.allFinite());
 }
 
 TEST(PlanAnchor, TheOffsetWaitsForTheFootToSettleThenRampsLinearly) {

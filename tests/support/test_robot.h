@@ -28,8 +28,9 @@ inline dynamics::ConfigVector standing_configuration() {
 }
 
 // The measured state (q, v) at t_ns as the planner's knot (planner::plan_knot_measured), as
-// stack_plan_rt hands it to the recovery step, the plan anchor and the lift-off hold. The
-// knot is static: one per call site's expression.
+// stack_plan_rt hands it to the recovery step, the plan anchor and the lift-off hold. One
+// static knot shared by every call: valid until the next measured_knot call (do not hold the
+// reference across calls or use two in one expression).
 inline const planner::PlanKnot& measured_knot(const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                                               hal::TimeNs t_ns) {
   static dynamics::Data data;
