@@ -126,11 +126,10 @@ void recovery_step_reset(RecoveryStepState& state);
 
 // measured: the measured state at window.knots[0] as a knot (plan_knot_measured). motion:
 // what the window was sampled from (the motion's next swings of a displaced foot),
-// motion_lag_ns behind the knots' stamps
-// (liftoff_hold.h). plan_offset: what the plan anchor (plan_anchor.h) will add to the
-// window's horizontal positions after this call; a new step's landing, chosen on the
-// measured state, has it taken off so that it lands where chosen. Rewrites window in place.
-// Real-time safe.
+// motion_lag_ns behind the knots' stamps (liftoff_hold.h). plan_offset: what the plan anchor
+// (plan_anchor.h) will add to the window's horizontal positions after this call; a new
+// step's landing, chosen on the measured state, has it taken off so that it lands where
+// chosen. Rewrites window in place. Real-time safe.
 void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& config, RecoveryStepState& state,
                       const MotionPlan& motion, const PlanKnot& measured, PlanWindow& window,
                       hal::TimeNs motion_lag_ns = 0,

@@ -177,9 +177,10 @@ void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
   cfg.settle_s = 0.0;
   dynamics::VelocityVector push = dynamics::VelocityVector::Zero();
   push[0] = -0.56;  // ξ = c + ċ/ω 0.16 m behind the CoM: 4 cm behind the heels
+  const auto stamp = [](int stage) -> hal::TimeNs { return 1'000'000'000 + stage * 20'000'000LL; };
   const auto call = [&](int stage, const dynamics::VelocityVector& v) {
-    planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
-    const hal::TimeNs t_ns = 1'000'000'000 + stage * 20'000'000LL;
+    const hal::TimeNs t_ns = stamp(stage);
+    planner::motion_plan_window_rt(f.robot, f.data, *motion, t_ns, 0.02, 61, window);
     planner::plan_knot_measured(f.robot, f.data, f.q0, v, t_ns, *measured);
     planner::recovery_step_rt(f.robot, cfg, *rs, *motion, *measured, window);
   };
@@ -197,11 +198,10 @@ void BM_RecoveryStepRewrite(benchmark::State& state, bool cold) {
       stage = 2;
     }
     if (cold) rs->cache_count = 0;
-    planner::motion_plan_window_rt(f.robot, f.data, *motion, 1'000'000'000 + stage * 20'000'000LL, 0.02, 61, window);
+    planner::motion_plan_window_rt(f.robot, f.data, *motion, stamp(stage), 0.02, 61, window);
     const auto t0 = Clock::now();
     // The measured state's kinematics are timed with it (stack_plan_rt computes them once per call).
-    planner::plan_knot_measured(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(),
-                                1'000'000'000 + stage * 20'000'000LL, *measured);
+    planner::plan_knot_measured(f.robot, f.data, f.q0, dynamics::VelocityVector::Zero(), stamp(stage), *measured);
     planner::recovery_step_rt(f.robot, cfg, *rs, *motion, *measured, window);
     us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
     ++stage;
