@@ -148,10 +148,14 @@ TEST(mocap_feasibility_repair, ParsesTheDocumentedOverrideLines) {
                                      "4 5.5 forbid turn\n"
                                      "6 7 forbid all\n"
                                      "0 0.1 force double\n"
-                                     "8 9 calm steps\n",
+                                     "8 9 calm steps\n"
+                                     "9 10 force square\n",
                                      o, error))
       << error;
-  ASSERT_EQ(o.size(), 7u);
+  ASSERT_EQ(o.size(), 8u);
+  EXPECT_TRUE(o[7].force_double);
+  EXPECT_TRUE(o[7].square_stance);
+  EXPECT_FALSE(o[5].square_stance);
   EXPECT_TRUE(o[6].calm_steps);
   EXPECT_FALSE(o[6].force_double);
   EXPECT_FALSE(o[6].forbid_all);
@@ -187,7 +191,7 @@ TEST(mocap_feasibility_repair, RejectsMalformedOverrideLinesNamingTheLine) {
       "0 inf forbid flight",         // not finite
       "0.5 1 forbid jump",           // unknown kind
       "0.5 1 forbid tilt",           // not a kind the override knows
-      "0.5 1 force single",          // only `force double`
+      "0.5 1 force single",          // only `force double` and `force square`
       "0.5 1 allow flight",          // unknown verb
       "0.5 1 forbid",                // missing kind
       "0.5 1",                       // missing verb
@@ -1013,6 +1017,59 @@ TEST(mocap_feasibility_repair, ForcedDoubleSupportHoldsBothFeetDown) {
   for (int d = 50; d < 120; ++d) EXPECT_EQ(r.contacts[r.lead_frames + d], ContactLabel::kDoubleSupport) << d;
   EXPECT_EQ(r.human_steps, 1);
   EXPECT_EQ(r.robot_steps, 0);
+}
+
+// A square hold: the human steps the left foot 0.20 m ahead, then the right foot 0.40 m (to
+// 0.20 m ahead of the left), leaning 0.08 m forward of its feet; the hold starts during the
+// right foot's swing. With `force square` the right foot lands beside the left at the
+// standing width and heading, and the pelvis stands over the feet as in standing (the
+// fixture's standing pose, independent of the repair); with `force double` the stagger and
+// the lean stay. The left step, before the hold, is kept in both.
+TEST(mocap_feasibility_repair, ForcedSquareHoldSetsTheFeetSideBySide) {
+  const int n = 300;
+  const Foot l0 = standing().feet[0], r0 = standing().feet[1];
+  const Foot l1 = moved(l0, 0.20), r1 = moved(r0, 0.40);
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < 40 ? l0 : (i >= 80 ? l1 : swing(l0, l1, i, 40, 80, 0.05));
+    k.right = i < 120 ? r0 : (i >= 160 ? r1 : swing(r0, r1, i, 120, 160, 0.05));
+    k.left_down = i < 40 || i >= 80;
+    k.right_down = i < 120 || i >= 160;
+    if (i >= 160) k.base_shift = Vec3(0.08, 0.0, 0.0);
+    return k;
+  });
+  const auto pelvis_from_mid = [](const ConfigVector& q) {
+    const auto f = feet_of(q);
+    return Eigen::Vector2d(q.head<2>() - 0.5 * (f[0].centre + f[1].centre).head<2>());
+  };
+  std::string error;
+  for (const char* verb : {"square", "double"}) {
+    SCOPED_TRACE(verb);
+    std::vector<RepairOverride> o;
+    ASSERT_TRUE(parse_repair_overrides(std::string("1.4 2.5 force ") + verb + "\n", o, error)) << error;
+    const RepairedMotion r = repair(m, o);
+    expect_dancable(r, n);
+    SCOPED_TRACE(listing(r));
+    const int held = r.lead_frames + 220;  // inside the hold, past its pelvis ramp
+    ASSERT_EQ(r.contacts[held], ContactLabel::kDoubleSupport);
+    const bool square = verb == std::string("square");
+    const Eigen::Vector2d feet = left_from_right(r.q[held]);
+    const auto f = feet_of(r.q[held]);
+    EXPECT_NEAR(feet_of(r.q[r.lead_frames + 100])[0].centre.x(), l1.centre.x(), 1e-6) << "the left step is kept";
+    if (square) {
+      EXPECT_NEAR(feet.x(), 0.0, 1e-6);
+      EXPECT_NEAR(feet.y(), standing().feet[0].centre.y() - standing().feet[1].centre.y(), 1e-6);
+      EXPECT_NEAR(f[0].yaw, f[1].yaw, 1e-6);
+      EXPECT_NEAR((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).norm(), 0.0, 1e-6);
+      bool listed = false;
+      for (const Repair& x : r.repairs) listed |= x.kind == RepairKind::kForcedDouble && x.reason.find("square hold") == 0;
+      EXPECT_TRUE(listed);
+      RecordProperty("pelvis_from_standing_m", number((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).norm()));
+    } else {
+      EXPECT_GT(-feet.x(), 0.1) << "the right foot lands ahead of the left (the human's 0.20 m, averaged)";
+      EXPECT_GT((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).x(), 0.05) << "the lean stays";
+    }
+  }
 }
 
 }  // namespace

@@ -28,11 +28,11 @@
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
 // the show set's model errors (--verify-show SEEDS, 0…16, default 4: seeds 1001…); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
-// a third: both feet held down there) and the motion optimized again (0: no check).
+// a third: both feet held down there, side by side) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
 // into the report's directory, or into --figures DIR (none: no figures).
 // --contacts FILE: lines "start_s end_s flight|left|right|double" replace the automatic labels
-// over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double"
+// over those ranges. --repairs FILE: "start_s end_s forbid KIND" / "start_s end_s force double|square"
 // (feasibility_repair.h). --horizon: the optimization window [s], 0.2…1.4. --map: "keypoint =
 // joint" lines for skeletons the built-in tables miss. --dance-bvh writes the built-in dance as
 // BVH (to inspect it in a viewer). --duration S: the built-in dance's length, a whole number

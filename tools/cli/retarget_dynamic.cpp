@@ -374,8 +374,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       hold.start_s = range.a / rate;
       hold.end_s = range.b / rate;
       hold.force_double = true;
+      hold.square_stance = true;
       overrides.push_back(hold);
-      attenuations.back().reason += "; both feet stay down here";
+      attenuations.back().reason += "; both feet stay down here, side by side";
     }
     // Calm steps over the whole dance, once: each touchdown is placed from the stance foot, so
     // the steps before the fall decide where and how the robot arrives there (calm steps over

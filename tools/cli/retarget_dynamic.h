@@ -38,7 +38,8 @@ struct DynamicStageOptions {
   // verify_gain about their 1 s average
   // and the motion optimized again; a second fall in a scaled range takes the gestures there
   // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*); a third
-  // holds both feet down over the range (the steps there are given up, and listed). Up to
+  // holds both feet down over the range, side by side (RepairOverride::square_stance; the
+  // steps there are given up, and listed). Up to
   // verify_rounds rounds. A motion that dances is left as it is. The report's "verification"
   // lists every run. cmu_05_20 needed 6 rounds to dance the floor to the end.
   int verify_rounds = 12;

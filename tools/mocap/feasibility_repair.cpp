@@ -213,8 +213,9 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
     ok = ok && (ls >> verb >> what) && !(ls >> extra) && std::isfinite(o.start_s) && std::isfinite(o.end_s) &&
          o.start_s >= 0.0 && o.end_s > o.start_s;
     if (ok && verb == "force") {
-      ok = what == "double";
+      ok = what == "double" || what == "square";
       o.force_double = true;
+      o.square_stance = what == "square";
     } else if (ok && verb == "calm") {
       ok = what == "steps";
       o.calm_steps = true;
@@ -236,7 +237,7 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all', 'START_S END_S force double' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|all', 'START_S END_S force double|square' "
               "or 'START_S END_S calm steps' (0 <= START_S < END_S)";
       return false;
     }
@@ -291,6 +292,9 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   // takes the human's last step: cmu_05_07's landed 0.40 m ahead, 0.45 m beside the other foot).
   const auto calm = [&](int i) {
     return covers(overrides, &RepairOverride::calm_steps, dance_time(std::clamp(i, lead, lead + n_dance - 1)));
+  };
+  const auto square = [&](int i) {
+    return in_dance(i) && covers(overrides, &RepairOverride::square_stance, dance_time(i));
   };
 
   RepairLog log(rate_hz);
@@ -473,6 +477,24 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     Interval& iv = stance[td.foot][td.index];
     const Interval* other = stance_at(1 - td.foot, td.frame);
     if (other == nullptr) continue;  // an allowed flight: nothing to place against
+    const double side = td.foot == 0 ? 1.0 : -1.0;
+    // A square hold: the later of the two feet standing into it is set down beside the earlier
+    // (the travel and stride limits below still apply to the step that brings it there).
+    const auto into_square = [&](const Interval& s) {
+      for (int i = s.a; i < s.b; ++i) {
+        if (square(i)) return true;
+      }
+      return false;
+    };
+    if (into_square(iv) && into_square(*other)) {
+      const FootPose before = iv.pose;
+      iv.pose.yaw = other->pose.yaw;
+      iv.pose.centre = other->pose.centre + rot_z(other->pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+      log.add(RepairKind::kForcedDouble, td.frame, iv.b,
+              std::string("square hold: the ") + (td.foot == 0 ? "left foot set down beside the right" : "right foot set down beside the left") +
+                  fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
+                      std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi));
+    }
     // Travel speed: from this foot's previous foothold, no farther than the speed limit over
     // the time since that touchdown (the stride check below may move it again).
     const bool calm_here = calm(td.frame);
@@ -492,7 +514,6 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
                     (iv.a - prev.a) / rate_hz, most, travel_speed) + calm_note + ")");
       }
     }
-    const double side = td.foot == 0 ? 1.0 : -1.0;
     const Mat3 r = rot_z(other->pose.yaw);
     Vec3 d = r.transpose() * (iv.pose.centre - other->pose.centre);
     const Vec3 d0 = d;
@@ -577,6 +598,10 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   std::vector<Vec3> base_pos(n);
   std::vector<Mat3> base_rot(n);
   std::vector<double> tilt_over(n, 0.0);  // the human's tilt where it was limited [rad]
+  // A square hold's pelvis: over its feet as in standing, eased in and out over kPelvisBlend_s.
+  std::vector<double> centred(n, 0.0);
+  for (int i = 0; i < n; ++i) centred[i] = square(i) ? 1.0 : 0.0;
+  centred = spread_over(centred, std::max(1, frames_of(kPelvisBlend_s)));
   for (int i = 0; i < n; ++i) {
     const int d = dance_frame(i);
     const ConfigVector& g = geometric[d];
@@ -585,6 +610,13 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     Vec3 offset = g.head<3>() - human_mid;
     offset.z() = 0.0;
     if (offset.norm() > kMaxPelvisOffset_m) offset *= kMaxPelvisOffset_m / offset.norm();
+    if (centred[i] > 0.0) {
+      const double yaw = std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
+                                    std::cos(feet[i][0].yaw) + std::cos(feet[i][1].yaw));
+      Vec3 standing = rot_z(yaw) * stand_base_from_mid;
+      standing.z() = 0.0;
+      offset += centred[i] * (standing - offset);
+    }
     Vec3 pos = robot_mid + offset;
     pos.z() = g[2];
     Eigen::Quaterniond qb(g[6], g[3], g[4], g[5]);

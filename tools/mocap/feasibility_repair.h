@@ -34,6 +34,8 @@
 //   start_s end_s forbid KIND     (KIND: flight, retime, stride, turn, upper, pelvis, bounce, travel,
 //                                  attenuate, reach, or all)
 //   start_s end_s force double    (both feet down over the range: a hold or a bounce)
+//   start_s end_s force square    (both feet down, side by side at the standing width, the pelvis
+//                                  over them: a hold with the widest support)
 //   start_s end_s calm steps      (shorter strides and slower travel: RepairConfig::calm_*)
 // times in the dance's own clock (the geometric motion's, before the lead-in). A forbidden
 // flight repair leaves the flight in the schedule: the dynamic stage then refuses the motion
@@ -164,6 +166,10 @@ struct RepairOverride {
   bool forbid_all = false;
   RepairKind forbid = RepairKind::kFlight;
   bool calm_steps = false;  // "calm steps": RepairConfig's calm_* limits over the range
+  // "force square" (force_double too): the feet standing over the range are set side by side
+  // at the standing width (the later touchdown beside the earlier foot, same heading) and the
+  // pelvis comes over them as in standing: the widest margin a hold can give.
+  bool square_stance = false;
 };
 // Parses the override text; false with a message naming the line.
 bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>& out, std::string& error);
