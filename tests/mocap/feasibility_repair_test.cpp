@@ -1020,15 +1020,16 @@ TEST(mocap_feasibility_repair, ForcedDoubleSupportHoldsBothFeetDown) {
 }
 
 // A square hold: the human steps the left foot 0.20 m ahead, then the right foot 0.40 m (to
-// 0.20 m ahead of the left), leaning 0.08 m forward of its feet; the hold starts during the
-// right foot's swing. With `force square` the right foot lands beside the left at the
-// standing width and heading, and the pelvis stands over the feet as in standing (the
-// fixture's standing pose, independent of the repair); with `force double` the stagger and
-// the lean stay. The left step, before the hold, is kept in both.
+// 0.20 m ahead of the left), both turning 0.3 rad, leaning 0.08 m forward of its feet; the
+// hold starts during the right foot's swing. With `force square` the right foot lands beside
+// the left at the standing width and the left's heading, and the pelvis stands over the feet
+// as in standing (the fixture's standing pose turned to the feet, independent of the repair);
+// with `force double` the stagger and the lean stay. The left step, before the hold, is kept
+// in both.
 TEST(mocap_feasibility_repair, ForcedSquareHoldSetsTheFeetSideBySide) {
-  const int n = 300;
+  const int n = 360;
   const Foot l0 = standing().feet[0], r0 = standing().feet[1];
-  const Foot l1 = moved(l0, 0.20), r1 = moved(r0, 0.40);
+  const Foot l1 = moved(l0, 0.20, 0.0, 0.3), r1 = moved(r0, 0.40, 0.0, 0.3);
   const Motion m = make_motion(n, [&](int i) {
     Keyframe k = stand_key();
     k.left = i < 40 ? l0 : (i >= 80 ? l1 : swing(l0, l1, i, 40, 80, 0.05));
@@ -1046,11 +1047,11 @@ TEST(mocap_feasibility_repair, ForcedSquareHoldSetsTheFeetSideBySide) {
   for (const char* verb : {"square", "double"}) {
     SCOPED_TRACE(verb);
     std::vector<RepairOverride> o;
-    ASSERT_TRUE(parse_repair_overrides(std::string("1.4 2.5 force ") + verb + "\n", o, error)) << error;
+    ASSERT_TRUE(parse_repair_overrides(std::string("1.4 3.0 force ") + verb + "\n", o, error)) << error;
     const RepairedMotion r = repair(m, o);
     expect_dancable(r, n);
     SCOPED_TRACE(listing(r));
-    const int held = r.lead_frames + 220;  // inside the hold, past its pelvis ramp
+    const int held = r.lead_frames + 225;  // both feet down 150..300: past the pelvis's 0.5 s ramps
     ASSERT_EQ(r.contacts[held], ContactLabel::kDoubleSupport);
     const bool square = verb == std::string("square");
     const Eigen::Vector2d feet = left_from_right(r.q[held]);
@@ -1060,14 +1061,16 @@ TEST(mocap_feasibility_repair, ForcedSquareHoldSetsTheFeetSideBySide) {
       EXPECT_NEAR(feet.x(), 0.0, 1e-6);
       EXPECT_NEAR(feet.y(), standing().feet[0].centre.y() - standing().feet[1].centre.y(), 1e-6);
       EXPECT_NEAR(f[0].yaw, f[1].yaw, 1e-6);
-      EXPECT_NEAR((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).norm(), 0.0, 1e-6);
+      const Eigen::Vector2d standing_offset = (rot_z(f[1].yaw) * standing().base_from_mid).head<2>();
+      EXPECT_NEAR((pelvis_from_mid(r.q[held]) - standing_offset).norm(), 0.0, 1e-6);
       bool listed = false;
       for (const Repair& x : r.repairs) listed |= x.kind == RepairKind::kForcedDouble && x.reason.find("square hold") == 0;
       EXPECT_TRUE(listed);
-      RecordProperty("pelvis_from_standing_m", number((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).norm()));
+      RecordProperty("pelvis_from_standing_m", number((pelvis_from_mid(r.q[held]) - standing_offset).norm()));
     } else {
       EXPECT_GT(-feet.x(), 0.1) << "the right foot lands ahead of the left (the human's 0.20 m, averaged)";
-      EXPECT_GT((pelvis_from_mid(r.q[held]) - standing().base_from_mid.head<2>()).x(), 0.05) << "the lean stays";
+      EXPECT_GT((pelvis_from_mid(r.q[held]) - (rot_z(f[1].yaw) * standing().base_from_mid).head<2>()).norm(), 0.05)
+          << "the lean stays";
     }
   }
 }

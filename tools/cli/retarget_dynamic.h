@@ -41,7 +41,7 @@ struct DynamicStageOptions {
   // holds both feet down over the range, side by side (RepairOverride::square_stance; the
   // steps there are given up, and listed). Up to
   // verify_rounds rounds. A motion that dances is left as it is. The report's "verification"
-  // lists every run. cmu_05_20 needed 6 rounds to dance the floor to the end.
+  // lists every run. cmu_05_20 needs 7 rounds to pass every run of the check.
   int verify_rounds = 12;
   std::vector<sim::GroundParams> verify_grounds = {sim::kFloor, sim::kCarpet};
   // Three noise draws, not one: a motion checked on seed 1 alone fell on carpet with seed 3
