@@ -1051,7 +1051,7 @@ TEST(mocap_feasibility_repair, ForcedSquareHoldSetsTheFeetSideBySide) {
     const RepairedMotion r = repair(m, o);
     expect_dancable(r, n);
     SCOPED_TRACE(listing(r));
-    const int held = r.lead_frames + 225;  // both feet down 150..300: past the pelvis's 0.5 s ramps
+    const int held = r.lead_frames + 225;  // inside the hold (frames 140..300), both feet down from 150
     ASSERT_EQ(r.contacts[held], ContactLabel::kDoubleSupport);
     const bool square = verb == std::string("square");
     const Eigen::Vector2d feet = left_from_right(r.q[held]);
