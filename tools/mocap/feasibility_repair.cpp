@@ -296,6 +296,12 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   const auto square = [&](int i) {
     return in_dance(i) && covers(overrides, &RepairOverride::square_stance, dance_time(i));
   };
+  const auto square_over = [&](const Interval& s) {  // a square hold meets [s.a, s.b)
+    for (int i = s.a; i < s.b; ++i) {
+      if (square(i)) return true;
+    }
+    return false;
+  };
 
   RepairLog log(rate_hz);
   auto data = std::make_unique<dynamics::Data>();
@@ -480,13 +486,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     const double side = td.foot == 0 ? 1.0 : -1.0;
     // A square hold: the later of the two feet standing into it is set down beside the earlier
     // (the travel and stride limits below still apply to the step that brings it there).
-    const auto into_square = [&](const Interval& s) {
-      for (int i = s.a; i < s.b; ++i) {
-        if (square(i)) return true;
-      }
-      return false;
-    };
-    if (into_square(iv) && into_square(*other)) {
+    if (square_over(iv) && square_over(*other)) {
       const FootPose before = iv.pose;
       iv.pose.yaw = other->pose.yaw;
       iv.pose.centre = other->pose.centre + rot_z(other->pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
@@ -595,6 +595,11 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     yaw = std::atan2(ss, sc);
     return sc != 0.0 || ss != 0.0;
   };
+  // The mean heading of frame i's two feet, down or not (the standing pose over them).
+  const auto feet_yaw = [&](int i) {
+    return std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
+                      std::cos(feet[i][0].yaw) + std::cos(feet[i][1].yaw));
+  };
   std::vector<Vec3> base_pos(n);
   std::vector<Mat3> base_rot(n);
   std::vector<double> tilt_over(n, 0.0);  // the human's tilt where it was limited [rad]
@@ -616,9 +621,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     offset.z() = 0.0;
     if (offset.norm() > kMaxPelvisOffset_m) offset *= kMaxPelvisOffset_m / offset.norm();
     if (centred[i] > 0.0) {
-      const double yaw = std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
-                                    std::cos(feet[i][0].yaw) + std::cos(feet[i][1].yaw));
-      Vec3 standing = rot_z(yaw) * stand_base_from_mid;
+      Vec3 standing = rot_z(feet_yaw(i)) * stand_base_from_mid;
       standing.z() = 0.0;
       offset += centred[i] * (standing - offset);
     }
@@ -754,9 +757,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   }
   // Lead-in and tail: standing on the footholds, blended into / out of the dance.
   const auto standing_base = [&](int i, Vec3& pos, Mat3& rot) {
-    const double yaw = std::atan2(std::sin(feet[i][0].yaw) + std::sin(feet[i][1].yaw),
-                                  std::cos(feet[i][0].yaw) + std::cos(feet[i][1].yaw));
-    rot = rot_z(yaw);
+    rot = rot_z(feet_yaw(i));
     pos = 0.5 * (feet[i][0].centre + feet[i][1].centre) + rot * stand_base_from_mid;
     pos.z() = q_stand[2];
   };
