@@ -26,7 +26,7 @@
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
 // the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
-// the show set's model errors (--verify-show SEEDS, 0…16, default 4: seeds 1001…); where it falls,
+// the show set's model errors (--verify-show SEEDS, 0…16, default 12: seeds 1001…); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there, side by side) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)

@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <thread>
 #include <utility>
 
 #include "controllers/motion/load_motion.h"
@@ -269,7 +270,42 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     }
     std::uint64_t fell_seed = 0;
     int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
-    for (const auto& [ground, engine, seed, firmware, show_errors] : checks) {
+    // The Simbody runs (not MuJoCo's, not the firmware loop's) in batches of consecutive runs,
+    // one thread each (hardware_concurrency at most): each run is its own plant, controller and
+    // workspaces, nothing shared but the read-only plan and model. The results are read in the
+    // list's order and a round still stops at its first fall, so the check decides exactly as
+    // one run after another does; a batch wastes at most its runs after that fall.
+    std::vector<sim::MotionSummary> runs(checks.size());
+    std::vector<char> ran(checks.size(), 0);
+    const auto parallel = [&](std::size_t i) {
+      return i < checks.size() && checks[i].engine == sim::Engine::kSimbody && !checks[i].firmware;
+    };
+    const auto simulate_one = [&](std::size_t i) {
+      const Check& check = checks[i];
+      sim::MotionRunConfig cfg;
+      cfg.stack.planner = stack::PlannerKind::kMpc;
+      cfg.run.ground = check.ground;
+      cfg.run.engine = check.engine;
+      cfg.run.seed = check.seed;
+      if (check.show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
+      runs[i] = sim::run_motion(robot, *plan, cfg);
+    };
+    const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
+    const auto simulate_batch = [&](std::size_t first) {
+      std::size_t end = first + 1;
+      if (parallel(first)) {
+        while (end < checks.size() && end - first < threads && parallel(end)) ++end;
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      std::vector<std::thread> workers;
+      for (std::size_t i = first + 1; i < end; ++i) workers.emplace_back(simulate_one, i);
+      simulate_one(first);
+      for (std::thread& w : workers) w.join();
+      verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      for (std::size_t i = first; i < end; ++i) ran[i] = 1;
+    };
+    for (std::size_t index = 0; index < checks.size(); ++index) {
+      const auto& [ground, engine, seed, firmware, show_errors] = checks[index];
       if (firmware) {
         firmware::sitl::SitlConfig fw;
         fw.loop.legs = firmware::sitl::kImageLegBinding;
@@ -306,15 +342,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         ++passed;
         continue;
       }
-      sim::MotionRunConfig cfg;
-      cfg.stack.planner = stack::PlannerKind::kMpc;
-      cfg.run.ground = ground;
-      cfg.run.engine = engine;
-      cfg.run.seed = seed;
-      if (show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, seed);
-      const auto t0 = std::chrono::steady_clock::now();
-      const sim::MotionSummary summary = sim::run_motion(robot, *plan, cfg);
-      verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (!ran[index]) simulate_batch(index);
+      const sim::MotionSummary& summary = runs[index];
       ordered_json entry = {{"round", verify_round},
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},

@@ -41,7 +41,7 @@ struct DynamicStageOptions {
   // holds both feet down over the range, side by side (RepairOverride::square_stance; the
   // steps there are given up, and listed). Up to
   // verify_rounds rounds. A motion that dances is left as it is. The report's "verification"
-  // lists every run. cmu_05_20 needs 7 rounds to pass every run of the check.
+  // lists every run. cmu_05_20 needs 9 rounds to pass every run of the check.
   int verify_rounds = 12;
   std::vector<sim::GroundParams> verify_grounds = {sim::kFloor, sim::kCarpet};
   // Three noise draws, not one: a motion checked on seed 1 alone fell on carpet with seed 3
@@ -62,8 +62,14 @@ struct DynamicStageOptions {
   // seeds. The runs above are the controller dancing its own model; the motions they passed
   // fell in the show campaign where a stance was marginal (cmu_05_20: 4 of 20 runs at
   // 7.0–7.4 s without a push, after a check that danced every nominal run). The seeds are
-  // not the campaign's (1…100): the campaign stays an independent measurement.
-  std::vector<std::uint64_t> verify_show_seeds = {1001, 1002, 1003, 1004};
+  // not the campaign's (1…100): the campaign stays an independent measurement. Twelve, not
+  // four: four draws miss a stretch that falls in one draw of five (perfume's finale passed
+  // 1001–1004 and then fell in 12 of the show campaign's 60 runs); with twelve the check
+  // falls there (seed 1007) and at the spin (1004), and the campaign (seeds 1–60, a 10 N·s
+  // push each) fell 10 times instead of 22. cmu_05_07 and the built-in dance pass all twelve
+  // with the motion they had; cmu_05_20 takes two more rounds (seed 1008) for the same 3/60.
+  std::vector<std::uint64_t> verify_show_seeds = {1001, 1002, 1003, 1004, 1005, 1006,
+                                                  1007, 1008, 1009, 1010, 1011, 1012};
   double verify_gain = 0.5;
   double verify_before_s = 2.0;
   double verify_after_s = 0.3;
