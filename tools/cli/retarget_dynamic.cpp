@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -269,26 +270,33 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       checks.push_back({sim::kCarpet, sim::Engine::kSimbody, seed, false, true});
     }
     std::uint64_t fell_seed = 0;
-    int passed = 0;  // runs of this round that danced (they run in order, each after the last danced)
+    int passed = 0;  // runs of this round that danced (read in order, up to the first that fell)
     // The Simbody runs (not MuJoCo's, not the firmware loop's) in batches of consecutive runs,
-    // one thread each (hardware_concurrency at most): each run is its own plant, controller and
-    // workspaces, nothing shared but the read-only plan and model. The results are read in the
-    // list's order and a round still stops at its first fall, so the check decides exactly as
-    // one run after another does; a batch wastes at most its runs after that fall.
+    // one thread each (a logical CPU each at most): each run is its own plant, controller and
+    // workspaces, nothing shared but the read-only plan and model. The firmware loop stays out
+    // and runs alone: it has static workspaces and toggles Eigen's process-wide malloc guard.
+    // The results are read in the list's order and a round still stops at its first fall, so
+    // the check decides exactly as one run after another does. What a batch wastes: its runs
+    // after that fall, danced to their end (in a round that falls, up to a whole run per CPU).
+    // An exception in a run is kept and rethrown when the loop reads that run (as it would have
+    // surfaced there one run after another), so it reaches the CLI's handler, not terminate.
     std::vector<sim::MotionSummary> runs(checks.size());
+    std::vector<std::exception_ptr> failures(checks.size());
     std::vector<char> ran(checks.size(), 0);
-    const auto parallel = [&](std::size_t i) {
-      return i < checks.size() && checks[i].engine == sim::Engine::kSimbody && !checks[i].firmware;
-    };
+    const auto parallel = [&](std::size_t i) { return checks[i].engine == sim::Engine::kSimbody && !checks[i].firmware; };
     const auto simulate_one = [&](std::size_t i) {
-      const Check& check = checks[i];
-      sim::MotionRunConfig cfg;
-      cfg.stack.planner = stack::PlannerKind::kMpc;
-      cfg.run.ground = check.ground;
-      cfg.run.engine = check.engine;
-      cfg.run.seed = check.seed;
-      if (check.show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
-      runs[i] = sim::run_motion(robot, *plan, cfg);
+      try {
+        const Check& check = checks[i];
+        sim::MotionRunConfig cfg;
+        cfg.stack.planner = stack::PlannerKind::kMpc;
+        cfg.run.ground = check.ground;
+        cfg.run.engine = check.engine;
+        cfg.run.seed = check.seed;
+        if (check.show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
+        runs[i] = sim::run_motion(robot, *plan, cfg);
+      } catch (...) {
+        failures[i] = std::current_exception();
+      }
     };
     const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
     const auto simulate_batch = [&](std::size_t first) {
@@ -297,10 +305,11 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         while (end < checks.size() && end - first < threads && parallel(end)) ++end;
       }
       const auto t0 = std::chrono::steady_clock::now();
-      std::vector<std::thread> workers;
-      for (std::size_t i = first + 1; i < end; ++i) workers.emplace_back(simulate_one, i);
-      simulate_one(first);
-      for (std::thread& w : workers) w.join();
+      {
+        std::vector<std::jthread> workers;  // joined on the way out, also if starting one throws
+        for (std::size_t i = first + 1; i < end; ++i) workers.emplace_back(simulate_one, i);
+        simulate_one(first);
+      }
       verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       for (std::size_t i = first; i < end; ++i) ran[i] = 1;
     };
@@ -343,6 +352,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         continue;
       }
       if (!ran[index]) simulate_batch(index);
+      if (failures[index]) std::rethrow_exception(failures[index]);
       const sim::MotionSummary& summary = runs[index];
       ordered_json entry = {{"round", verify_round},
                             {"engine", sim::to_string(engine)},

@@ -46,7 +46,7 @@ struct DynamicStageOptions {
   std::vector<sim::GroundParams> verify_grounds = {sim::kFloor, sim::kCarpet};
   // Three noise draws, not one: a motion checked on seed 1 alone fell on carpet with seed 3
   // (cmu_05_20 at 7.1 s). In order seed by seed, each seed's grounds together; a round stops
-  // at its first fall, so the extra runs cost only in rounds that dance.
+  // at its first fall (the runs of a batch already started beside it dance on: run_dynamic_stage).
   std::vector<std::uint64_t> verify_seeds = {1, 2, 3};
   // Then MuJoCo on the floor (Leju's own MJCF and MuJoCo's contact, independent of our
   // tables): perfume fell there at 32.8 s, where Simbody danced it on both grounds.
