@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <exception>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -282,7 +282,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     // surfaced there one run after another), so it reaches the CLI's handler, not terminate.
     std::vector<sim::MotionSummary> runs(checks.size());
     std::vector<std::exception_ptr> failures(checks.size());
-    std::vector<char> ran(checks.size(), 0);
+    std::size_t simulated_to = 0;  // runs [0, simulated_to) have run (batches go in list order)
     const auto parallel = [&](std::size_t i) { return checks[i].engine == sim::Engine::kSimbody && !checks[i].firmware; };
     const auto simulate_one = [&](std::size_t i) {
       try {
@@ -311,7 +311,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         simulate_one(first);
       }
       verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      for (std::size_t i = first; i < end; ++i) ran[i] = 1;
+      simulated_to = end;
     };
     for (std::size_t index = 0; index < checks.size(); ++index) {
       const auto& [ground, engine, seed, firmware, show_errors] = checks[index];
@@ -351,7 +351,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         ++passed;
         continue;
       }
-      if (!ran[index]) simulate_batch(index);
+      if (index >= simulated_to) simulate_batch(index);
       if (failures[index]) std::rethrow_exception(failures[index]);
       const sim::MotionSummary& summary = runs[index];
       ordered_json entry = {{"round", verify_round},
