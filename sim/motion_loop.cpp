@@ -411,6 +411,7 @@ void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out
   out.plan_positions_on_a_stop = ws.plan_positions_on_a_stop;
   out.recovery_steps = ws.recovery.steps;
   out.recovery_declined = ws.recovery.declined;
+  out.recovery_early_touchdowns = ws.recovery.early_touchdowns;
   out.liftoff_holds = ws.liftoff.holds;
   out.liftoff_released = ws.liftoff.released;
   out.motion_lag_s_max = 1e-9 * static_cast<double>(ws.liftoff.lag_max_ns);
@@ -442,7 +443,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"wbc_qp_iterations\": {\"p50\": %.0f, \"p99\": %.0f, \"max\": %.0f},\n"
                 "  \"deadline_misses\": %llu,\n  \"wbc_not_ok_ticks\": %llu,\n"
                 "  \"plans_applied\": %llu,\n  \"plans_skipped\": %llu,\n  \"mpc_failures\": %llu,\n"
-                "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n"
+                "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n  \"recovery_early_touchdowns\": %llu,\n"
                 "  \"liftoff_holds\": %llu,\n  \"liftoff_released\": %llu,\n  \"motion_lag_s\": {\"max\": %.3f, \"end\": %.3f},\n"
                 "  \"plan_anchor\": {\"reanchors\": %llu, \"refused\": %llu, \"offset_m_max\": %.4f},\n"
                 "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f}\n}\n",
@@ -452,7 +453,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 static_cast<unsigned long long>(s.deadline_misses), static_cast<unsigned long long>(s.wbc_not_ok_ticks),
                 static_cast<unsigned long long>(s.plans_applied), static_cast<unsigned long long>(s.plans_skipped), static_cast<unsigned long long>(s.mpc_failures),
                 static_cast<unsigned long long>(s.plan_positions_on_a_stop), static_cast<unsigned long long>(s.recovery_steps),
-                static_cast<unsigned long long>(s.recovery_declined), static_cast<unsigned long long>(s.liftoff_holds),
+                static_cast<unsigned long long>(s.recovery_declined), static_cast<unsigned long long>(s.recovery_early_touchdowns), static_cast<unsigned long long>(s.liftoff_holds),
                 static_cast<unsigned long long>(s.liftoff_released), s.motion_lag_s_max, s.motion_lag_s_end,
                 static_cast<unsigned long long>(s.anchor_reanchors), static_cast<unsigned long long>(s.anchor_refused),
                 s.anchor_offset_m_max, s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max);

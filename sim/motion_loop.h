@@ -88,8 +88,10 @@ struct MotionSummary {
   std::uint64_t plan_positions_on_a_stop = 0;  // MPC knot joint positions put on a stop
   std::uint64_t recovery_steps = 0;            // steps the motion did not plan (recovery_step.h)
   // planner calls whose capture point had left the support (the step's trigger) where no
-  // step within the reach box would have captured: none taken (recovery_step.h, "choose")
+  // step within the reach box (nor, in a swing, an early touchdown) would have captured:
+  // none taken (recovery_step.h, "choose")
   std::uint64_t recovery_declined = 0;
+  std::uint64_t recovery_early_touchdowns = 0;  // swings landed early (recovery_step.h)
   // Lift-offs the planner held (liftoff_hold.h), those let go at the hold's limit, and how
   // far the motion's clock fell behind (most, and at the end of the run) [s].
   std::uint64_t liftoff_holds = 0, liftoff_released = 0;

@@ -37,7 +37,15 @@ Vec2 displacement_at(const FootDisplacement& d, hal::TimeNs t, double lift_heigh
   return out;
 }
 
-bool in_recovery_swing(const FootDisplacement& d, hal::TimeNs t) { return d.active && t >= d.lift_ns && t < d.land_ns; }
+bool in_recovery_swing(const FootDisplacement& d, hal::TimeNs t) {
+  return d.active && !d.early && t >= d.lift_ns && t < d.land_ns;
+}
+
+// Between an early touchdown's trigger and the motion's touchdown: the sole's corners are
+// rewritten towards (and then held at) its landing.
+bool in_early_touchdown(const FootDisplacement& d, hal::TimeNs t) {
+  return d.active && d.early && t >= d.lift_ns && t < d.land_ns;
+}
 
 // The motion's next swing of `foot` after `after_ns`, its lift-off searched up to `until_ns`
 // (the window's end): fills the return interval once a lift-off is found (touchdown: the
@@ -85,6 +93,19 @@ bool foot_down(const PlanKnot& knot, int foot) {
   return true;
 }
 
+// The reach box in the stance foot's axes (measured knot m); the swing foot stays on its own side.
+Vec2 within_reach(const RecoveryStepConfig& cfg, const PlanKnot& m, int swing, const Vec2& target) {
+  const int stance = 1 - swing;
+  const Vec2 stance_centre = foot_centre(m, stance);
+  const Vec2 ahead = foot_forward(m, stance);
+  const Vec2 left(-ahead.y(), ahead.x());
+  const double side = swing == 0 ? 1.0 : -1.0;  // the left foot stands to the stance foot's left
+  const Vec2 r = target - stance_centre;
+  const double x = std::clamp(r.dot(ahead), -cfg.reach_behind_m, cfg.reach_ahead_m);
+  const double y = side * std::clamp(side * r.dot(left), cfg.min_width_m, cfg.max_width_m);
+  return stance_centre + x * ahead + y * left;
+}
+
 struct StepCandidate {
   bool captures = false;
   int swing = 0;
@@ -110,15 +131,7 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
   const Vec2 away = xi_t - p;
   Vec2 target = xi_t + (away.norm() > 1e-9 ? Vec2(cfg.overshoot_m * away / away.norm()) : Vec2::Zero());
 
-  // Reach box in the stance foot's axes; the swing foot stays on its own side.
-  const Vec2 stance_centre = foot_centre(m, stance);
-  const Vec2 ahead = foot_forward(m, stance);
-  const Vec2 left(-ahead.y(), ahead.x());
-  const double side = swing == 0 ? 1.0 : -1.0;  // the left foot stands to the stance foot's left
-  const Vec2 r = target - stance_centre;
-  const double x = std::clamp(r.dot(ahead), -cfg.reach_behind_m, cfg.reach_ahead_m);
-  const double y = side * std::clamp(side * r.dot(left), cfg.min_width_m, cfg.max_width_m);
-  target = stance_centre + x * ahead + y * left;
+  target = within_reach(cfg, m, swing, target);
 
   // Displacement from where the motion (and an earlier recovery step) has the foot, bounded.
   const FootDisplacement& d = st.foot[swing];
@@ -135,6 +148,121 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
   out.margin_m = signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
   out.captures = out.margin_m >= cfg.capture_margin_m;
   return out;
+}
+
+// Early touchdown: the motion swings one foot now (the other stands until its touchdown);
+// if ξ at that touchdown, propagated from the measured state, misses the support it makes
+// by early_trigger_m more than the motion's own ξ does, and no landing within reach on the
+// motion's clock captures it, the swing lands early_lead_s from now beyond ξ then, if that
+// captures. In double support it does nothing (the step below is for that).
+void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, const PlanKnot& m,
+                      const PlanWindow& window, const Vec2& plan_offset, bool blocked) {
+  const PlanKnot& k0 = window.knots[0];
+  const bool down0 = foot_down(k0, 0), down1 = foot_down(k0, 1);
+  if (down0 == down1) return;
+  const int swing = down0 ? 1 : 0, stance = 1 - swing;
+  if (blocked || !cfg.early_touchdown || st.foot[swing].active) {
+    st.early_calls = 0;
+    return;
+  }
+  // The motion's touchdown in the window, the stance foot down until then.
+  int land = -1;
+  for (int k = 1; k < window.count; ++k) {
+    if (!foot_down(window.knots[k], stance)) break;
+    if (foot_down(window.knots[k], swing)) {
+      land = k;
+      break;
+    }
+  }
+  const hal::TimeNs now = k0.stamp_ns;
+  const hal::TimeNs early_land = now + static_cast<hal::TimeNs>(std::llround(cfg.early_lead_s * 1e9));
+  const hal::TimeNs gain = static_cast<hal::TimeNs>(std::llround(cfg.early_min_gain_s * 1e9));
+  if (land < 0 || window.knots[land].stamp_ns - early_land < gain) {
+    st.early_calls = 0;
+    return;
+  }
+  const PlanKnot& touchdown = window.knots[land];
+  const double t_motion = 1e-9 * static_cast<double>(touchdown.stamp_ns - now);
+
+  // The measured state's ξ at the motion's touchdown, and the motion's own (its first knot):
+  // the pendulum over the stance sole, measured coordinates (the window's plus plan_offset).
+  std::array<Vec2, kNumPoints> corners;  // stance sole, then the swing sole at its landing
+  std::array<Vec2, kNumPoints> planned;
+  double stance_z = 0.0, planned_z = 0.0;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = stance * kCornersPerFoot + i;
+    corners[i] = m.point_position_m.segment<2>(3 * c);
+    planned[i] = k0.point_position_m.segment<2>(3 * c) + plan_offset;
+    stance_z += m.point_position_m[3 * c + 2] / kCornersPerFoot;
+    planned_z += k0.point_position_m[3 * c + 2] / kCornersPerFoot;
+    corners[kCornersPerFoot + i] = touchdown.point_position_m.segment<2>(3 * (swing * kCornersPerFoot + i)) + plan_offset;
+    planned[kCornersPerFoot + i] = corners[kCornersPerFoot + i];
+  }
+  std::array<Vec2, kCornersPerFoot> stance_corners, planned_stance;
+  for (int i = 0; i < kCornersPerFoot; ++i) stance_corners[i] = corners[i], planned_stance[i] = planned[i];
+  const Polygon2<kCornersPerFoot> stance_sole = convex_hull<kCornersPerFoot>(stance_corners, kCornersPerFoot);
+  const CapturePoint cp = capture_point(m, stance_z, cfg.min_pendulum_height_m);
+  const Vec2 p = project_into(stance_sole, cp.xi, 0.0);
+  const Vec2 xi_motion = p + (cp.xi - p) * std::exp(cp.omega * t_motion);
+  const double margin_motion = signed_margin(convex_hull<kNumPoints>(corners, kNumPoints), xi_motion);
+  CapturePoint plan_cp = capture_point(k0, planned_z, cfg.min_pendulum_height_m);
+  plan_cp.xi += plan_offset;
+  const Vec2 plan_p = project_into(convex_hull<kCornersPerFoot>(planned_stance, kCornersPerFoot), plan_cp.xi, 0.0);
+  const Vec2 plan_xi_motion = plan_p + (plan_cp.xi - plan_p) * std::exp(plan_cp.omega * t_motion);
+  const double plan_margin = signed_margin(convex_hull<kNumPoints>(planned, kNumPoints), plan_xi_motion);
+  // Beyond the motion's own (a dance's swing may plan ξ outside: the next double support
+  // brings it back). A non-finite state fails the comparison: no early touchdown from it.
+  if (!(margin_motion < std::min(plan_margin, 0.0) - cfg.early_trigger_m)) {
+    st.early_calls = 0;
+    return;
+  }
+
+  // A landing beyond ξ at time t from now, within reach: its step from the motion's landing
+  // (window coordinates) and the margin of ξ then inside the support it makes.
+  Vec2 centre = Vec2::Zero();  // of the motion's landing, window coordinates
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    centre += touchdown.point_position_m.segment<2>(3 * (swing * kCornersPerFoot + i)) / kCornersPerFoot;
+  }
+  const auto landing = [&](double t, Vec2& step) {
+    const Vec2 xi_t = p + (cp.xi - p) * std::exp(cp.omega * t);
+    const Vec2 away = xi_t - p;
+    const Vec2 beyond = away.norm() > 1e-9 ? Vec2(cfg.overshoot_m * away / away.norm()) : Vec2::Zero();
+    const Vec2 target = within_reach(cfg, m, swing, xi_t + beyond);
+    step = target - plan_offset - centre;
+    if (step.norm() > cfg.max_step_m) step *= cfg.max_step_m / step.norm();
+    std::array<Vec2, kNumPoints> after = corners;
+    for (int i = 0; i < kCornersPerFoot; ++i) after[kCornersPerFoot + i] += step;
+    return signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
+  };
+  // A landing on the motion's clock that captures is the MPC's to find (it adapts the spot).
+  Vec2 step = Vec2::Zero();
+  if (landing(t_motion, step) >= cfg.capture_margin_m) {
+    st.early_calls = 0;
+    return;
+  }
+  if (++st.early_calls < cfg.trigger_calls) return;
+  // Landing early_lead_s from now must capture.
+  const double margin = landing(cfg.early_lead_s, step);
+  if (!(margin >= cfg.capture_margin_m)) {
+    ++st.declined;
+    st.early_calls = 0;
+    return;
+  }
+  FootDisplacement& d = st.foot[swing];
+  d = FootDisplacement{};
+  d.active = true;
+  d.early = true;
+  d.from = step;
+  d.to = step;
+  d.lift_ns = now;
+  d.early_land_ns = early_land;
+  d.land_ns = touchdown.stamp_ns;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    d.landing[i] = touchdown.point_position_m.segment<3>(3 * (swing * kCornersPerFoot + i));
+  }
+  st.early_calls = 0;
+  ++st.early_touchdowns;
+  return;
 }
 
 // Decides and starts a recovery step if the measured state calls for one.
@@ -161,6 +289,7 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const P
   }
   const bool settling = now - st.start_ns < static_cast<hal::TimeNs>(std::llround(cfg.settle_s * 1e9));
   const bool swinging = (st.foot[0].active && now < st.foot[0].land_ns) || (st.foot[1].active && now < st.foot[1].land_ns);
+  maybe_land_early(cfg, st, m, window, plan_offset, settling || swinging);
   // A non-finite state fails the comparison below: no step from it (the MPC refuses it too).
   if (settling || swinging || !(st.last_outside_m > cfg.trigger_outside_m)) {
     st.outside_calls = 0;
@@ -203,7 +332,8 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const P
 const char* recovery_step_validate(const RecoveryStepConfig& c) {
   const double values[] = {c.trigger_outside_m, c.lift_delay_s, c.swing_s,  c.lift_height_m, c.quiet_s,
                            c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
-                           c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m};
+                           c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m,
+                           c.early_trigger_m,   c.early_lead_s, c.early_min_gain_s};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
@@ -215,6 +345,9 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
   if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
   if (c.min_pendulum_height_m <= 0.0) return "recovery step: min_pendulum_height_m must be > 0";
+  if (c.early_trigger_m < 0.0 || c.early_lead_s < 0.05 || c.early_min_gain_s < 0.0) {
+    return "recovery step: early_trigger_m >= 0, early_lead_s >= 0.05, early_min_gain_s >= 0";
+  }
   return nullptr;
 }
 
@@ -224,6 +357,8 @@ void recovery_step_reset(RecoveryStepState& state) {
   state.foot = {};
   state.steps = 0;
   state.declined = 0;
+  state.early_touchdowns = 0;
+  state.early_calls = 0;
   state.last_outside_m = 0.0;
   state.cache_count = 0;
   state.cache_valid = {};
@@ -266,8 +401,25 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
     std::array<Vec3, kNumPoints> targets;
     for (int c = 0; c < kNumPoints; ++c) targets[c] = knot.point_position_m.segment<3>(3 * c);
     for (int foot = 0; foot < 2; ++foot) {
+      const FootDisplacement& fd = st.foot[foot];
+      if (in_early_touchdown(fd, knot.stamp_ns)) {
+        // Towards the landing (moved by `to`) until early_land_ns, then down on it.
+        const bool down = knot.stamp_ns >= fd.early_land_ns;
+        const double s = down ? 1.0 : smooth(fraction(knot.stamp_ns, fd.lift_ns, fd.early_land_ns));
+        rw.d[foot] = fd.to;
+        rw.early[foot] = s;
+        st.changed[k] = true;
+        for (int i = 0; i < kCornersPerFoot; ++i) {
+          Vec3 landing = fd.landing[i];
+          landing.head<2>() += fd.to;
+          Vec3& t = targets[foot * kCornersPerFoot + i];
+          t = (1.0 - s) * t + s * landing;
+          if (down) knot.in_contact[foot * kCornersPerFoot + i] = true;
+        }
+        continue;
+      }
       double lift = 0.0;
-      const Vec2 d = displacement_at(st.foot[foot], knot.stamp_ns, cfg.lift_height_m, lift);
+      const Vec2 d = displacement_at(fd, knot.stamp_ns, cfg.lift_height_m, lift);
       rw.d[foot] = d;
       rw.lift[foot] = lift;
       rw.swing[foot] = in_recovery_swing(st.foot[foot], knot.stamp_ns);

@@ -30,6 +30,21 @@
 //            motion's own swing it blends back to zero, and the foot lands where the
 //            motion has it.
 //
+// Early touchdown (step timing, in a swing the motion plans): the MPC adapts where a swing
+// foot lands but not when. Pushed towards the swing side in a long single support (cmu_05_20's
+// first step, 0.7 s: three show-campaign falls in 60, each 1.0–1.4 s after a push at
+// 1.8–2.7 s) the capture point runs past any landing within reach before the motion lands.
+// When ξ at the motion's touchdown (centre of pressure at the stance sole's point nearest ξ)
+// would lie early_trigger_m farther outside the support that touchdown makes than the
+// motion's own ξ, and no landing within reach on the motion's clock would capture it, the
+// foot lands early_lead_s from now instead, overshoot_m beyond ξ then (the reach box and
+// max_step_m of a step), if that captures: the window's swing corners blend from the
+// motion's to that landing, stand on it until the motion's touchdown, and the displacement
+// is then held and returned like a step's. Both conditions matter: with the first alone
+// (against a fixed margin) a show campaign on perfume fell in 58 of 60 runs, each from an
+// early touchdown at 18.7 s (its own plan's ξ misses there; 4 cm of measured error grow 7×
+// over the 0.56 s left, and the foot went 0.29 m back).
+//
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
 // 1.3 ms on the call that takes a step), and only for the knots the previous call did not
@@ -66,6 +81,20 @@ struct RecoveryStepConfig {
   // No trigger this long after a reset: the estimator's velocity settles after start-up
   // (the show set's biased IMU on carpet: 0.58 m/s error at 26 ms, under 0.1 m/s by 0.1 s).
   double settle_s = 0.5;
+
+  // Early touchdown (step timing): while the motion swings a foot, ξ propagated from the
+  // measured state to the motion's touchdown (the centre of pressure at the stance sole's
+  // point nearest ξ) lies early_trigger_m farther outside the support that touchdown makes
+  // than the motion's own ξ (its first knot's, propagated alike; 0 if inside), no landing
+  // within the reach box on the motion's clock captures it, on trigger_calls calls in a
+  // row: the swing foot lands early_lead_s from now instead, overshoot_m beyond ξ at that
+  // moment (reach box and max_step_m as for a step), if that captures by capture_margin_m
+  // and gains at least early_min_gain_s on the motion. It stays there until the motion's
+  // touchdown and then keeps the displacement like a step.
+  bool early_touchdown = true;
+  double early_trigger_m = 0.03;
+  double early_lead_s = 0.15;
+  double early_min_gain_s = 0.10;
 };
 
 // nullptr if usable, else what is wrong. Load time.
@@ -74,10 +103,18 @@ const char* recovery_step_validate(const RecoveryStepConfig& config);
 // One foot's displacement from the motion: d(t) = from + s(t)·(to − from) during the
 // recovery swing [lift, land) (s smooth 0 → 1), `to` after it, and back to 0 over the
 // motion's own next swing of that foot [return_lift, return_land) once it is known.
+//
+// An early touchdown (`early`) instead: from lift_ns (the trigger) the swing sole blends from
+// the motion's towards `landing` (the motion's touchdown corners, window coordinates) moved by
+// `to`, reaches it at early_land_ns and stands there until land_ns (the motion's touchdown);
+// from then on it is displaced by `to` as after a step.
 struct FootDisplacement {
   bool active = false;
   Eigen::Vector2d from = Eigen::Vector2d::Zero(), to = Eigen::Vector2d::Zero();
   hal::TimeNs lift_ns = 0, land_ns = 0;
+  bool early = false;
+  hal::TimeNs early_land_ns = 0;
+  std::array<Vec3, kCornersPerFoot> landing{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   bool return_known = false;
   hal::TimeNs return_lift_ns = 0, return_land_ns = 0;
 };
@@ -88,7 +125,10 @@ struct KnotRewrite {
   std::array<Eigen::Vector2d, 2> d{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::array<double, 2> lift{};
   std::array<bool, 2> swing{};
-  bool operator==(const KnotRewrite& o) const { return d == o.d && lift == o.lift && swing == o.swing; }
+  std::array<double, 2> early{};  // an early touchdown's blend towards its landing (0 none … 1 down)
+  bool operator==(const KnotRewrite& o) const {
+    return d == o.d && lift == o.lift && swing == o.swing && early == o.early;
+  }
 };
 
 struct RecoveryStepState {
@@ -97,7 +137,9 @@ struct RecoveryStepState {
   hal::TimeNs start_ns = 0;                // the first call after the reset
   std::array<FootDisplacement, 2> foot{};  // [left, right]
   std::uint64_t steps = 0;                 // recovery steps taken since the reset
-  std::uint64_t declined = 0;              // triggers where no step would have captured
+  std::uint64_t declined = 0;              // triggers where no step (or early touchdown) would have captured
+  std::uint64_t early_touchdowns = 0;      // swings landed before the motion's touchdown
+  int early_calls = 0;
   double last_outside_m = 0.0;             // ξ's distance outside the support at the last call (< 0 inside)
   dynamics::Data data;                     // scratch
   std::array<dynamics::ConfigVector, kMaxWindowKnots> q{};  // scratch: re-solved knots

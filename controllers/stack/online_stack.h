@@ -66,7 +66,8 @@ struct StackConfig {
   wbc::WbcConfig wbc{};
   mpc::MpcConfig mpc{};
   // MPC planner only: a step the motion did not plan when the capture point leaves the
-  // support in double support (recovery_step.h).
+  // support in double support, and an earlier touchdown of a planned swing that would not
+  // catch it (recovery_step.h).
   planner::RecoveryStepConfig recovery{};
   // MPC planner only: a planned lift-off waits while the capture point is not over the
   // foot that will stand (liftoff_hold.h).

@@ -355,6 +355,195 @@ TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
   EXPECT_GT(reused, 30 * 50) << "most knots come from the previous call";
 }
 
+// Early touchdown. The motion swings the left foot over [1.0, 1.8) s; at 1.1 s the robot,
+// on its right foot, moves left so that ξ lies at the left sole's outer edge. Propagated to
+// the motion's touchdown (0.7 s on, the centre of pressure at the right sole's inner edge) ξ
+// is far beyond the left foot's landing; 0.15 s on it is not yet: the left foot lands then,
+// beyond it. Oracle: the pendulum in closed form on the soles' axis-aligned edges, and the
+// rewritten knots' corners by forward kinematics.
+struct EarlyTouchdown {
+  Fixture f;
+  Standing s = standing_geometry();
+  double inner_y = -1e9;  // the right sole's inner edge
+  double toe_x = -1e9;
+  Vec2 velocity;
+  explicit EarlyTouchdown(double xi_beyond_outer_m, double touchdown_s = 1.8) {
+    lift_in_motion(*f.motion, kLeftFoot, 1.0, touchdown_s);
+    for (int i = 0; i < kCornersPerFoot; ++i) inner_y = std::max(inner_y, s.corner[kRightFoot * kCornersPerFoot + i].y());
+    for (const Vec3& c : s.corner) toe_x = std::max(toe_x, c.x());
+    velocity = Vec2(0.0, (s.outer_y + xi_beyond_outer_m - s.com.y()) * s.omega);
+  }
+  // ξ after t seconds with the centre of pressure at the right sole's point nearest ξ.
+  Vec2 xi_after(double t) const { return xi_after(t, velocity); }
+  Vec2 xi_after(double t, const Vec2& v) const {
+    const Vec2 xi = s.com.head<2>() + v / s.omega;
+    const Vec2 p(std::clamp(xi.x(), s.heel_x, toe_x), inner_y);
+    return p + (xi - p) * std::exp(s.omega * t);
+  }
+  Vec2 left_centre(const std::array<Vec3, kNumPoints>& c) const {
+    Vec2 out = Vec2::Zero();
+    for (int i = 0; i < kCornersPerFoot; ++i) out += c[kLeftFoot * kCornersPerFoot + i].head<2>() / kCornersPerFoot;
+    return out;
+  }
+};
+
+TEST(RecoveryStep, ASwingThatCannotCatchLandsEarlyBeyondTheCapturePoint) {
+  EarlyTouchdown e(0.0);
+  Fixture& f = e.f;
+  const Standing& s = e.s;
+  // The motion's touchdown misses ξ then by far (the trigger's premise, in closed form).
+  EXPECT_GT(e.xi_after(0.7).y() - s.outer_y, 0.3);
+
+  f.call(1.1, e.velocity);
+  EXPECT_EQ(f.state->early_touchdowns, 0u) << "one call is not yet a trigger";
+  EXPECT_TRUE(f.window_unchanged());
+  {
+    kuavo::test::AllocTrap trap;
+    f.call(1.1 + kDt, e.velocity);
+    EXPECT_EQ(trap.count(), 0u);
+  }
+  ASSERT_EQ(f.state->early_touchdowns, 1u);
+  EXPECT_EQ(f.state->steps, 0u);
+  const double now = 1.1 + kDt, land = now + f.config.early_lead_s;
+
+  // Where it lands: overshoot_m beyond ξ at the early touchdown, on the line from the CoP.
+  const Vec2 xi_land = e.xi_after(f.config.early_lead_s);
+  const Vec2 p(std::clamp(xi_land.x(), s.heel_x, e.toe_x), e.inner_y);
+  const Vec2 expected = xi_land + f.config.overshoot_m * (xi_land - p).normalized();
+  const Vec2 right_centre = 0.5 * (s.corner[kRightFoot * kCornersPerFoot].head<2>() + s.corner[kRightFoot * kCornersPerFoot + 3].head<2>());
+  ASSERT_LT(expected.y() - right_centre.y(), f.config.max_width_m) << "the test's target is within reach";
+
+  for (int k = 0; k < kKnots; ++k) {
+    const PlanKnot& knot = f.window->knots[k];
+    const double t = now + kDt * k;
+    const auto c = corners_of(knot);
+    EXPECT_TRUE(foot_in_contact(knot, kRightFoot)) << t;
+    EXPECT_EQ(foot_in_contact(knot, kLeftFoot), t > land - 1e-6) << t;
+    if (t > land - 1e-6) {
+      EXPECT_LT((e.left_centre(c) - expected).norm(), 2e-3) << t << ": on the landing, before and after the motion's touchdown";
+      for (int i = 0; i < kCornersPerFoot; ++i) {
+        const int ci = kLeftFoot * kCornersPerFoot + i;
+        EXPECT_NEAR(c[ci].z(), s.corner[ci].z(), 1e-3) << t << ": on the ground";
+      }
+    }
+  }
+  // The support it makes holds ξ at touchdown by capture_margin_m; the motion's would not.
+  const auto landed = corners_of(f.window->knots[kKnots - 1]);
+  std::array<Vec2, kNumPoints> after, before;
+  for (int c = 0; c < kNumPoints; ++c) after[c] = landed[c].head<2>(), before[c] = s.corner[c].head<2>();
+  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_land), f.config.capture_margin_m - 1e-3);
+  EXPECT_LT(signed_margin(convex_hull<kNumPoints>(before, kNumPoints), e.xi_after(0.7)), -0.3);
+
+  // Nothing more while it is under way.
+  for (int i = 2; i < 10; ++i) f.call(1.1 + kDt * i, e.velocity);
+  EXPECT_EQ(f.state->early_touchdowns, 1u);
+  EXPECT_EQ(f.state->steps, 0u);
+}
+
+// ξ over the stance sole's centre: it stays there, the motion's touchdown holds it, nothing
+// changes; the push above with early touchdown off changes nothing either.
+TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionsTouchdownCatches) {
+  EarlyTouchdown e(0.0);
+  Vec2 right_centre = Vec2::Zero();
+  for (int i = 0; i < kCornersPerFoot; ++i) right_centre += e.s.corner[kRightFoot * kCornersPerFoot + i].head<2>() / kCornersPerFoot;
+  const Vec2 velocity = (right_centre - e.s.com.head<2>()) * e.s.omega;
+  for (int i = 0; i < 10; ++i) {
+    e.f.call(1.1 + kDt * i, velocity);
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+
+  EarlyTouchdown off(0.0);
+  off.f.config.early_touchdown = false;
+  for (int i = 0; i < 5; ++i) {
+    off.f.call(1.1 + kDt * i, off.velocity);
+    EXPECT_TRUE(off.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(off.f.state->early_touchdowns, 0u);
+}
+
+// The motion's own state (the knots stand still, ξ between the feet) throws ξ far beyond the
+// left foot's landing on one foot: a dance's swing may plan that (the next double support
+// brings it back). Measured = planned: nothing changes.
+TEST(RecoveryStep, NoEarlyTouchdownWhereTheMotionItselfPlansCapturePointOutside) {
+  EarlyTouchdown e(0.0);
+  EXPECT_GT(e.xi_after(0.7, Vec2::Zero()).y() - e.s.outer_y, 0.2) << "the premise: the plan's ξ misses by far";
+  for (int i = 0; i < 5; ++i) {
+    e.f.call(1.1 + kDt * i, Vec2::Zero());
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+}
+
+// ξ 2 cm beside the plan's, the motion's touchdown 0.4 s away: ξ then misses the motion's
+// landing by several cm more than the plan's, but a landing within the reach box on the
+// motion's clock captures it: that is the MPC's (it adapts the spot), nothing changes. With
+// the reach box narrowed below that landing, the foot lands early instead.
+TEST(RecoveryStep, NoEarlyTouchdownWhenALandingOnTheMotionsClockCaptures) {
+  EarlyTouchdown e(0.0, 1.5);
+  const Vec2 velocity(0.0, 0.02 * e.s.omega);
+  const double t_motion = 1.5 - 1.1 - kDt;
+  const Vec2 xi_meas = e.xi_after(t_motion, velocity), xi_plan = e.xi_after(t_motion, Vec2::Zero());
+  EXPECT_GT(xi_meas.y() - xi_plan.y(), 0.05) << "the premise: beyond the plan's by more than early_trigger_m";
+  EXPECT_GT(xi_meas.y(), e.s.outer_y + e.f.config.early_trigger_m) << "the premise: the motion's landing misses it";
+  Vec2 right_centre = Vec2::Zero();
+  for (int i = 0; i < kCornersPerFoot; ++i) right_centre += e.s.corner[kRightFoot * kCornersPerFoot + i].head<2>() / kCornersPerFoot;
+  const double width = xi_meas.y() + e.f.config.overshoot_m - right_centre.y();
+  ASSERT_LT(width, e.f.config.max_width_m - 0.01) << "the premise: a landing on the clock within reach";
+  for (int i = 0; i < 3; ++i) {
+    e.f.call(1.1 + kDt * i, velocity);
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+
+  EarlyTouchdown narrow(0.0, 1.5);
+  narrow.f.config.max_width_m = width - 0.08;  // ξ then 1 cm inside the sole: short of capture_margin_m
+  for (int i = 0; i < 3; ++i) narrow.f.call(1.1 + kDt * i, velocity);
+  EXPECT_EQ(narrow.f.state->early_touchdowns, 1u);
+}
+
+// The motion lands within early_lead_s + early_min_gain_s: landing early gains too little.
+TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionLandsSoonAnyway) {
+  EarlyTouchdown e(0.0);
+  for (int i = 0; i < 5; ++i) {
+    e.f.call(1.6 + kDt * i, e.velocity);
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+}
+
+// The knot cache through an early touchdown, its hold, the motion's touchdown and the return
+// over the motion's next swing: bit for bit the window a state without the cache gives.
+TEST(RecoveryStep, ReusingKnotsThroughAnEarlyTouchdownChangesNoBit) {
+  EarlyTouchdown e(0.0);
+  Fixture& f = e.f;
+  lift_in_motion(*f.motion, kLeftFoot, 2.3, 2.7);
+  auto fresh = std::make_unique<RecoveryStepState>();
+  auto fresh_window = std::make_unique<PlanWindow>();
+  int reused = 0;
+  for (int i = 0; i < 60; ++i) {
+    const double t = 1.1 + kDt * i;
+    const Vec2 v = i < 2 ? e.velocity : Vec2::Zero();
+    *fresh = *f.state;
+    fresh->cache_count = 0;
+    const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
+    motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
+    recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion,
+                     kuavo::test::measured_knot(standing_configuration(), translating(v), t_ns), *fresh_window);
+    f.call(t, v);
+    for (int k = 0; k < kKnots; ++k) {
+      const PlanKnot &a = f.window->knots[k], &b = fresh_window->knots[k];
+      ASSERT_TRUE(a.q == b.q && a.v == b.v && a.in_contact == b.in_contact && a.point_position_m == b.point_position_m &&
+                  a.point_velocity_m_s == b.point_velocity_m_s)
+          << "call " << i << " knot " << k;
+      reused += f.state->hit[k] >= 0 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(f.state->early_touchdowns, 1u);
+  EXPECT_TRUE(f.state->foot[kLeftFoot].return_known);
+  EXPECT_GT(reused, 20 * 50) << "most knots come from the previous call";
+}
+
 TEST(RecoveryStep, ConfigValidation) {
   EXPECT_EQ(recovery_step_validate(RecoveryStepConfig{}), nullptr);
   RecoveryStepConfig c;
@@ -368,6 +557,12 @@ TEST(RecoveryStep, ConfigValidation) {
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c = {};
   c.trigger_calls = 0;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.early_lead_s = 0.02;  // no foot comes down from its arc that fast
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.early_trigger_m = std::nan("");
   EXPECT_NE(recovery_step_validate(c), nullptr);
 }
 

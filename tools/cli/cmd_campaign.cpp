@@ -269,7 +269,7 @@ int run_campaign(int argc, char** argv) {
   std::ofstream csv(dir / "runs.csv");
   csv << "run,motion,ground,perturbation,seed,push_start_s,push_direction_deg,ok,fell,fell_at_s,sim_time_s,"
          "zmp_margin_m_min,tracking_rms_legs_rad,tracking_rms_arms_rad,com_err_m_max,torque_ratio_max,"
-         "torque_saturations,wbc_not_ok_ticks,mpc_failures,recovery_steps,liftoff_holds,motion_lag_s_max,anchor_offset_m_max,error,log_sha256\n";
+         "torque_saturations,wbc_not_ok_ticks,mpc_failures,recovery_steps,early_touchdowns,liftoff_holds,motion_lag_s_max,anchor_offset_m_max,error,log_sha256\n";
   struct Tally {
     int runs = 0, falls = 0;
   };
@@ -287,7 +287,7 @@ int run_campaign(int argc, char** argv) {
     std::string err = !have ? "no summary (see runs/" + r.id + ".err)" : !parsed ? "unreadable summary" : s.value("error", "");
     for (char& c : err) c = c == ',' || c == '\n' ? ';' : c;
     char row[1024];
-    std::snprintf(row, sizeof row, "%s,%s,%s,%s,%llu,%.3f,%.2f,%d,%d,%.3f,%.3f,%.5f,%.5f,%.5f,%.5f,%.4f,%llu,%llu,%llu,%llu,%llu,%.3f,%.4f,%s,%s\n",
+    std::snprintf(row, sizeof row, "%s,%s,%s,%s,%llu,%.3f,%.2f,%d,%d,%.3f,%.3f,%.5f,%.5f,%.5f,%.5f,%.4f,%llu,%llu,%llu,%llu,%llu,%llu,%.3f,%.4f,%s,%s\n",
                   r.id.c_str(), r.motion.c_str(), r.ground.c_str(), r.perturbation.c_str(),
                   static_cast<unsigned long long>(r.seed), r.pushed ? r.push.start_s : -1.0,
                   r.pushed ? r.push.direction_rad * 180.0 / 3.14159265358979323846 : 0.0, run_ok ? 1 : 0, fell ? 1 : 0,
@@ -300,6 +300,7 @@ int run_campaign(int argc, char** argv) {
                   static_cast<unsigned long long>(parsed ? number_or(s, "wbc_not_ok_ticks", 0.0) : 0.0),
                   static_cast<unsigned long long>(parsed ? number_or(s, "mpc_failures", 0.0) : 0.0),
                   static_cast<unsigned long long>(parsed ? number_or(s, "recovery_steps", 0.0) : 0.0),
+                  static_cast<unsigned long long>(parsed ? number_or(s, "recovery_early_touchdowns", 0.0) : 0.0),
                   static_cast<unsigned long long>(parsed ? number_or(s, "liftoff_holds", 0.0) : 0.0),
                   parsed && s.contains("motion_lag_s") ? number_or(s["motion_lag_s"], "max", 0.0) : 0.0,
                   parsed && s.contains("plan_anchor") ? number_or(s["plan_anchor"], "offset_m_max", 0.0) : 0.0, err.c_str(),

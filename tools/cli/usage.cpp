@@ -50,7 +50,8 @@ constexpr CommandHelp kHelp[] = {
      "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
-     "               [--liftoff-hold on|off] [--plan-anchor on|off] [--plan-anchor-home SHARE]\n"
+     "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
+     "               [--plan-anchor-home SHARE]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
      "               --log run.csv --summary run.json [--quiet]\n"},
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
