@@ -9,7 +9,8 @@
 // task's duty cycle at 50 Hz (kuavo_fw --timing): what the call costs once its working set has
 // left the caches.
 // BM_RecoveryStepRewrite*: the recovery step's window rewrite with a step under way or held,
-// which runs before the MPC in the same planning call.
+// which runs before the MPC in the same planning call; BM_EarlyTouchdownTrigger: the call
+// that lands a swing early.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -213,6 +214,48 @@ void BM_RecoveryStepRewriteConsecutive(benchmark::State& state) { BM_RecoverySte
 void BM_RecoveryStepRewriteCold(benchmark::State& state) { BM_RecoveryStepRewrite(state, true); }
 BENCHMARK(BM_RecoveryStepRewriteConsecutive)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RecoveryStepRewriteCold)->Unit(benchmark::kMicrosecond);
+
+// The planner call that lands a swing early (recovery_step.h, early touchdown): the motion
+// swings the left foot over [1.0, 1.8) s, the robot on its right foot moves left at 0.56 m/s
+// (ξ at the left sole's outer edge); the second call at 1.1 s triggers and rewrites the
+// window (every knot from then on carries the landing). Timed: that call, from a reset.
+void BM_EarlyTouchdownTrigger(benchmark::State& state) {
+  Fixture& f = fixture();
+  static auto motion = std::make_unique<planner::MotionPlan>();
+  static auto rs = std::make_unique<planner::RecoveryStepState>();
+  static auto measured = std::make_unique<planner::PlanKnot>();
+  static planner::PlanWindow window;
+  motion->rate_hz = 100.0;
+  motion->frame_count = 600;
+  for (int i = 0; i < motion->frame_count; ++i) {
+    motion->q[i] = f.q0, motion->foot_contact[i] = {!(i >= 100 && i < 180), true};
+  }
+  planner::RecoveryStepConfig cfg;
+  cfg.settle_s = 0.0;
+  dynamics::VelocityVector push = dynamics::VelocityVector::Zero();
+  push[1] = 0.56;
+  // Timed as the step's rewrite above: the measured knot and the rewrite, not the window's sampling.
+  const auto call = [&](hal::TimeNs t_ns, std::vector<double>* us) {
+    planner::motion_plan_window_rt(f.robot, f.data, *motion, t_ns, 0.02, 61, window);
+    const auto t0 = Clock::now();
+    planner::plan_knot_measured(f.robot, f.data, f.q0, push, t_ns, *measured);
+    planner::recovery_step_rt(f.robot, cfg, *rs, *motion, *measured, window);
+    if (us != nullptr) us->push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+  };
+  std::vector<double> us;
+  for (auto _ : state) {
+    planner::recovery_step_reset(*rs);
+    call(1'080'000'000, nullptr);
+    call(1'100'000'000, &us);
+    if (rs->early_touchdowns != 1) {
+      state.SkipWithError("no early touchdown triggered");
+      return;
+    }
+  }
+  state.counters["p50_us"] = percentile(us, 50);
+  state.counters["p99_us"] = percentile(us, 99);
+}
+BENCHMARK(BM_EarlyTouchdownTrigger)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
