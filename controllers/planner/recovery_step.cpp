@@ -159,7 +159,10 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
                       const PlanWindow& window, const Vec2& plan_offset, bool blocked) {
   const PlanKnot& k0 = window.knots[0];
   const bool down0 = foot_down(k0, 0), down1 = foot_down(k0, 1);
-  if (down0 == down1) return;
+  if (down0 == down1) {
+    st.early_calls = 0;
+    return;
+  }
   const int swing = down0 ? 1 : 0, stance = 1 - swing;
   if (blocked || !cfg.early_touchdown || st.foot[swing].active) {
     st.early_calls = 0;
@@ -184,8 +187,10 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
   const PlanKnot& touchdown = window.knots[land];
   const double t_motion = 1e-9 * static_cast<double>(touchdown.stamp_ns - now);
 
-  // The measured state's ξ at the motion's touchdown, and the motion's own (its first knot):
-  // the pendulum over the stance sole, measured coordinates (the window's plus plan_offset).
+  // The measured state's ξ at the motion's touchdown, and the motion's own (its first knot, as
+  // the motion has it: not moved by a displacement held on the stance foot, which moves the
+  // support but not the dance's CoM): the pendulum over the stance sole, measured coordinates
+  // (the window's plus plan_offset).
   std::array<Vec2, kNumPoints> corners;  // stance sole, then the swing sole at its landing
   std::array<Vec2, kNumPoints> planned;
   double stance_z = 0.0, planned_z = 0.0;
@@ -318,6 +323,7 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const P
   }
   FootDisplacement& d = st.foot[best.swing];
   d.active = true;
+  d.early = false;  // the foot may still hold an early touchdown's displacement: `from` carries it
   d.from = best.current;
   d.to = best.current + best.step;
   d.lift_ns = lift;

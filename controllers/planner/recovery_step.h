@@ -40,14 +40,16 @@
 // foot lands early_lead_s from now instead, overshoot_m beyond ξ then (the reach box and
 // max_step_m of a step), if that captures: the window's swing corners blend from the
 // motion's to that landing, stand on it until the motion's touchdown, and the displacement
-// is then held and returned like a step's. Both conditions matter: with the first alone
+// is then held and returned like a step's. Not while the swing foot carries a displacement
+// (its return swing: it lands where the motion has it). Both conditions matter: with the first alone
 // (against a fixed margin) a show campaign on perfume fell in 58 of 60 runs, each from an
 // early touchdown at 18.7 s (its own plan's ξ misses there; 4 cm of measured error grow 7×
 // over the 0.56 s left, and the foot went 0.29 m back).
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
-// 1.3 ms on the call that takes a step), and only for the knots the previous call did not
+// 1.3 ms on the call that takes a step, 1.1 ms p50 on the one that lands a swing early, loaded),
+// and only for the knots the previous call did not
 // have (the window's tail: 33 µs p50 on the calls after it; mpc_bench).
 #pragma once
 
@@ -125,7 +127,10 @@ struct KnotRewrite {
   std::array<Eigen::Vector2d, 2> d{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::array<double, 2> lift{};
   std::array<bool, 2> swing{};
-  std::array<double, 2> early{};  // an early touchdown's blend towards its landing (0 none … 1 down)
+  // An early touchdown's blend towards its landing (0 none … 1 down). Its landing corners and
+  // time are not in the key: they stay fixed while a displacement lives, and a new one never
+  // starts on the call after another on the same foot with the same `to`.
+  std::array<double, 2> early{};
   bool operator==(const KnotRewrite& o) const {
     return d == o.d && lift == o.lift && swing == o.swing && early == o.early;
   }
@@ -139,7 +144,7 @@ struct RecoveryStepState {
   std::uint64_t steps = 0;                 // recovery steps taken since the reset
   std::uint64_t declined = 0;              // triggers where no step (or early touchdown) would have captured
   std::uint64_t early_touchdowns = 0;      // swings landed before the motion's touchdown
-  int early_calls = 0;
+  int early_calls = 0;                     // consecutive swing calls meeting the early trigger
   double last_outside_m = 0.0;             // ξ's distance outside the support at the last call (< 0 inside)
   dynamics::Data data;                     // scratch
   std::array<dynamics::ConfigVector, kMaxWindowKnots> q{};  // scratch: re-solved knots

@@ -502,7 +502,8 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenALandingOnTheMotionsClockCaptures) {
   EXPECT_EQ(narrow.f.state->early_touchdowns, 1u);
 }
 
-// The motion lands within early_lead_s + early_min_gain_s: landing early gains too little.
+// The motion lands 0.2 s from now, within early_lead_s + early_min_gain_s: landing early gains
+// too little (and a landing on the motion's clock within reach catches ξ): nothing changes.
 TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionLandsSoonAnyway) {
   EarlyTouchdown e(0.0);
   for (int i = 0; i < 5; ++i) {
@@ -510,6 +511,73 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionLandsSoonAnyway) {
     EXPECT_TRUE(e.f.window_unchanged()) << i;
   }
   EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+  // The control: the same state half a second earlier in the swing lands early.
+  EarlyTouchdown early(0.0);
+  for (int i = 0; i < 2; ++i) early.f.call(1.1 + kDt * i, early.velocity);
+  EXPECT_EQ(early.f.state->early_touchdowns, 1u);
+}
+
+// The plan anchor adds its offset to the window after this call: the early landing (chosen
+// on the measured state) has it taken off, so window + offset lands where the landing without
+// an offset does (the blend before it starts from the motion's sole, which the offset moves).
+TEST(RecoveryStep, AnEarlyLandingHasTheAnchorsOffsetTakenOff) {
+  const Vec2 offset(0.02, -0.01);
+  EarlyTouchdown a(0.0), b(0.0);
+  for (int i = 0; i < 2; ++i) {
+    a.f.call(1.1 + kDt * i, a.velocity);
+    b.f.call(1.1 + kDt * i, b.velocity, offset);
+  }
+  ASSERT_EQ(a.f.state->early_touchdowns, 1u);
+  ASSERT_EQ(b.f.state->early_touchdowns, 1u);
+  bool moved = false;
+  for (int k = 0; k < kKnots; ++k) {
+    const PlanKnot &ka = a.f.window->knots[k], &kb = b.f.window->knots[k];
+    if (!foot_in_contact(ka, kLeftFoot)) continue;  // the blend
+    for (int i = 0; i < kCornersPerFoot; ++i) {
+      const int c = kLeftFoot * kCornersPerFoot + i;
+      const Vec2 expected = ka.point_position_m.segment<2>(3 * c) - offset;
+      EXPECT_LT((kb.point_position_m.segment<2>(3 * c) - expected).norm(), 1e-9) << k;
+      moved = moved || (ka.point_position_m.segment<2>(3 * c) - a.f.untouched->knots[k].point_position_m.segment<2>(3 * c)).norm() > 2.0 * offset.norm();
+    }
+  }
+  EXPECT_TRUE(moved) << "the landing moved the foot by more than the offset: the comparison is not trivially met";
+}
+
+// After the motion's touchdown the early landing's displacement is held; a step of that foot
+// (pushed backwards in the double support after it) is an ordinary step: the foot leaves
+// contact over its swing and arcs lift_height_m up, from where it was held.
+TEST(RecoveryStep, AStepOfAFootHeldByAnEarlyTouchdownSwingsLikeAnyStep) {
+  EarlyTouchdown e(0.0);
+  Fixture& f = e.f;
+  f.call(1.1, e.velocity);
+  f.call(1.1 + kDt, e.velocity);
+  ASSERT_EQ(f.state->early_touchdowns, 1u);
+  const Vec2 held = f.state->foot[kLeftFoot].to;
+  // Both feet down after 1.8 s; ξ 2 cm behind the heels: the held left foot takes the step
+  // (2 cm: the left; 4 cm: the right, at the time of writing).
+  const Vec2 back = e.s.backwards(0.02);
+  f.call(2.0, back);
+  f.call(2.0 + kDt, back);
+  ASSERT_EQ(f.state->steps, 1u) << "declined " << f.state->declined;
+  const int swing = kLeftFoot;
+  ASSERT_GT(f.state->foot[swing].lift_ns, 1'900'000'000) << "the left foot must be the one that steps";
+  EXPECT_FALSE(f.state->foot[swing].early);
+  const hal::TimeNs lift = f.state->foot[swing].lift_ns, land = f.state->foot[swing].land_ns;
+  double apex = 0.0;
+  for (int k = 0; k < kKnots; ++k) {
+    const PlanKnot& knot = f.window->knots[k];
+    const bool in_swing = knot.stamp_ns >= lift && knot.stamp_ns < land;
+    EXPECT_EQ(foot_in_contact(knot, swing), !in_swing) << k;
+    const auto c = corners_of(knot);
+    for (int i = 0; i < kCornersPerFoot; ++i) {
+      const int ci = swing * kCornersPerFoot + i;
+      apex = std::max(apex, c[ci].z() - e.s.corner[ci].z());
+    }
+  }
+  EXPECT_NEAR(apex, f.config.lift_height_m, 2e-3);
+  // It swings from the early landing: the first knot still has the held displacement.
+  const auto c0 = corners_of(f.window->knots[0]);
+  EXPECT_LT((e.left_centre(c0) - e.left_centre(e.s.corner) - held).norm(), 2e-3);
 }
 
 // The knot cache through an early touchdown, its hold, the motion's touchdown and the return
