@@ -202,8 +202,9 @@ TEST(mocap_cli, BuiltInDanceTakesADuration) {
       << slurp(kOut + "_dclip.stderr");
 }
 
-// The closed-loop check: cmu_05_20 as retargeted falls in `kuavo simulate` (on carpet, seed 1,
-// at 12.1 s; on the floor too before the early touchdown); with one round the report lists the fall, the range of gestures scaled for it ([fall − 2 s, fall + 0.3 s],
+// The closed-loop check: cmu_05_20 as retargeted falls in `kuavo simulate` (at 72f410c on the
+// floor, seed 2, at 7.8 s: round 0's third run; before the early touchdown its first); with one
+// round the report lists the fall, the range of gestures scaled for it ([fall − 2 s, fall + 0.3 s],
 // the output clock) and the run after the repair. The in-process check must be what
 // `kuavo simulate` does: the last run's outcome is compared with `kuavo simulate` of the
 // written file on the same ground and seed, in its own process (bit-deterministic: equal).
