@@ -14,6 +14,17 @@
 namespace kuavo::test {
 namespace {
 
+// The MPC planner on the floor, pushed horizontally for 0.1 s from start_s.
+sim::MotionRunConfig pushed_mpc_run(double start_s, double impulse_Ns, double direction_deg) {
+  sim::MotionRunConfig cfg;
+  cfg.stack.planner = stack::PlannerKind::kMpc;
+  cfg.run.push.start_s = start_s;
+  cfg.run.push.duration_s = 0.1;
+  const double a = direction_deg * M_PI / 180.0;
+  cfg.run.push.force_N = sim::Vec3(std::cos(a), std::sin(a), 0.0) * impulse_Ns / 0.1;
+  return cfg;
+}
+
 sim::MotionSummary push_standing(double impulse_Ns, double direction_deg, bool recovery) {
   static auto plan = std::make_unique<planner::MotionPlan>();
   plan->rate_hz = 50.0;
@@ -21,13 +32,8 @@ sim::MotionSummary push_standing(double impulse_Ns, double direction_deg, bool r
   const dynamics::ConfigVector q0 = standing_configuration();
   for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = q0, plan->foot_contact[i] = {true, true};
   EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
-  sim::MotionRunConfig cfg;
-  cfg.stack.planner = stack::PlannerKind::kMpc;
+  sim::MotionRunConfig cfg = pushed_mpc_run(2.0, impulse_Ns, direction_deg);
   cfg.stack.recovery.enabled = recovery;
-  cfg.run.push.start_s = 2.0;
-  cfg.run.push.duration_s = 0.1;
-  const double a = direction_deg * M_PI / 180.0;
-  cfg.run.push.force_N = sim::Vec3(std::cos(a), std::sin(a), 0.0) * impulse_Ns / 0.1;
   return sim::run_motion(s45_robot(), *plan, cfg);
 }
 
@@ -84,13 +90,8 @@ sim::MotionSummary push_in_a_swing(double impulse_Ns, double direction_deg, bool
   gait.steps = 1;
   gait.swing_s = 0.7;
   EXPECT_EQ(planner::make_step_in_place(s45_robot(), standing_configuration(), gait, *plan), nullptr);
-  sim::MotionRunConfig cfg;
-  cfg.stack.planner = stack::PlannerKind::kMpc;
+  sim::MotionRunConfig cfg = pushed_mpc_run(2.05, impulse_Ns, direction_deg);
   cfg.stack.recovery.early_touchdown = early;
-  cfg.run.push.start_s = 2.05;
-  cfg.run.push.duration_s = 0.1;
-  const double a = direction_deg * M_PI / 180.0;
-  cfg.run.push.force_N = sim::Vec3(std::cos(a), std::sin(a), 0.0) * impulse_Ns / 0.1;
   return sim::run_motion(s45_robot(), *plan, cfg);
 }
 
