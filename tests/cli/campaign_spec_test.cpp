@@ -125,6 +125,33 @@ TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
   EXPECT_FALSE(cli::draw_push(spec, 1, 2.0, d));  // window [1, 0.9]: empty
 }
 
+// The closed-loop check's push (kuavo retarget --verify-show-push) is the show conditions'
+// push with another impulse: the same time and direction as `kuavo campaign` draws for that
+// seed from the spec written out here (0.1 s, 1 s clear of either end), the force scaled.
+TEST(CampaignSpec, ShowPushIsTheCampaignsDrawWithTheGivenImpulse) {
+  cli::PushSpec spec;
+  spec.enabled = true;
+  spec.impulse_Ns = 15.0;
+  spec.duration_s = 0.1;
+  spec.start_after_s = 1.0;
+  spec.end_before_s = 1.0;
+  for (std::uint64_t seed = 1001; seed <= 1016; ++seed) {
+    cli::PushDraw expected, got;
+    cli::PushSpec used;
+    ASSERT_TRUE(cli::draw_push(spec, seed, 14.7, expected));
+    ASSERT_TRUE(cli::draw_show_push(seed, 14.7, 15.0, got, used));
+    EXPECT_EQ(got.start_s, expected.start_s) << seed;
+    EXPECT_EQ(got.direction_rad, expected.direction_rad) << seed;
+    EXPECT_DOUBLE_EQ(got.force_N, 150.0);
+    EXPECT_DOUBLE_EQ(used.duration_s, 0.1);
+  }
+  cli::PushDraw d;
+  cli::PushSpec u;
+  EXPECT_FALSE(cli::draw_show_push(1001, 14.7, 0.0, d, u));   // no push asked for
+  EXPECT_FALSE(cli::draw_show_push(1001, 14.7, std::nan(""), d, u));
+  EXPECT_FALSE(cli::draw_show_push(1001, 2.0, 10.0, d, u));  // too short for the window
+}
+
 TEST(CampaignSpec, MotionNamesAreFileStems) {
   EXPECT_EQ(cli::motion_name("dance"), "dance");
   EXPECT_EQ(cli::motion_name("/a/b/salsa.motion"), "salsa");

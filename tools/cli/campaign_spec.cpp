@@ -166,6 +166,16 @@ bool draw_push(const PushSpec& spec, std::uint64_t seed, double run_length_s, Pu
   return true;
 }
 
+bool draw_show_push(std::uint64_t seed, double run_length_s, double impulse_Ns, PushDraw& out, PushSpec& spec_out) {
+  if (!(impulse_Ns > 0.0) || !std::isfinite(impulse_Ns)) return false;
+  CampaignSpec show;
+  std::string error;
+  if (!parse_campaign_spec(kShowConditionsSpec, show, error)) return false;
+  spec_out = show.push;
+  spec_out.impulse_Ns = impulse_Ns;
+  return draw_push(spec_out, seed, run_length_s, out);
+}
+
 void wilson_interval_95(int falls, int runs, double& lo, double& hi) {
   lo = 0.0;
   hi = 1.0;

@@ -74,6 +74,12 @@ struct PushDraw {
 // false when the window [start_after, length − end_before] is empty.
 bool draw_push(const PushSpec& spec, std::uint64_t seed, double run_length_s, PushDraw& out);
 
+// The show conditions' push (kShowConditionsSpec's "push") with impulse_Ns instead of its own,
+// drawn for `seed` as draw_push draws it; its duration in spec_out. false when impulse_Ns is
+// not positive or the window is empty. The closed-loop check of `kuavo retarget` pushes its
+// model-error runs with it (--verify-show-push).
+bool draw_show_push(std::uint64_t seed, double run_length_s, double impulse_Ns, PushDraw& out, PushSpec& spec_out);
+
 // Wilson score interval for `falls` out of `runs` at 95 % (z = 1.959964): unlike the
 // normal approximation it stays inside [0, 1] and is not [0, 0] at zero falls.
 void wilson_interval_95(int falls, int runs, double& lo, double& hi);

@@ -16,6 +16,7 @@
 #include "firmware/sitl/sitl_run.h"
 #include "sim/motion_loop.h"
 #include "sim/perturbation.h"
+#include "tools/cli/campaign_spec.h"
 #include "tools/cli/retarget_figures.h"
 #include "tools/mocap/dynamics_check.h"
 #include "tools/mocap/motion_file.h"
@@ -24,6 +25,12 @@
 
 namespace kuavo::cli {
 namespace {
+
+std::string push_time(double start_s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f s", start_s);
+  return buf;
+}
 
 using nlohmann::ordered_json;
 
@@ -138,6 +145,17 @@ bool verification_range(double fell_at_s, int lead_frames, int dance_frames, dou
 }
 
 }  // namespace
+
+bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim::Push& out) {
+  out = sim::Push{};
+  PushDraw draw;
+  PushSpec spec;
+  if (!draw_show_push(seed, run_length_s, impulse_Ns, draw, spec)) return false;
+  out.start_s = draw.start_s;
+  out.duration_s = spec.duration_s;
+  out.force_N = dynamics::Vec3(draw.force_N * std::cos(draw.direction_rad), draw.force_N * std::sin(draw.direction_rad), 0.0);
+  return true;
+}
 
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
@@ -255,6 +273,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       bool show_errors = false;  // the plant with the show set's model errors drawn from seed
     };
     std::vector<Check> checks;
+    const double run_length_s = planner::motion_plan_duration_s(*plan) + sim::MotionRunConfig{}.settle_s;
     for (const std::uint64_t seed : options.verify_seeds) {
       for (const sim::GroundParams& ground : options.verify_grounds) checks.push_back({ground, sim::Engine::kSimbody, seed});
     }
@@ -292,7 +311,10 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
-        if (check.show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
+        if (check.show_errors) {
+          cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
+          check_push(check.seed, run_length_s, options.verify_show_push_Ns, cfg.run.push);
+        }
         runs[i] = sim::run_motion(robot, *plan, cfg);
       } catch (...) {
         failures[i] = std::current_exception();
@@ -358,7 +380,14 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},
                             {"seed", seed}};
+      sim::Push push;
+      const bool pushed = show_errors && check_push(seed, run_length_s, options.verify_show_push_Ns, push);
       if (show_errors) entry["perturbation"] = show_set.name;
+      if (pushed) {
+        entry["push"] = {{"start_s", push.start_s},
+                         {"direction_deg", std::atan2(push.force_N.y(), push.force_N.x()) * 180.0 / M_PI},
+                         {"impulse_Ns", push.force_N.norm() * push.duration_s}};
+      }
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
         // without it, and says so.
@@ -376,6 +405,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       if (summary.run.fell) {
         fell_at_s = summary.run.fell_at_s;
         fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo"
+                  : pushed       ? std::string(ground.name) + " with the show set's model errors and a push at " +
+                                 push_time(push.start_s)
                   : show_errors                  ? std::string(ground.name) + " with the show set's model errors"
                                                  : std::string(ground.name);
         fell_seed = seed;
