@@ -404,11 +404,14 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       verification_runs.push_back(entry);
       if (summary.run.fell) {
         fell_at_s = summary.run.fell_at_s;
-        fell_on = engine == sim::Engine::kMujoco ? std::string(ground.name) + " in MuJoCo"
-                  : pushed       ? std::string(ground.name) + " with the show set's model errors and a push at " +
-                                 push_time(push.start_s)
-                  : show_errors                  ? std::string(ground.name) + " with the show set's model errors"
-                                                 : std::string(ground.name);
+        fell_on = std::string(ground.name);
+        if (engine == sim::Engine::kMujoco) {
+          fell_on += " in MuJoCo";
+        } else if (pushed) {
+          fell_on += " with the show set's model errors and a push at " + push_time(push.start_s);
+        } else if (show_errors) {
+          fell_on += " with the show set's model errors";
+        }
         fell_seed = seed;
         break;
       }
