@@ -386,7 +386,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       if (pushed) {
         entry["push"] = {{"start_s", push.start_s},
                          {"direction_deg", std::atan2(push.force_N.y(), push.force_N.x()) * 180.0 / M_PI},
-                         {"impulse_Ns", push.force_N.norm() * push.duration_s}};
+                         {"impulse_Ns", options.verify_show_push_Ns}};
       }
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
