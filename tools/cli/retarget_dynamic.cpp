@@ -271,6 +271,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       std::uint64_t seed;
       bool firmware = false;
       bool show_errors = false;  // the plant with the show set's model errors drawn from seed
+      sim::Push push{};          // and the push check_push draws from seed (duration 0: none)
     };
     std::vector<Check> checks;
     const double run_length_s = planner::motion_plan_duration_s(*plan) + sim::MotionRunConfig{}.settle_s;
@@ -286,7 +287,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       }
     }
     for (const std::uint64_t seed : options.verify_show_seeds) {
-      checks.push_back({sim::kCarpet, sim::Engine::kSimbody, seed, false, true});
+      Check check{sim::kCarpet, sim::Engine::kSimbody, seed, false, true};
+      check_push(seed, run_length_s, options.verify_show_push_Ns, check.push);
+      checks.push_back(check);
     }
     std::uint64_t fell_seed = 0;
     int passed = 0;  // runs of this round that danced (read in order, up to the first that fell)
@@ -311,10 +314,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
-        if (check.show_errors) {
-          cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
-          check_push(check.seed, run_length_s, options.verify_show_push_Ns, cfg.run.push);
-        }
+        if (check.show_errors) cfg.perturbation = sim::draw_perturbation(robot, show_set, check.seed);
+        cfg.run.push = check.push;
         runs[i] = sim::run_motion(robot, *plan, cfg);
       } catch (...) {
         failures[i] = std::current_exception();
@@ -336,7 +337,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       simulated_to = end;
     };
     for (std::size_t index = 0; index < checks.size(); ++index) {
-      const auto& [ground, engine, seed, firmware, show_errors] = checks[index];
+      const auto& [ground, engine, seed, firmware, show_errors, push] = checks[index];
+      const bool pushed = push.duration_s > 0.0;
       if (firmware) {
         firmware::sitl::SitlConfig fw;
         fw.loop.legs = firmware::sitl::kImageLegBinding;
@@ -380,8 +382,6 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},
                             {"seed", seed}};
-      sim::Push push;
-      const bool pushed = show_errors && check_push(seed, run_length_s, options.verify_show_push_Ns, push);
       if (show_errors) entry["perturbation"] = show_set.name;
       if (pushed) {
         entry["push"] = {{"start_s", push.start_s},
