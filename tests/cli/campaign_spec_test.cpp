@@ -99,13 +99,19 @@ TEST(CampaignSpec, RejectsPushesAndRunsSimulateRefuses) {
   EXPECT_NE(error.find("600 s"), std::string::npos) << error;
 }
 
-TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
+// The show conditions' push written out: 0.1 s, 1 s clear of either end.
+cli::PushSpec push_spec(double impulse_Ns) {
   cli::PushSpec spec;
   spec.enabled = true;
-  spec.impulse_Ns = 10.0;
+  spec.impulse_Ns = impulse_Ns;
   spec.duration_s = 0.1;
   spec.start_after_s = 1.0;
   spec.end_before_s = 1.0;
+  return spec;
+}
+
+TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
+  const cli::PushSpec spec = push_spec(10.0);
   double min_dir = 10.0, max_dir = -10.0;
   for (std::uint64_t seed = 1; seed <= 200; ++seed) {
     cli::PushDraw a, b;
@@ -129,12 +135,7 @@ TEST(CampaignSpec, PushDrawIsSeededAndInsideTheWindow) {
 // push with another impulse: the same time and direction as `kuavo campaign` draws for that
 // seed from the spec written out here (0.1 s, 1 s clear of either end), the force scaled.
 TEST(CampaignSpec, ShowPushIsTheCampaignsDrawWithTheGivenImpulse) {
-  cli::PushSpec spec;
-  spec.enabled = true;
-  spec.impulse_Ns = 15.0;
-  spec.duration_s = 0.1;
-  spec.start_after_s = 1.0;
-  spec.end_before_s = 1.0;
+  const cli::PushSpec spec = push_spec(15.0);
   for (std::uint64_t seed = 1001; seed <= 1016; ++seed) {
     cli::PushDraw expected, got;
     cli::PushSpec used;
