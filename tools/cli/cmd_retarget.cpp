@@ -359,7 +359,7 @@ int run(int argc, char** argv) {
     if (v["danced"].is_boolean() && !v["danced"].get<bool>()) {
       nlohmann::ordered_json last = v["runs"].back();  // the kept round's fall
       for (const auto& run : v["runs"]) {
-        if (run["round"] == v["kept_round"] && run.value("fell", false)) last = run;
+        if (run["round"] == v["kept_round"] && run.value("fell", false) && !run.value("given_up", false)) last = run;
       }
       std::fprintf(stderr,
                    "kuavo retarget: warning: the motion still falls in the closed-loop simulation after %d round(s) "
@@ -367,6 +367,16 @@ int run(int argc, char** argv) {
                    "\"verification\" lists every run\n",
                    v["rounds"].get<int>(), v["kept_round"].get<int>(), last["ground"].get<std::string>().c_str(),
                    static_cast<unsigned long long>(last["seed"].get<std::uint64_t>()), last["fell_at_s"].get<double>());
+    }
+    if (!v["given_up_seeds"].empty()) {
+      std::string seeds;
+      for (const auto& seed : v["given_up_seeds"]) {
+        seeds += (seeds.empty() ? "" : ", ") + std::to_string(seed.get<std::uint64_t>());
+      }
+      std::fprintf(stderr,
+                   "kuavo retarget: note: the closed-loop check gave up %zu pushed run(s) (seed %s): each fell after "
+                   "its push where the only repair left was holding both feet down over the dance's steps\n",
+                   v["given_up_seeds"].size(), seeds.c_str());
     }
   }
 

@@ -1,0 +1,39 @@
+// The closed-loop check's repair ladder (`kuavo retarget`'s verification, retarget_dynamic.cpp):
+// where the retargeted motion falls in the check, which frames are repaired and how, and when
+// the check gives up a pushed run instead.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+namespace kuavo::cli {
+
+struct VerifyLadder {
+  double gain = 0.5;      // the first fall in a range scales its gestures by this
+  double before_s = 2.0;  // the range: [fall − before_s, fall + after_s)
+  double after_s = 0.3;
+};
+
+// A fall's repair: the dance-clock frames [a, b) = [fall − before_s, fall + after_s) within
+// the dance, scaled by gain, or by 0 and with calm steps (mocap::RepairConfig::calm_*) where a
+// range of an earlier round overlaps, and with both feet held down over it where two do.
+struct VerifyRange {
+  int a = 0, b = 0;
+  double gain = 1.0;
+  bool calm_steps = false;  // a second fall there: calm steps too
+  bool hold = false;        // a third: both feet down over the range
+};
+
+// The repair of a fall at fell_at_s (the output motion's clock, lead_frames of lead-in before
+// the dance's dance_frames); its range is appended to `scaled` (the earlier rounds').
+// false if nothing of the dance lies there (a fall in the lead-in or the tail).
+bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz, const VerifyLadder& ladder,
+                        std::vector<std::pair<int, int>>& scaled, VerifyRange& out);
+
+// Whether the check gives up a pushed run that fell at fell_at_s: the fall came after the
+// push (push_start_s) and the ladder's next rung there is holding both feet down. `scaled` is
+// left as it is.
+bool gives_up_pushed_run(double push_start_s, double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
+                         const VerifyLadder& ladder, const std::vector<std::pair<int, int>>& scaled);
+
+}  // namespace kuavo::cli
