@@ -27,7 +27,7 @@
 // the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
 // the show set's model errors (--verify-show SEEDS, 0…16, default 12: seeds 1001…), each with one
-// push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 0: none); where it falls,
+// push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there, side by side) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
