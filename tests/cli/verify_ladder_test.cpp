@@ -3,7 +3,7 @@
 // its range [450 − 200, 450 + 30) = [250, 480); a first fall there scales by the gain, a
 // second (an overlapping range before) takes the gestures out with calm steps, a third holds
 // both feet down. A pushed run is given up exactly where that third rung would come after its
-// push.
+// push, at most before_s (the range's lead) after it.
 #include <gtest/gtest.h>
 
 #include "tools/cli/verify_ladder.h"
@@ -33,6 +33,8 @@ TEST(VerifyLadder, RangeAndRungs) {
 
   ASSERT_TRUE(verification_range(5.2, kLead, kDance, kRate, ladder, scaled, r));  // overlaps both
   EXPECT_TRUE(r.hold);
+  EXPECT_EQ(r.gain, 0.0);
+  EXPECT_TRUE(r.calm_steps);
 
   // Elsewhere the ladder starts again; at the dance's ends the range is cut; in the lead-in
   // there is nothing to repair.
@@ -42,6 +44,9 @@ TEST(VerifyLadder, RangeAndRungs) {
   ASSERT_TRUE(verification_range(1.0, kLead, kDance, kRate, ladder, scaled, r));
   EXPECT_EQ(r.a, 0);
   EXPECT_EQ(r.b, 80);
+  ASSERT_TRUE(verification_range(10.4, kLead, kDance, kRate, ladder, scaled, r));  // dance frame 990
+  EXPECT_EQ(r.a, 790);
+  EXPECT_EQ(r.b, 1000);
   EXPECT_FALSE(verification_range(0.1, kLead, kDance, kRate, ladder, scaled, r));
 }
 
@@ -53,9 +58,13 @@ TEST(VerifyLadder, PushedRunGivenUpOnlyAtTheHoldAfterItsPush) {
   scaled.emplace_back(300, 530);
   // Two: the next would hold both feet down.
   EXPECT_TRUE(gives_up_pushed_run(4.0, 5.0, kLead, kDance, kRate, ladder, scaled));
-  EXPECT_EQ(scaled.size(), 2u);  // left as it was
-  // The push still to come: the model errors felled it, the ladder goes on as for any fall.
+  EXPECT_TRUE(gives_up_pushed_run(3.0, 5.0, kLead, kDance, kRate, ladder, scaled));  // 2 s before: in range
+  EXPECT_EQ(scaled, (std::vector<std::pair<int, int>>{{250, 480}, {300, 530}}));     // left as it was
+  // The push still to come (or at the fall's instant): the model errors felled it, the ladder
+  // goes on as for any fall. A push more than before_s earlier did not tip it over either.
   EXPECT_FALSE(gives_up_pushed_run(6.0, 5.0, kLead, kDance, kRate, ladder, scaled));
+  EXPECT_FALSE(gives_up_pushed_run(5.0, 5.0, kLead, kDance, kRate, ladder, scaled));
+  EXPECT_FALSE(gives_up_pushed_run(2.9, 5.0, kLead, kDance, kRate, ladder, scaled));
   // A fall away from both ranges (10 s: [750, 980)): the first rung.
   EXPECT_FALSE(gives_up_pushed_run(4.0, 10.0, kLead, kDance, kRate, ladder, scaled));
 }

@@ -297,9 +297,18 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   const auto& last = runs[kept].back();
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
   const bool fw = last["engine"] == "firmware";
+  std::string push;  // a model-error run's push (--verify-show-push), replayed with its exact force
+  if (last.contains("push")) {
+    const auto& p = last["push"];
+    char arg[160];
+    std::snprintf(arg, sizeof arg, " --push %.17g:%.17g,%.17g,%.17g:%.17g", p["start_s"].get<double>(),
+                  p["force_N"][0].get<double>(), p["force_N"][1].get<double>(), p["force_N"][2].get<double>(),
+                  p["duration_s"].get<double>());
+    push = arg;
+  }
   const std::string where = " --ground " + last["ground"].get<std::string>() + " --seed " +
                             std::to_string(last["seed"].get<std::uint64_t>()) +
-                            (last.contains("perturbation") ? " --perturb show" : "") + " --summary " + kOut +
+                            (last.contains("perturbation") ? " --perturb show" : "") + push + " --summary " + kOut +
                             "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
                              : kBin + " simulate " + kOut + "_ver.motion --quiet --engine " + last["engine"].get<std::string>() + where;

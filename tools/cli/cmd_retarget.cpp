@@ -368,13 +368,13 @@ int run(int argc, char** argv) {
                    v["rounds"].get<int>(), v["kept_round"].get<int>(), last["ground"].get<std::string>().c_str(),
                    static_cast<unsigned long long>(last["seed"].get<std::uint64_t>()), last["fell_at_s"].get<double>());
     }
-    if (!v["given_up_seeds"].empty()) {
+    if (!quiet && !v["given_up_seeds"].empty()) {
       std::string seeds;
       for (const auto& seed : v["given_up_seeds"]) {
         seeds += (seeds.empty() ? "" : ", ") + std::to_string(seed.get<std::uint64_t>());
       }
       std::fprintf(stderr,
-                   "kuavo retarget: note: the closed-loop check gave up %zu pushed run(s) (seed %s): each fell after "
+                   "kuavo retarget: note: the closed-loop check gave up %zu pushed run(s) (seed(s) %s): each fell after "
                    "its push where the only repair left was holding both feet down over the dance's steps\n",
                    v["given_up_seeds"].size(), seeds.c_str());
     }

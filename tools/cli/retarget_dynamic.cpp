@@ -215,9 +215,10 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   double verify_sim_s = 0.0;
   std::vector<std::pair<int, int>> verify_ranges;  // dance-clock frames scaled so far
   bool calm_everywhere = false;
-  // Pushed runs the check gave up on: a fall after the push where the ladder's next rung is
-  // holding both feet down. The steps stay; the run is listed and left out of later rounds.
-  std::vector<std::uint64_t> given_up_seeds;
+  // Pushed runs the check gave up on: a fall within verify_before_s after the push where the
+  // ladder's next rung is holding both feet down (gives_up_pushed_run). The steps stay; the run
+  // is listed and left out of later rounds.
+  std::vector<std::pair<std::uint64_t, int>> given_up;  // seed, round
   const VerifyLadder ladder{options.verify_gain, options.verify_before_s, options.verify_after_s};
   sim::PerturbationSet show_set;
   sim::perturbation_set_by_name("show", show_set);
@@ -260,7 +261,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       }
     }
     for (const std::uint64_t seed : options.verify_show_seeds) {
-      if (std::find(given_up_seeds.begin(), given_up_seeds.end(), seed) != given_up_seeds.end()) continue;
+      if (std::any_of(given_up.begin(), given_up.end(), [&](const auto& g) { return g.first == seed; })) continue;
       Check check{sim::kCarpet, sim::Engine::kSimbody, seed, false, true};
       check_push(seed, run_length_s, options.verify_show_push_Ns, check.push);
       checks.push_back(check);
@@ -271,8 +272,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     // one thread each (a logical CPU each at most): each run is its own plant, controller and
     // workspaces, nothing shared but the read-only plan and model. The firmware loop stays out
     // and runs alone: it has static workspaces and toggles Eigen's process-wide malloc guard.
-    // The results are read in the list's order and a round still stops at its first fall, so
-    // the check decides exactly as one run after another does. What a batch wastes: its runs
+    // The results are read in the list's order and a round still stops at its first fall (a
+    // pushed run given up does not stop it), so the check decides exactly as one run after
+    // another does. What a batch wastes: its runs
     // after that fall, danced to their end (in a round that falls, up to a whole run per CPU).
     // An exception in a run is kept and rethrown when the loop reads that run (as it would have
     // surfaced there one run after another), so it reaches the CLI's handler, not terminate.
@@ -360,7 +362,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       if (pushed) {
         entry["push"] = {{"start_s", push.start_s},
                          {"direction_deg", std::atan2(push.force_N.y(), push.force_N.x()) * 180.0 / M_PI},
-                         {"impulse_Ns", options.verify_show_push_Ns}};
+                         {"impulse_Ns", options.verify_show_push_Ns},
+                         {"force_N", {push.force_N.x(), push.force_N.y(), push.force_N.z()}},  // to replay it exactly
+                         {"duration_s", push.duration_s}};
       }
       if (!summary.run.ok && engine == sim::Engine::kMujoco) {
         // Leju's MJCF not where the build put it, or MuJoCo refusing it: the check goes on
@@ -376,16 +380,16 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       entry["fell"] = summary.run.fell;
       entry["fell_at_s"] = summary.run.fell ? summary.run.fell_at_s : -1.0;
       if (summary.run.fell && pushed) {
-        // Tipped over by its push where two earlier rounds' repairs already lie (the gestures
-        // scaled, then taken out): the last rung, both feet down, would buy this push with
-        // the dance's steps (cmu_05_20: 3 of its 7 for the same show campaign, 1 fall in 60
-        // either way). A standing robot is not the dance; the check gives this run up and
-        // goes on.
+        // Tipped over by its push (within the range the fall would repair) where two earlier
+        // rounds' repairs already lie (the gestures scaled, then taken out): the last rung,
+        // both feet down, would buy this push with the dance's steps (cmu_05_20: 3 of its 7
+        // for the same show campaign, 1 fall in 60 either way). A standing robot is not the
+        // dance; the check gives this run up and goes on.
         if (gives_up_pushed_run(push.start_s, summary.run.fell_at_s, result.repaired.lead_frames,
                                 result.repaired.dance_frames, rate, ladder, verify_ranges)) {
           entry["given_up"] = true;
           verification_runs.push_back(entry);
-          given_up_seeds.push_back(seed);
+          given_up.emplace_back(seed, verify_round);
           continue;
         }
       }
@@ -408,11 +412,13 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       ++passed;
     }
     danced = fell_at_s < 0.0;
-    // The best round so far: more runs danced, then the later fall. A later round's repair can
-    // make things worse elsewhere (cmu_05_07: a round that danced the floor, then carpet's
-    // repair fell on the floor at 8.5 s in every later round); the output is the best round's.
+    // The best round so far: one that danced (every run not given up), else more runs danced,
+    // then the later fall. A later round's repair can make things worse elsewhere (cmu_05_07: a
+    // round that danced the floor, then carpet's repair fell on the floor at 8.5 s in every later
+    // round); the output is the best round's. A round that danced leaves out the runs given up,
+    // so it may count fewer passes than one that fell in its last run: it still wins.
     const double reached = danced ? std::numeric_limits<double>::infinity() : fell_at_s;
-    if (verify_round == 0 || passed > best_passed || (passed == best_passed && reached > best_reached)) {
+    if (verify_round == 0 || danced || passed > best_passed || (passed == best_passed && reached > best_reached)) {
       best_round = verify_round, best_passed = passed, best_reached = reached;
       best = result;
       best_attenuations = attenuations.size();
@@ -535,6 +541,10 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                        {"com_path_m", paths(a, b)}});
   }
   d["repairs"] = repairs;
+  std::vector<std::uint64_t> given_up_seeds;  // those the written round's check left out
+  for (const auto& [seed, round] : given_up) {
+    if (round <= best_round) given_up_seeds.push_back(seed);
+  }
   d["verification"] = {{"rounds", verify_round},
                        {"kept_round", best_round},
                        {"given_up_seeds", given_up_seeds},

@@ -28,7 +28,8 @@ bool verification_range(double fell_at_s, int lead_frames, int dance_frames, dou
 
 bool gives_up_pushed_run(double push_start_s, double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
                          const VerifyLadder& ladder, const std::vector<std::pair<int, int>>& scaled) {
-  if (!(push_start_s < fell_at_s)) return false;  // the model errors alone: the ladder as for any fall
+  // The model errors alone (the push still to come), or a push long before: the ladder as for any fall.
+  if (!(push_start_s < fell_at_s && push_start_s >= fell_at_s - ladder.before_s)) return false;
   std::vector<std::pair<int, int>> trial = scaled;
   VerifyRange next;
   return verification_range(fell_at_s, lead_frames, dance_frames, rate_hz, ladder, trial, next) && next.hold;

@@ -30,9 +30,10 @@ struct VerifyRange {
 bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz, const VerifyLadder& ladder,
                         std::vector<std::pair<int, int>>& scaled, VerifyRange& out);
 
-// Whether the check gives up a pushed run that fell at fell_at_s: the fall came after the
-// push (push_start_s) and the ladder's next rung there is holding both feet down. `scaled` is
-// left as it is.
+// Whether the check gives up a pushed run that fell at fell_at_s: the push (push_start_s) came
+// before the fall and within the range the fall would repair (at most before_s before it: the
+// push tipped it over, not the motion seconds later), and the ladder's next rung there is
+// holding both feet down. `scaled` is left as it is.
 bool gives_up_pushed_run(double push_start_s, double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
                          const VerifyLadder& ladder, const std::vector<std::pair<int, int>>& scaled);
 
