@@ -215,11 +215,11 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   double verify_sim_s = 0.0;
   std::vector<std::pair<int, int>> verify_ranges;  // dance-clock frames scaled so far
   bool calm_everywhere = false;
-  // Pushed runs the check gave up on: a fall within verify_before_s after the push where the
-  // ladder's next rung is holding both feet down (gives_up_pushed_run). The steps stay; the run
-  // is listed and left out of later rounds.
+  // Pushed runs the check gave up on: a fall within the ladder's before_s after the push where
+  // its next rung is holding both feet down (gives_up_pushed_run). The steps stay; the run is
+  // listed and left out of later rounds.
   std::vector<std::pair<std::uint64_t, int>> given_up;  // seed, round
-  const VerifyLadder ladder{options.verify_gain, options.verify_before_s, options.verify_after_s};
+  const VerifyLadder& ladder = options.verify_ladder;
   sim::PerturbationSet show_set;
   sim::perturbation_set_by_name("show", show_set);
   int best_round = -1, best_passed = 0;
@@ -274,8 +274,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     // and runs alone: it has static workspaces and toggles Eigen's process-wide malloc guard.
     // The results are read in the list's order and a round still stops at its first fall (a
     // pushed run given up does not stop it), so the check decides exactly as one run after
-    // another does. What a batch wastes: its runs
-    // after that fall, danced to their end (in a round that falls, up to a whole run per CPU).
+    // another does. What a batch wastes: its runs after that fall, danced to their end (in a
+    // round that falls, up to a whole run per CPU).
     // An exception in a run is kept and rethrown when the loop reads that run (as it would have
     // surfaced there one run after another), so it reaches the CLI's handler, not terminate.
     std::vector<sim::MotionSummary> runs(checks.size());

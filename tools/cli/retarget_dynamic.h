@@ -11,6 +11,7 @@
 
 #include "sim/ground_contact.h"
 #include "sim/plant.h"
+#include "tools/cli/verify_ladder.h"
 #include "tools/mocap/dynamic_retarget.h"
 #include "tools/mocap/feasibility_repair.h"
 #include "tools/mocap/human_targets.h"
@@ -35,8 +36,8 @@ struct DynamicStageOptions {
   // danced in the simulator by the online stack on each of verify_grounds with each of
   // verify_seeds (the sensor noise's seed), as `kuavo simulate MOTION` dances it, then in
   // MuJoCo on the floor (verify_mujoco; seed verify_seeds[0]). Where
-  // it falls, the gestures over [fall − verify_before_s, fall + verify_after_s] are scaled by
-  // verify_gain about their 1 s average
+  // it falls, the gestures over [fall − before_s, fall + after_s] are scaled by the gain
+  // (verify_ladder) about their 1 s average
   // and the motion optimized again; a second fall in a scaled range takes the gestures there
   // out (gain 0) and makes the whole dance take calm steps (RepairConfig::calm_*); a third
   // holds both feet down over the range, side by side (RepairOverride::square_stance; the
@@ -93,9 +94,7 @@ struct DynamicStageOptions {
   // three clips the show campaign falls 12 times in 180 instead of 15, for 3 and 1 points of
   // CoM path (cmu_05_07, cmu_05_20) and two to three more rounds of the check there.
   double verify_show_push_Ns = 10.0;
-  double verify_gain = 0.5;
-  double verify_before_s = 2.0;
-  double verify_after_s = 0.3;
+  VerifyLadder verify_ladder;  // the repair's gain and range about a fall (verify_ladder.h)
   std::string csv_path;   // the dynamic trajectory, "" = none
   std::string plots_dir;  // Fig. 4 / 5 SVGs (retarget_figures.h), "" = none; the directory must exist
 };
