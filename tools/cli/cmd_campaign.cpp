@@ -1,4 +1,4 @@
-// kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE]
+// kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--attribute]
 // kuavo campaign --example
 // A matrix of motions × grounds × perturbation sets × seeds (campaign_spec.h), each run its
 // own `kuavo simulate` process with its seed, the job list run by GNU parallel (all cores
@@ -8,7 +8,9 @@
 // order, no wall-clock figures: the same campaign gives the same table) and
 // DIR/summary.json (runs, falls, per motion the fall rate's 95 % Wilson interval). A run
 // that produced no summary or whose simulation failed counts as a fall (conservative) and
-// is also counted in "sim_failures".
+// is also counted in "sim_failures". --attribute runs each fall that had both a push and
+// model errors again with each alone (DIR/attribution/, DIR/attribution.csv, and per motion
+// "fall_causes" in summary.json): whether the push or the errors topple the robot.
 #include <sys/resource.h>
 
 #include <cmath>
@@ -51,7 +53,7 @@ struct Motion {
 };
 
 struct Run {
-  std::string id, motion, ground, perturbation, perturbation_arg;
+  std::string id, motion, motion_path, ground, perturbation, perturbation_arg;
   std::uint64_t seed = 0;
   bool pushed = false;
   PushDraw push;
@@ -83,13 +85,30 @@ double number_or(const nlohmann::json& j, const char* key, double fallback) {
   return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
 }
 
+// A run's summary: whether it simulated to its end (ok) and whether the robot fell there.
+struct Outcome {
+  bool parsed = false, ok = false, fell = false;
+  double fell_at_s = -1.0;
+};
+Outcome read_outcome(const fs::path& summary_path) {
+  Outcome o;
+  bool have = false;
+  const std::string text = read_file(summary_path.string(), have);
+  const nlohmann::json s = have ? nlohmann::json::parse(text, nullptr, false) : nlohmann::json();
+  o.parsed = have && !s.is_discarded() && s.is_object();
+  o.ok = o.parsed && s.value("ok", false);
+  o.fell = o.parsed && s.value("fell", false);
+  o.fell_at_s = o.parsed ? number_or(s, "fell_at_s", -1.0) : -1.0;
+  return o;
+}
+
 }  // namespace
 
 int run_campaign(int argc, char** argv) {
   std::string out_dir = "campaign", sshloginfile, jobs = "100%";
   std::vector<std::string> specs;
   long long seeds_override = 0, jobs_n = 0;
-  bool example = false, quiet = false;
+  bool example = false, quiet = false, attribute = false;
   constexpr args::ModeMask kRun = 1, kExample = 2;
   args::Parser p("kuavo campaign");
   p.positionals("SPEC.json", &specs, 1);
@@ -100,6 +119,7 @@ int run_campaign(int argc, char** argv) {
   p.integer("--jobs", "N", 1, 4096, "jobs", &jobs_n).modes = kRun;
   p.input_file("--sshloginfile", "FILE", &sshloginfile).modes = kRun;
   p.flag("--quiet", &quiet).modes = kRun;
+  p.flag("--attribute", &attribute).modes = kRun;
   if (const int code = parse_command_line(p, argc, argv, "campaign"); code >= 0) return code;
   if (!p.refuse_inapplicable(example ? kExample : kRun, example ? "--example" : "a campaign run")) {
     std::fprintf(stderr, "%s\n", p.error().c_str());
@@ -184,6 +204,47 @@ int run_campaign(int argc, char** argv) {
     if (p != "none" && p != "show") p = fs::absolute(p).string();  // remote machines see absolute paths
   }
 
+  // The `kuavo simulate` of a run, its summary to BASE.json (written as .part, renamed when
+  // done). Without `errors` the plant is the controller's model (--perturb none, same
+  // seed); without `push`, no push: the two halves of a fall's attribution (--attribute).
+  const auto simulate_command = [&](const Run& r, bool errors, bool push, const std::string& base) {
+    std::string cmd = quote(self) + " simulate " + quote(r.motion_path) + " --planner " + spec.planner + " --ground " +
+                      r.ground + " --perturb " + quote(errors ? r.perturbation_arg : "none") + " --seed " +
+                      std::to_string(r.seed);
+    if (errors) cmd += " --perturb-seed " + std::to_string(r.seed);
+    if (spec.liftoff_hold) cmd += " --liftoff-hold on";
+    if (spec.plan_anchor) cmd += *spec.plan_anchor ? " --plan-anchor on" : " --plan-anchor off";
+    if (spec.plan_anchor_home) {
+      char h[64];
+      std::snprintf(h, sizeof h, " --plan-anchor-home %.6g", *spec.plan_anchor_home);
+      cmd += h;
+    }
+    if (spec.duration_s > 0.0) {
+      char d[64];
+      std::snprintf(d, sizeof d, " --duration %.6g", spec.duration_s);
+      cmd += d;
+    }
+    if (push && r.pushed) {
+      char p_arg[128];
+      std::snprintf(p_arg, sizeof p_arg, " --push %.3f:%.6f,%.6f,0:%.6g", r.push.start_s,
+                    r.push.force_N * std::cos(r.push.direction_rad), r.push.force_N * std::sin(r.push.direction_rad),
+                    spec.push.duration_s);
+      cmd += p_arg;
+    }
+    return cmd + " --summary " + quote(base + ".json.part") + " > /dev/null 2> " + quote(base + ".err") + "; test -s " +
+           quote(base + ".json.part") + " && mv " + quote(base + ".json.part") + " " + quote(base + ".json");
+  };
+  // GNU parallel over a job file (a failed run shows as a missing or failed summary).
+  const auto run_jobs = [&](const fs::path& job_file, const fs::path& joblog) {
+    std::string cmd = "parallel --will-cite --halt never -j " + quote(jobs) + " --joblog " + quote(joblog.string());
+    if (!sshloginfile.empty()) cmd += " --sshloginfile " + quote(sshloginfile);
+    // Progress (GNU parallel's own: done, left, estimated time) on a terminal, not when piped.
+    if (!quiet && isatty(STDERR_FILENO)) cmd += " --eta";
+    cmd += " < " + quote(job_file.string());
+    std::fflush(stderr);
+    std::system(cmd.c_str());
+  };
+
   // The matrix, in a fixed order.
   std::vector<Run> runs;
   for (const Motion& m : motions) {
@@ -197,21 +258,6 @@ int run_campaign(int argc, char** argv) {
           r.perturbation_arg = p;
           r.seed = spec.first_seed + static_cast<std::uint64_t>(k);
           r.id = r.motion + "__" + g + "__" + r.perturbation + "__" + std::to_string(r.seed);
-          std::string cmd = quote(self) + " simulate " + quote(m.path) + " --planner " + spec.planner + " --ground " + g +
-                            " --perturb " + quote(p) + " --seed " + std::to_string(r.seed) + " --perturb-seed " +
-                            std::to_string(r.seed);
-          if (spec.liftoff_hold) cmd += " --liftoff-hold on";
-          if (spec.plan_anchor) cmd += *spec.plan_anchor ? " --plan-anchor on" : " --plan-anchor off";
-          if (spec.plan_anchor_home) {
-            char h[64];
-            std::snprintf(h, sizeof h, " --plan-anchor-home %.6g", *spec.plan_anchor_home);
-            cmd += h;
-          }
-          if (spec.duration_s > 0.0) {
-            char d[64];
-            std::snprintf(d, sizeof d, " --duration %.6g", spec.duration_s);
-            cmd += d;
-          }
           if (spec.push.enabled) {
             if (!draw_push(spec.push, r.seed, m.run_length_s, r.push)) {
               std::fprintf(stderr, "kuavo campaign: the push window is empty for motion '%s' (%.3f s)\n", m.name.c_str(),
@@ -219,16 +265,9 @@ int run_campaign(int argc, char** argv) {
               return 2;
             }
             r.pushed = true;
-            char p_arg[128];
-            std::snprintf(p_arg, sizeof p_arg, " --push %.3f:%.6f,%.6f,0:%.6g", r.push.start_s,
-                          r.push.force_N * std::cos(r.push.direction_rad), r.push.force_N * std::sin(r.push.direction_rad),
-                          spec.push.duration_s);
-            cmd += p_arg;
           }
-          const std::string base = (dir / "runs" / r.id).string();
-          cmd += " --summary " + quote(base + ".json.part") + " > /dev/null 2> " + quote(base + ".err") + "; test -s " +
-                 quote(base + ".json.part") + " && mv " + quote(base + ".json.part") + " " + quote(base + ".json");
-          r.command = cmd;
+          r.motion_path = m.path;
+          r.command = simulate_command(r, true, true, (dir / "runs" / r.id).string());
           runs.push_back(r);
         }
       }
@@ -250,20 +289,55 @@ int run_campaign(int argc, char** argv) {
   }
   std::fprintf(stderr, "kuavo campaign: %zu runs, %d to do, %zu already done\n", runs.size(), pending,
                runs.size() - static_cast<std::size_t>(pending));
-  if (pending > 0) {
-    std::string cmd = "parallel --will-cite --halt never -j " + quote(jobs) + " --joblog " +
-                      quote((dir / "joblog.txt").string());
-    if (!sshloginfile.empty()) cmd += " --sshloginfile " + quote(sshloginfile);
-    // Progress (GNU parallel's own: done, left, estimated time) on a terminal, not when piped.
-    if (!quiet && isatty(STDERR_FILENO)) cmd += " --eta";
-    cmd += " < " + quote(job_file.string());
-    std::fflush(stderr);
-    std::system(cmd.c_str());  // a failed run shows as a missing or failed summary below
-  }
+  if (pending > 0) run_jobs(job_file, dir / "joblog.txt");
   struct rusage children {};
   getrusage(RUSAGE_CHILDREN, &children);
   const double cpu_s = static_cast<double>(children.ru_utime.tv_sec + children.ru_stime.tv_sec) +
                        1e-6 * static_cast<double>(children.ru_utime.tv_usec + children.ru_stime.tv_usec);
+
+  // Attribution (--attribute): each run that fell with both a push and model errors is run
+  // again twice in DIR/attribution/ (resumable like the runs): the push alone on the
+  // controller's own model (--perturb none, the same seed: the same sensor noise), and the
+  // model errors alone without the push. Its cause: "push" (only the push alone falls),
+  // "errors" (only the errors alone), "each" (both halves fall), "together" (neither
+  // does: it takes the two), "failed" (a half did not simulate).
+  std::vector<std::string> cause(runs.size());
+  std::vector<Outcome> push_alone(runs.size()), errors_alone(runs.size());
+  if (attribute) {
+    fs::create_directories(dir / "attribution", ec);
+    const fs::path att_jobs = dir / "attribution" / "jobs.txt";
+    std::vector<std::size_t> fallen;
+    int att_pending = 0;
+    {
+      std::ofstream jf(att_jobs);
+      for (std::size_t i = 0; i < runs.size(); ++i) {
+        const Outcome o = read_outcome(dir / "runs" / (runs[i].id + ".json"));
+        if (!(o.ok && o.fell && runs[i].pushed && runs[i].perturbation_arg != "none")) continue;
+        fallen.push_back(i);
+        for (const bool errors : {false, true}) {
+          const fs::path base = dir / "attribution" / (runs[i].id + (errors ? "__errors_alone" : "__push_alone"));
+          if (fs::exists(base.string() + ".json")) continue;
+          jf << simulate_command(runs[i], errors, !errors, base.string()) << "\n";
+          ++att_pending;
+        }
+      }
+    }
+    std::fprintf(stderr, "kuavo campaign: attribution of %zu falls, %d runs to do\n", fallen.size(), att_pending);
+    if (att_pending > 0) run_jobs(att_jobs, dir / "attribution" / "joblog.txt");
+    std::ofstream acsv(dir / "attribution.csv");
+    acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s\n";
+    for (const std::size_t i : fallen) {
+      push_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
+      errors_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
+      const Outcome& p = push_alone[i];
+      const Outcome& e = errors_alone[i];
+      cause[i] = !p.ok || !e.ok ? "failed" : p.fell && e.fell ? "each" : p.fell ? "push" : e.fell ? "errors" : "together";
+      char row[512];
+      std::snprintf(row, sizeof row, "%s,%s,%s,%.3f,%.3f\n", runs[i].id.c_str(), runs[i].motion.c_str(), cause[i].c_str(),
+                    p.ok && p.fell ? p.fell_at_s : -1.0, e.ok && e.fell ? e.fell_at_s : -1.0);
+      acsv << row;
+    }
+  }
 
   // The table.
   std::ofstream csv(dir / "runs.csv");
@@ -272,6 +346,7 @@ int run_campaign(int argc, char** argv) {
          "torque_saturations,wbc_not_ok_ticks,mpc_failures,recovery_steps,early_touchdowns,liftoff_holds,motion_lag_s_max,anchor_offset_m_max,error,log_sha256\n";
   struct Tally {
     int runs = 0, falls = 0;
+    std::map<std::string, int> causes;
   };
   std::map<std::string, Tally> per_motion;
   int total_runs = 0, total_falls = 0, failures = 0;
@@ -312,6 +387,7 @@ int run_campaign(int argc, char** argv) {
     ++total_runs;
     t.falls += counted_fall;
     total_falls += counted_fall;
+    if (!cause[i].empty()) ++t.causes[cause[i]];
     failures += !run_ok;
     if (parsed && to_do[i]) sim_seconds += number_or(s, "sim_time_s", 0.0);
   }
@@ -332,6 +408,14 @@ int run_campaign(int argc, char** argv) {
     summary["motions"][m.name] = {{"runs", t.runs},
                                   {"falls", t.falls},
                                   {"fall_rate_ci95", {std::round(lo * 1e5) / 1e5, std::round(hi * 1e5) / 1e5}}};
+    if (attribute) {  // falls with a push and model errors, by what alone topples the robot
+      nlohmann::ordered_json causes = nlohmann::ordered_json::object();
+      for (const char* c : {"push", "errors", "each", "together", "failed"}) {
+        const auto it = t.causes.find(c);
+        causes[c] = it == t.causes.end() ? 0 : it->second;
+      }
+      summary["motions"][m.name]["fall_causes"] = causes;
+    }
   }
   std::ofstream(dir / "summary.json") << summary.dump(2) << "\n";
   std::fputs((summary.dump(2) + "\n").c_str(), stdout);
