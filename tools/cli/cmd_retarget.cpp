@@ -26,7 +26,7 @@
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
 // the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
-// the show set's model errors (--verify-show SEEDS, 0…16, default 12: seeds 1001…), each with one
+// the show set's model errors (--verify-show SEEDS, 0…48, default 12: seeds 1001…), each with one
 // push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there, side by side) and the motion optimized again (0: no check).
@@ -152,7 +152,7 @@ int run(int argc, char** argv) {
   p.integer("--verify", "ROUNDS", 0, 16, "rounds", &verify_rounds).modes = kDynamic;
   p.choice("--verify-mujoco", {"on", "off"}, &verify_mujoco).modes = kDynamic;
   p.choice("--verify-firmware", {"on", "off"}, &verify_firmware).modes = kDynamic;
-  p.integer("--verify-show", "SEEDS", 0, 16, "seeds", &verify_show).modes = kDynamic;
+  p.integer("--verify-show", "SEEDS", 0, 48, "seeds", &verify_show).modes = kDynamic;
   p.number("--verify-show-push", "NS", 0.0, 40.0, "N·s", &verify_show_push_Ns).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
