@@ -305,6 +305,10 @@ int run_campaign(int argc, char** argv) {
   std::vector<Outcome> push_alone(runs.size()), errors_alone(runs.size());
   if (attribute) {
     fs::create_directories(dir / "attribution", ec);
+    if (ec) {
+      std::fprintf(stderr, "kuavo campaign: cannot create %s: %s\n", (dir / "attribution").c_str(), ec.message().c_str());
+      return 2;
+    }
     const fs::path att_jobs = dir / "attribution" / "jobs.txt";
     std::vector<std::size_t> fallen;
     int att_pending = 0;
@@ -326,16 +330,21 @@ int run_campaign(int argc, char** argv) {
     if (att_pending > 0) run_jobs(att_jobs, dir / "attribution" / "joblog.txt");
     std::ofstream acsv(dir / "attribution.csv");
     acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s\n";
+    int failed = 0;
     for (const std::size_t i : fallen) {
       push_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
       errors_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
       const Outcome& p = push_alone[i];
       const Outcome& e = errors_alone[i];
       cause[i] = !p.ok || !e.ok ? "failed" : p.fell && e.fell ? "each" : p.fell ? "push" : e.fell ? "errors" : "together";
-      char row[512];
-      std::snprintf(row, sizeof row, "%s,%s,%s,%.3f,%.3f\n", runs[i].id.c_str(), runs[i].motion.c_str(), cause[i].c_str(),
-                    p.ok && p.fell ? p.fell_at_s : -1.0, e.ok && e.fell ? e.fell_at_s : -1.0);
-      acsv << row;
+      failed += cause[i] == "failed";
+      char times[64];
+      std::snprintf(times, sizeof times, "%.3f,%.3f", p.ok && p.fell ? p.fell_at_s : -1.0, e.ok && e.fell ? e.fell_at_s : -1.0);
+      acsv << runs[i].id << ',' << runs[i].motion << ',' << cause[i] << ',' << times << '\n';
+    }
+    if (failed > 0) {
+      std::fprintf(stderr, "kuavo campaign: %d attributions failed: a half did not simulate (see %s/*.err)\n", failed,
+                   (dir / "attribution").c_str());
     }
   }
 

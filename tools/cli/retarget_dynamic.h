@@ -72,7 +72,7 @@ struct DynamicStageOptions {
   // falls there (seed 1007) and at the spin (1004), and the campaign (seeds 1–60, a 10 N·s
   // push each) fell 10 times instead of 22. cmu_05_07 and the built-in dance pass all twelve
   // with the motion they had; cmu_05_20 takes two more rounds (seed 1008) for the same 3/60.
-  // Twenty-four (`--verify-show 24`; the CLI takes up to 48) measured at f85d3c9's tree
+  // Twenty-four (`--verify-show 24`; the CLI takes up to 48 since 2d1e265), measured
   // (show campaign, seeds 1–60, against twelve): cmu_05_07 round 12, 0/60 instead of 4/60,
   // but 3 of its 11 steps kept (holds where its rounds fell at 6.8–9.8 s), CoM path
   // 16 % instead of 38 %; cmu_05_20 round 11, 0/60 instead of 1/60, 5 of 7 steps, 15 % instead
