@@ -85,20 +85,27 @@ double number_or(const nlohmann::json& j, const char* key, double fallback) {
   return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
 }
 
-// A run's summary: whether it simulated to its end (ok) and whether the robot fell there.
+// A run's summary as written by `kuavo simulate --summary`: `have` whether the file is there,
+// `parsed` whether it holds a JSON object (else an empty one).
+nlohmann::json read_summary(const fs::path& summary_path, bool& have, bool& parsed) {
+  const std::string text = read_file(summary_path.string(), have);
+  nlohmann::json s = have ? nlohmann::json::parse(text, nullptr, false) : nlohmann::json();
+  parsed = have && !s.is_discarded() && s.is_object();
+  return parsed ? s : nlohmann::json::object();
+}
+
+// Whether a run simulated to its end (ok) and whether the robot fell there.
 struct Outcome {
-  bool parsed = false, ok = false, fell = false;
+  bool ok = false, fell = false;
   double fell_at_s = -1.0;
 };
 Outcome read_outcome(const fs::path& summary_path) {
+  bool have = false, parsed = false;
+  const nlohmann::json s = read_summary(summary_path, have, parsed);
   Outcome o;
-  bool have = false;
-  const std::string text = read_file(summary_path.string(), have);
-  const nlohmann::json s = have ? nlohmann::json::parse(text, nullptr, false) : nlohmann::json();
-  o.parsed = have && !s.is_discarded() && s.is_object();
-  o.ok = o.parsed && s.value("ok", false);
-  o.fell = o.parsed && s.value("fell", false);
-  o.fell_at_s = o.parsed ? number_or(s, "fell_at_s", -1.0) : -1.0;
+  o.ok = parsed && s.value("ok", false);
+  o.fell = parsed && s.value("fell", false);
+  o.fell_at_s = parsed ? number_or(s, "fell_at_s", -1.0) : -1.0;
   return o;
 }
 
@@ -302,7 +309,6 @@ int run_campaign(int argc, char** argv) {
   // "errors" (only the errors alone), "each" (both halves fall), "together" (neither
   // does: it takes the two), "failed" (a half did not simulate).
   std::vector<std::string> cause(runs.size());
-  std::vector<Outcome> push_alone(runs.size()), errors_alone(runs.size());
   if (attribute) {
     fs::create_directories(dir / "attribution", ec);
     if (ec) {
@@ -332,10 +338,8 @@ int run_campaign(int argc, char** argv) {
     acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s\n";
     int failed = 0;
     for (const std::size_t i : fallen) {
-      push_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
-      errors_alone[i] = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
-      const Outcome& p = push_alone[i];
-      const Outcome& e = errors_alone[i];
+      const Outcome p = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
+      const Outcome e = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
       cause[i] = !p.ok || !e.ok ? "failed" : p.fell && e.fell ? "each" : p.fell ? "push" : e.fell ? "errors" : "together";
       failed += cause[i] == "failed";
       char times[64];
@@ -362,10 +366,8 @@ int run_campaign(int argc, char** argv) {
   double sim_seconds = 0.0;  // of the runs this invocation did
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const Run& r = runs[i];
-    bool have = false;
-    const std::string summary_text = read_file((dir / "runs" / (r.id + ".json")).string(), have);
-    nlohmann::json s = have ? nlohmann::json::parse(summary_text, nullptr, false) : nlohmann::json();
-    const bool parsed = have && !s.is_discarded() && s.is_object();
+    bool have = false, parsed = false;
+    const nlohmann::json s = read_summary(dir / "runs" / (r.id + ".json"), have, parsed);
     const bool run_ok = parsed && s.value("ok", false);
     const bool fell = parsed && s.value("fell", false);
     std::string err = !have ? "no summary (see runs/" + r.id + ".err)" : !parsed ? "unreadable summary" : s.value("error", "");
