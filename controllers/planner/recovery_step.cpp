@@ -155,8 +155,9 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
 // by early_trigger_m more than the motion's own ξ does, and no landing within reach on the
 // motion's clock captures it, the swing lands early_lead_s from now beyond ξ then, if that
 // captures. In double support it does nothing (the step below is for that).
-void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, const PlanKnot& m,
-                      const PlanWindow& window, const Vec2& plan_offset, bool blocked) {
+void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, const MotionPlan& motion,
+                      hal::TimeNs motion_lag_ns, const PlanKnot& m, const PlanWindow& window, const Vec2& plan_offset,
+                      bool blocked) {
   const PlanKnot& k0 = window.knots[0];
   const bool down0 = foot_down(k0, 0), down1 = foot_down(k0, 1);
   if (down0 == down1) {
@@ -185,6 +186,17 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
     return;
   }
   const PlanKnot& touchdown = window.knots[land];
+  // Only in a long swing: the motion's lift-off of this foot (its frames, motion_lag_ns behind
+  // the knots) to its touchdown lasts early_min_swing_s.
+  if (cfg.early_min_swing_s > 0.0) {
+    int lift = motion_plan_frame_at(motion, now - motion_lag_ns);
+    while (lift > 0 && !motion.foot_contact[lift - 1][swing]) --lift;
+    const hal::TimeNs lift_ns = motion_plan_frame_time(motion, lift) + motion_lag_ns;
+    if (1e-9 * static_cast<double>(touchdown.stamp_ns - lift_ns) < cfg.early_min_swing_s) {
+      st.early_calls = 0;
+      return;
+    }
+  }
   const double t_motion = 1e-9 * static_cast<double>(touchdown.stamp_ns - now);
 
   // The measured state's ξ at the motion's touchdown, and the motion's own (its first knot, as
@@ -271,8 +283,8 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
 }
 
 // Decides and starts a recovery step if the measured state calls for one.
-void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const PlanKnot& m, const PlanWindow& window,
-                   const Vec2& plan_offset) {
+void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const MotionPlan& motion,
+                   hal::TimeNs motion_lag_ns, const PlanKnot& m, const PlanWindow& window, const Vec2& plan_offset) {
   const PlanKnot& k0 = window.knots[0];
   const hal::TimeNs now = k0.stamp_ns;
 
@@ -294,7 +306,7 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const P
   }
   const bool settling = now - st.start_ns < static_cast<hal::TimeNs>(std::llround(cfg.settle_s * 1e9));
   const bool swinging = (st.foot[0].active && now < st.foot[0].land_ns) || (st.foot[1].active && now < st.foot[1].land_ns);
-  maybe_land_early(cfg, st, m, window, plan_offset, settling || swinging);
+  maybe_land_early(cfg, st, motion, motion_lag_ns, m, window, plan_offset, settling || swinging);
   // A non-finite state fails the comparison below: no step from it (the MPC refuses it too).
   if (settling || swinging || !(st.last_outside_m > cfg.trigger_outside_m)) {
     st.outside_calls = 0;
@@ -339,7 +351,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   const double values[] = {c.trigger_outside_m, c.lift_delay_s, c.swing_s,  c.lift_height_m, c.quiet_s,
                            c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
                            c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m,
-                           c.early_trigger_m,   c.early_lead_s, c.early_min_gain_s};
+                           c.early_trigger_m,   c.early_lead_s, c.early_min_gain_s, c.early_min_swing_s};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
@@ -351,8 +363,8 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
   if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
   if (c.min_pendulum_height_m <= 0.0) return "recovery step: min_pendulum_height_m must be > 0";
-  if (c.early_trigger_m < 0.0 || c.early_lead_s < 0.05 || c.early_min_gain_s < 0.0) {
-    return "recovery step: early_trigger_m >= 0, early_lead_s >= 0.05, early_min_gain_s >= 0";
+  if (c.early_trigger_m < 0.0 || c.early_lead_s < 0.05 || c.early_min_gain_s < 0.0 || c.early_min_swing_s < 0.0) {
+    return "recovery step: early_trigger_m >= 0, early_lead_s >= 0.05, early_min_gain_s >= 0, early_min_swing_s >= 0";
   }
   return nullptr;
 }
@@ -381,7 +393,7 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   for (FootDisplacement& d : st.foot) {
     if (d.active && d.return_known && now >= d.return_land_ns) d = FootDisplacement{};
   }
-  maybe_trigger(cfg, st, measured, window, plan_offset);
+  maybe_trigger(cfg, st, motion, motion_lag_ns, measured, window, plan_offset);
   for (int foot = 0; foot < 2; ++foot) {
     FootDisplacement& d = st.foot[foot];
     if (d.active && end > d.land_ns && !d.return_known) {

@@ -44,7 +44,9 @@
 // (its return swing: it lands where the motion has it). Both conditions matter: with the first alone
 // (against a fixed margin) a show campaign on perfume fell in 58 of 60 runs, each from an
 // early touchdown at 18.7 s (its own plan's ξ misses there; 4 cm of measured error grow 7×
-// over the 0.56 s left, and the foot went 0.29 m back).
+// over the 0.56 s left, and the foot went 0.29 m back). And only in a swing of the motion
+// that lasts early_min_swing_s: a long single support, which it was made for; in short ones
+// (0.3 s) it threw the robot.
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
@@ -97,6 +99,14 @@ struct RecoveryStepConfig {
   double early_trigger_m = 0.03;
   double early_lead_s = 0.15;
   double early_min_gain_s = 0.10;
+  // … and only in a long swing: the motion's lift-off of that foot to its touchdown lasts at
+  // least this long. A short swing lands soon on its own, and rewriting it just after lift-off
+  // to land 0.15 s later elsewhere threw the robot: in the show campaigns (stop 52) every early
+  // touchdown in a swing of 0.29–0.31 s fell (cmu_05_07 seeds 12, 21, 25, 53; cmu_05_20 seed 12:
+  // the stance foot's force spiked to 1.2–1.6 kN, then both feet left the ground) and each of
+  // those runs danced to the end with the motion's clock; the ones in cmu_05_20's 0.67 s first
+  // swing (seeds 4, 56) stood, and fell without it. Leju's gait steps in 0.4–0.45 s.
+  double early_min_swing_s = 0.5;
 };
 
 // nullptr if usable, else what is wrong. Load time.

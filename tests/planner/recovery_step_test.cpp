@@ -367,8 +367,8 @@ struct EarlyTouchdown {
   double inner_y = -1e9;  // the right sole's inner edge
   double toe_x = -1e9;
   Vec2 velocity;
-  explicit EarlyTouchdown(double xi_beyond_outer_m, double touchdown_s = 1.8) {
-    lift_in_motion(*f.motion, kLeftFoot, 1.0, touchdown_s);
+  explicit EarlyTouchdown(double xi_beyond_outer_m, double touchdown_s = 1.8, double lift_s = 1.0) {
+    lift_in_motion(*f.motion, kLeftFoot, lift_s, touchdown_s);
     for (int i = 0; i < kCornersPerFoot; ++i) inner_y = std::max(inner_y, s.corner[kRightFoot * kCornersPerFoot + i].y());
     for (const Vec3& c : s.corner) toe_x = std::max(toe_x, c.x());
     velocity = Vec2(0.0, (s.outer_y + xi_beyond_outer_m - s.com.y()) * s.omega);
@@ -517,6 +517,33 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionLandsSoonAnyway) {
   EXPECT_EQ(early.f.state->early_touchdowns, 1u);
 }
 
+// A short swing (cmu_05_07's 0.34 s, lifted at 1.08 s, down at 1.42 s), the same push just
+// after lift-off: the trigger's conditions hold (with early_min_swing_s 0 it lands early, the
+// control), but the swing is shorter than early_min_swing_s: it lands on the motion's clock.
+TEST(RecoveryStep, NoEarlyTouchdownInAShortSwing) {
+  EarlyTouchdown e(0.0, 1.42, 1.08);
+  ASSERT_LT(0.34, e.f.config.early_min_swing_s) << "the premise: a swing short of the default minimum";
+  for (int i = 0; i < 5; ++i) {
+    e.f.call(1.1 + kDt * i, e.velocity);
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+  EarlyTouchdown control(0.0, 1.42, 1.08);
+  control.f.config.early_min_swing_s = 0.0;
+  for (int i = 0; i < 2; ++i) control.f.call(1.1 + kDt * i, control.velocity);
+  EXPECT_EQ(control.f.state->early_touchdowns, 1u);
+  // The boundary: a swing of 0.36 s passes a minimum of 0.35 s and fails one of 0.37 s.
+  EarlyTouchdown pass(0.0, 1.44, 1.08), fail(0.0, 1.44, 1.08);
+  pass.f.config.early_min_swing_s = 0.35;
+  fail.f.config.early_min_swing_s = 0.37;
+  for (int i = 0; i < 2; ++i) {
+    pass.f.call(1.1 + kDt * i, pass.velocity);
+    fail.f.call(1.1 + kDt * i, fail.velocity);
+  }
+  EXPECT_EQ(pass.f.state->early_touchdowns, 1u);
+  EXPECT_EQ(fail.f.state->early_touchdowns, 0u);
+}
+
 // The plan anchor adds its offset to the window after this call: the early landing (chosen
 // on the measured state) has it taken off, so window + offset lands where the landing without
 // an offset does (the blend before it starts from the motion's sole, which the offset moves).
@@ -631,6 +658,11 @@ TEST(RecoveryStep, ConfigValidation) {
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c = {};
   c.early_trigger_m = std::nan("");
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.early_min_swing_s = -0.1;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c.early_min_swing_s = std::nan("");
   EXPECT_NE(recovery_step_validate(c), nullptr);
 }
 
