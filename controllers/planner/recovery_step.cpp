@@ -186,10 +186,16 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
     return;
   }
   const PlanKnot& touchdown = window.knots[land];
-  // Only in a long swing: the motion's lift-off of this foot (its frames, motion_lag_ns behind
-  // the knots) to its touchdown lasts early_min_swing_s.
+  // Only in a long swing: from the motion's lift-off of this foot (its frames, motion_lag_ns
+  // behind the knots) to the knot it lands on lasts early_min_swing_s. The frame at knot 0 is in
+  // that swing (the window is sampled from it with the same lag); if it is not, nothing is
+  // measured and nothing lands early. The scan reads at most the swing's frames.
   if (cfg.early_min_swing_s > 0.0) {
     int lift = motion_plan_frame_at(motion, now - motion_lag_ns);
+    if (motion.foot_contact[lift][swing]) {
+      st.early_calls = 0;
+      return;
+    }
     while (lift > 0 && !motion.foot_contact[lift - 1][swing]) --lift;
     const hal::TimeNs lift_ns = motion_plan_frame_time(motion, lift) + motion_lag_ns;
     if (1e-9 * static_cast<double>(touchdown.stamp_ns - lift_ns) < cfg.early_min_swing_s) {

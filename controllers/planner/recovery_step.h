@@ -52,7 +52,8 @@
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
 // 1.3 ms on the call that takes a step, 1.1 ms p50 on the one that lands a swing early, loaded),
 // and only for the knots the previous call did not
-// have (the window's tail: 33 µs p50 on the calls after it; mpc_bench).
+// have (the window's tail: 33 µs p50 on the calls after it; mpc_bench). In a swing, the
+// early touchdown's check reads the motion's frames back to the swing's lift-off.
 #pragma once
 
 #include <array>
@@ -99,9 +100,10 @@ struct RecoveryStepConfig {
   double early_trigger_m = 0.03;
   double early_lead_s = 0.15;
   double early_min_gain_s = 0.10;
-  // … and only in a long swing: the motion's lift-off of that foot to its touchdown lasts at
-  // least this long. A short swing lands soon on its own, and rewriting it just after lift-off
-  // to land 0.15 s later elsewhere threw the robot: in the show campaigns (stop 52) every early
+  // … and only in a long swing: from the motion's lift-off of that foot to the window knot it
+  // lands on (within one knot, 0.02 s, of the motion's touchdown) lasts at least this long.
+  // A short swing lands soon on its own, and rewriting it just after lift-off to land 0.15 s
+  // later elsewhere threw the robot: in the show campaigns (the motions of stop 51) every early
   // touchdown in a swing of 0.29–0.31 s fell (cmu_05_07 seeds 12, 21, 25, 53; cmu_05_20 seed 12:
   // the stance foot's force spiked to 1.2–1.6 kN, then both feet left the ground) and each of
   // those runs danced to the end with the motion's clock; the ones in cmu_05_20's 0.67 s first

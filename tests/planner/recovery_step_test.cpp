@@ -498,6 +498,7 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenALandingOnTheMotionsClockCaptures) {
 
   EarlyTouchdown narrow(0.0, 1.5);
   narrow.f.config.max_width_m = width - 0.08;  // ξ then 1 cm inside the sole: short of capture_margin_m
+  narrow.f.config.early_min_swing_s = 0.0;     // its 0.5 s swing: not this test's question
   for (int i = 0; i < 3; ++i) narrow.f.call(1.1 + kDt * i, velocity);
   EXPECT_EQ(narrow.f.state->early_touchdowns, 1u);
 }
@@ -517,7 +518,7 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionLandsSoonAnyway) {
   EXPECT_EQ(early.f.state->early_touchdowns, 1u);
 }
 
-// A short swing (cmu_05_07's 0.34 s, lifted at 1.08 s, down at 1.42 s), the same push just
+// A short swing like cmu_05_07's (0.34 s, lifted at 1.08 s, down at 1.42 s), the same push just
 // after lift-off: the trigger's conditions hold (with early_min_swing_s 0 it lands early, the
 // control), but the swing is shorter than early_min_swing_s: it lands on the motion's clock.
 TEST(RecoveryStep, NoEarlyTouchdownInAShortSwing) {
@@ -532,10 +533,11 @@ TEST(RecoveryStep, NoEarlyTouchdownInAShortSwing) {
   control.f.config.early_min_swing_s = 0.0;
   for (int i = 0; i < 2; ++i) control.f.call(1.1 + kDt * i, control.velocity);
   EXPECT_EQ(control.f.state->early_touchdowns, 1u);
-  // The boundary: a swing of 0.36 s passes a minimum of 0.35 s and fails one of 0.37 s.
+  // The boundary: a swing of 0.36 s passes a minimum of 0.355 s and fails one of 0.365 s (a
+  // lift-off found one frame, 0.01 s, early or late fails one of the two).
   EarlyTouchdown pass(0.0, 1.44, 1.08), fail(0.0, 1.44, 1.08);
-  pass.f.config.early_min_swing_s = 0.35;
-  fail.f.config.early_min_swing_s = 0.37;
+  pass.f.config.early_min_swing_s = 0.355;
+  fail.f.config.early_min_swing_s = 0.365;
   for (int i = 0; i < 2; ++i) {
     pass.f.call(1.1 + kDt * i, pass.velocity);
     fail.f.call(1.1 + kDt * i, fail.velocity);
