@@ -313,12 +313,16 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const M
   const bool settling = now - st.start_ns < static_cast<hal::TimeNs>(std::llround(cfg.settle_s * 1e9));
   const bool swinging = (st.foot[0].active && now < st.foot[0].land_ns) || (st.foot[1].active && now < st.foot[1].land_ns);
   maybe_land_early(cfg, st, motion, motion_lag_ns, m, window, plan_offset, settling || swinging);
-  // A non-finite state fails the comparison below: no step from it (the MPC refuses it too).
-  if (settling || swinging || !(st.last_outside_m > cfg.trigger_outside_m)) {
+  // A non-finite state fails the comparisons below: no step from it (the MPC refuses it too).
+  // creep_outside_m <= trigger_outside_m (validated): a ξ short of the first is short of both.
+  if (settling || swinging || !(st.last_outside_m > cfg.creep_outside_m)) {
     st.outside_calls = 0;
+    st.creep_calls = 0;
     return;
   }
-  if (++st.outside_calls < cfg.trigger_calls) return;
+  st.outside_calls = st.last_outside_m > cfg.trigger_outside_m ? st.outside_calls + 1 : 0;
+  ++st.creep_calls;
+  if (st.outside_calls < cfg.trigger_calls && st.creep_calls < cfg.creep_calls) return;
 
   // The motion must keep both feet down until the step has landed and settled.
   const hal::TimeNs lift = now + static_cast<hal::TimeNs>(std::llround(cfg.lift_delay_s * 1e9));
@@ -348,20 +352,22 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const M
   d.land_ns = land;
   d.return_known = false;
   st.outside_calls = 0;
+  st.creep_calls = 0;
   ++st.steps;
 }
 
 }  // namespace
 
 const char* recovery_step_validate(const RecoveryStepConfig& c) {
-  const double values[] = {c.trigger_outside_m, c.lift_delay_s, c.swing_s,  c.lift_height_m, c.quiet_s,
-                           c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
+  const double values[] = {c.trigger_outside_m, c.creep_outside_m, c.lift_delay_s, c.swing_s, c.lift_height_m,
+                           c.quiet_s,           c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
                            c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m,
                            c.early_trigger_m,   c.early_lead_s, c.early_min_gain_s, c.early_min_swing_s};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
-  if (c.trigger_calls < 1) return "recovery step: trigger_calls must be at least 1";
+  if (c.trigger_calls < 1 || c.creep_calls < 1) return "recovery step: trigger_calls and creep_calls must be at least 1";
+  if (c.creep_outside_m > c.trigger_outside_m) return "recovery step: creep_outside_m must not exceed trigger_outside_m";
   if (c.lift_delay_s < 0.0 || c.swing_s < 0.1 || c.quiet_s < 0.0) return "recovery step: lift_delay_s >= 0, swing_s >= 0.1, quiet_s >= 0";
   if (c.lift_height_m < 0.0 || c.lift_height_m > 0.15) return "recovery step: lift_height_m must be in [0, 0.15]";
   if (c.max_step_m <= 0.0 || c.max_step_m > 0.5) return "recovery step: max_step_m must be in (0, 0.5]";
@@ -377,6 +383,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
 
 void recovery_step_reset(RecoveryStepState& state) {
   state.outside_calls = 0;
+  state.creep_calls = 0;
   state.started = false;
   state.foot = {};
   state.steps = 0;

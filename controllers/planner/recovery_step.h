@@ -9,7 +9,8 @@
 //
 // What it does, once per planner call, on the window the MPC is about to track:
 //   trigger  the measured ξ is more than trigger_outside_m outside the convex hull of the
-//            soles on trigger_calls calls in a row (not within settle_s of a reset), the
+//            soles on trigger_calls calls in a row, or within -creep_outside_m of its edge
+//            (or beyond) on creep_calls calls in a row (not within settle_s of a reset), the
 //            motion keeps both feet down from now until the step has landed plus quiet_s,
 //            and no recovery swing is under way.
 //   choose   each foot in turn as the swing foot: the centre of pressure is taken at the
@@ -29,6 +30,19 @@
 //   return   the displacement is held until the motion itself lifts that foot: over the
 //            motion's own swing it blends back to zero, and the foot lands where the
 //            motion has it.
+//
+// Why a second trigger (stop 54): the soles' hull is not the region the ankles can hold. A
+// loaded ankle's two motors (27 N·m each) give about 49 N·m of pitch through the linkage,
+// which holds the centre of pressure at most 49 N·m / 340 N = 0.14 m ahead of the ankle,
+// 3 cm short of the toe (0.171 m). So ξ can cross the hull's edge slowly and for good while
+// the 1 cm trigger waits: in perfume's push-alone fall of seed 36 (pushed at 14.2 s) ξ went
+// from 0.6 cm inside to 1.5 cm outside in 0.1 s; at 1.5 cm (14.60 s) the best step left ξ
+// 1 mm inside, short of the 2 cm capture margin, and steps were declined until the fall;
+// at 14.54 s (0.2 cm out, the creep trigger) it captured by 2.0 cm and the robot stood. In seed 15 the loaded ankle
+// sat at its limit for 1.3 s with ξ 0–1 cm out; it steps sooner now but still falls. Lowering
+// trigger_outside_m itself to -1 cm also stepped on single excursions the ankles catch
+// (cmu_05_07 seed 44: 0.9 cm out once, a sideways step on 0.40 friction, fell; it stands
+// without the step); 4 calls (0.08 s) in a row tell the two apart.
 //
 // Early touchdown (step timing, in a swing the motion plans): the MPC adapts where a swing
 // foot lands but not when. Pushed towards the swing side in a long single support (cmu_05_20's
@@ -66,7 +80,11 @@ namespace kuavo::planner {
 struct RecoveryStepConfig {
   bool enabled = true;
   double trigger_outside_m = 0.01;  // ξ this far outside the support polygon …
-  int trigger_calls = 2;            // … on this many planner calls in a row
+  int trigger_calls = 2;            // … on this many planner calls in a row,
+  // or ξ within -creep_outside_m of the edge, or beyond it, on creep_calls calls in a row (a
+  // creep the ankles do not stop: see above). creep_outside_m <= trigger_outside_m.
+  double creep_outside_m = -0.01;
+  int creep_calls = 4;
   double lift_delay_s = 0.06;       // trigger → lift-off: the load moves to the stance foot
   double swing_s = 0.40;            // lift-off → touchdown (Leju's gait: 0.4–0.45 s a step)
   double lift_height_m = 0.05;      // swing apex above the motion's sole height
@@ -150,6 +168,7 @@ struct KnotRewrite {
 
 struct RecoveryStepState {
   int outside_calls = 0;
+  int creep_calls = 0;  // consecutive calls with ξ beyond creep_outside_m
   bool started = false;
   hal::TimeNs start_ns = 0;                // the first call after the reset
   std::array<FootDisplacement, 2> foot{};  // [left, right]

@@ -250,6 +250,67 @@ TEST(RecoveryStep, TheAnchorsOffsetIsTakenOffTheLanding) {
             2.0 * offset.norm());
 }
 
+// A creep (perfume's push-alone falls, stop 54): ξ held just past the edge, short of
+// trigger_outside_m, while the loaded ankle sits at its motor limit. It triggers after
+// creep_calls calls in a row, not after trigger_calls.
+TEST(RecoveryStep, ACreepJustPastTheEdgeStepsAfterCreepCalls) {
+  Fixture f;
+  ASSERT_GT(f.config.creep_calls, f.config.trigger_calls) << "the premise: the creep count is the longer one";
+  ASSERT_LT(0.005, f.config.trigger_outside_m) << "the premise: 5 mm out is short of the fast trigger";
+  const Standing s = standing_geometry();
+  const Vec2 velocity = s.backwards(0.005);
+  for (int i = 0; i + 1 < f.config.creep_calls; ++i) {
+    f.call(1.0 + kDt * i, velocity);
+    EXPECT_TRUE(f.window_unchanged()) << i;
+    EXPECT_NEAR(f.state->last_outside_m, 0.005, 2e-3) << i;
+  }
+  EXPECT_EQ(f.state->steps + f.state->declined, 0u);
+  f.call(1.0 + kDt * (f.config.creep_calls - 1), velocity);
+  ASSERT_EQ(f.state->steps, 1u);
+  // It steps back: the swing sole's centre lands behind where it stood.
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  const auto landed = corners_of(f.window->knots[kKnots - 1]);
+  double dx = 0.0;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = swing * kCornersPerFoot + i;
+    dx += (landed[c].x() - s.corner[c].x()) / kCornersPerFoot;
+  }
+  EXPECT_LT(dx, -0.02);
+}
+
+// The creep threshold from both sides: ξ 15 mm inside the edge never triggers, 5 mm inside
+// does (where no step captures, it is declined: the trigger fired all the same).
+TEST(RecoveryStep, TheCreepThresholdIsCreepOutsideM) {
+  ASSERT_NEAR(RecoveryStepConfig{}.creep_outside_m, -0.01, 1e-12) << "the premise of the two cases";
+  const Standing s = standing_geometry();
+  Fixture inside;
+  for (int i = 0; i < 3 * inside.config.creep_calls; ++i) {
+    inside.call(1.0 + kDt * i, s.backwards(-0.015));
+    EXPECT_TRUE(inside.window_unchanged()) << i;
+  }
+  EXPECT_NEAR(inside.state->last_outside_m, -0.015, 2e-3);
+  EXPECT_EQ(inside.state->steps + inside.state->declined, 0u);
+  Fixture near;
+  for (int i = 0; i < near.config.creep_calls; ++i) near.call(1.0 + kDt * i, s.backwards(-0.005));
+  EXPECT_NEAR(near.state->last_outside_m, -0.005, 2e-3);
+  EXPECT_EQ(near.state->steps + near.state->declined, 1u);
+}
+
+// The creep count is of calls in a row: one call well inside starts it again.
+TEST(RecoveryStep, ACreepInterruptedCountsAgain) {
+  Fixture f;
+  const Standing s = standing_geometry();
+  const Vec2 velocity = s.backwards(0.005);
+  double t = 1.0;
+  for (int i = 0; i + 1 < f.config.creep_calls; ++i, t += kDt) f.call(t, velocity);
+  f.call(t, Vec2::Zero());  // ξ = c, well inside
+  t += kDt;
+  for (int i = 0; i + 1 < f.config.creep_calls; ++i, t += kDt) f.call(t, velocity);
+  EXPECT_EQ(f.state->steps + f.state->declined, 0u);
+  f.call(t, velocity);
+  EXPECT_EQ(f.state->steps, 1u);
+}
+
 // ξ 4 cm beside the left foot: the right foot cannot land beyond it (it stays on its own
 // side) and standing on the right foot throws ξ farther out: nothing captures, no step.
 TEST(RecoveryStep, SidewaysBeyondReachIsDeclined) {
@@ -655,6 +716,17 @@ TEST(RecoveryStep, ConfigValidation) {
   c = {};
   c.trigger_calls = 0;
   EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.creep_calls = 0;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.creep_outside_m = std::nan("");
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.creep_outside_m = c.trigger_outside_m + 0.001;  // a creep trigger farther out than the fast one
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c.creep_outside_m = c.trigger_outside_m;
+  EXPECT_EQ(recovery_step_validate(c), nullptr);
   c = {};
   c.early_lead_s = 0.02;  // no foot comes down from its arc that fast
   EXPECT_NE(recovery_step_validate(c), nullptr);
