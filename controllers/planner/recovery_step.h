@@ -38,8 +38,9 @@
 // the 1 cm trigger waits: in perfume's push-alone fall of seed 36 (pushed at 14.2 s) ξ went
 // from 0.6 cm inside to 1.5 cm outside in 0.1 s; at 1.5 cm (14.60 s) the best step left ξ
 // 1 mm inside, short of the 2 cm capture margin, and steps were declined until the fall;
-// at 14.54 s (0.2 cm out, the creep trigger) it captured by 2.0 cm and the robot stood. In seed 15 the loaded ankle
-// sat at its limit for 1.3 s with ξ 0–1 cm out; it steps sooner now but still falls. Lowering
+// at 14.54 s (0.2 cm out, the creep trigger) it captured by 2.0 cm and the robot stood.
+// In seed 15 the loaded ankle sat at its limit for 1.3 s with ξ 0–1 cm out; it steps
+// sooner now but still falls (the step's weight transfer collapses). Lowering
 // trigger_outside_m itself to -1 cm also stepped on single excursions the ankles catch
 // (cmu_05_07 seed 44: 0.9 cm out once, a sideways step on 0.40 friction, fell; it stands
 // without the step); 4 calls (0.08 s) in a row tell the two apart.
