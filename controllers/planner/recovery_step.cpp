@@ -359,10 +359,11 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const M
 }  // namespace
 
 const char* recovery_step_validate(const RecoveryStepConfig& c) {
-  const double values[] = {c.trigger_outside_m, c.creep_outside_m, c.lift_delay_s, c.swing_s, c.lift_height_m,
-                           c.quiet_s,           c.overshoot_m,       c.max_step_m,   c.reach_ahead_m, c.reach_behind_m, c.min_width_m,
-                           c.max_width_m,       c.min_pendulum_height_m, c.settle_s, c.capture_margin_m,
-                           c.early_trigger_m,   c.early_lead_s, c.early_min_gain_s, c.early_min_swing_s};
+  const double values[] = {c.trigger_outside_m, c.creep_outside_m, c.lift_delay_s,   c.swing_s,
+                           c.lift_height_m,     c.quiet_s,         c.overshoot_m,    c.max_step_m,
+                           c.reach_ahead_m,     c.reach_behind_m,  c.min_width_m,    c.max_width_m,
+                           c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m,
+                           c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
