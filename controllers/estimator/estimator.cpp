@@ -1,6 +1,8 @@
 #include "controllers/estimator/estimator.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/finite.h"
@@ -29,7 +31,8 @@ bool config_valid(const EstimatorConfig& c) {
   }
   const bool bias_ok = std::isfinite(c.initial_accel_bias_variance_m2_s4) && c.initial_accel_bias_variance_m2_s4 >= 0.0 &&
                        std::isfinite(c.accel_bias_random_walk_m2_s5) && c.accel_bias_random_walk_m2_s5 >= 0.0;
-  return bias_ok && std::isfinite(c.ground_height_m) && c.dt_min_s <= c.dt_max_s;
+  const bool gate_ok = std::isfinite(c.contact_velocity_gate_m_s) && c.contact_velocity_gate_m_s >= 0.0;
+  return bias_ok && gate_ok && std::isfinite(c.ground_height_m) && c.dt_min_s <= c.dt_max_s;
 }
 
 // A usable IMU sample: flagged valid, finite, within the sensor's ranges, and a
@@ -135,6 +138,33 @@ double contact_innovation_norm(const KfMeasurementVector& innovation, const Cont
   return std::sqrt(sum);
 }
 
+// The contact gate (EstimatorConfig::contact_velocity_gate_m_s): each planned stance corner's
+// velocity innovation ‖v_rel,i + v_base‖ against the predicted base velocity; corners more
+// than the gate beyond the smallest one leave the measurements for this tick. Requires
+// relative_kinematics(). Returns the flags the measurements use; s.gated marks the ones out.
+ContactFlags gate_contact(const model::Model& model, EstimatorState& s, const ContactFlags& planned,
+                          const Eigen::Vector3d& v_base_m_s) {
+  s.gated = {};
+  const double gate = s.config.contact_velocity_gate_m_s;
+  if (!(gate > 0.0)) return planned;
+  std::array<double, kPoints> innovation{};
+  double smallest = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < kPoints; ++i) {
+    if (!planned[i]) continue;
+    innovation[i] = (dynamics::frame_velocity(model, s.data, i).head<3>() + v_base_m_s).norm();
+    smallest = std::min(smallest, innovation[i]);
+  }
+  ContactFlags used = planned;
+  for (int i = 0; i < kPoints; ++i) {
+    if (planned[i] && innovation[i] > smallest + gate) {
+      used[i] = false;
+      s.gated[i] = true;
+      ++s.gated_corner_ticks;
+    }
+  }
+  return used;
+}
+
 EstimatorStatus worse(EstimatorStatus a, EstimatorStatus b) { return a > b ? a : b; }
 
 void write_output(const EstimatorState& s, EstimateOutput& out) {
@@ -174,6 +204,8 @@ bool estimator_init(const EstimatorConfig& config, EstimatorState& state) {
   state.orientation.setIdentity();
   state.initialized = false;
   state.imu_rejects = state.joint_rejects = state.dt_clamps = state.divergences = state.horizontal_resets = 0;
+  state.gated_corner_ticks = 0;
+  state.gated = {};
   return ok;
 }
 
@@ -245,11 +277,16 @@ void estimator_step_rt(const model::Model& model, EstimatorState& s, const hal::
   fill_process_variance(c, contact, dt_s, s.process_variance);
   kf_predict_rt(s.x, s.p, a_world_m_s2, s.process_variance, dt_s);
 
+  // The contact gate takes corners that move out of the measurements (their rows get the
+  // swing noise); their points keep the stance process noise, so P stays as the plan has it.
+  ContactFlags used = contact;
+  s.gated = {};
   if (joints_ok) {
     relative_kinematics(model, s);
-    fill_measurements(model, s, contact);
+    used = gate_contact(model, s, contact, s.x.segment<3>(3));
+    fill_measurements(model, s, used);
     kf_update_rt(s.x, s.p, s.y, s.measurement_variance, s.innovation);
-    out.innovation_norm = contact_innovation_norm(s.innovation, contact);
+    out.innovation_norm = contact_innovation_norm(s.innovation, used);
   }
   if (kf_bound_horizontal_rt(s.p, c.horizontal_covariance_det_limit_m4)) ++s.horizontal_resets;
 
