@@ -5,7 +5,9 @@
 // origin with base axes (FACTS.md §5.3). A linear Kalman filter (linear_kf.h)
 // over base position, base velocity (world) and the 8 sole corners fuses the
 // low-passed (12 Hz) accelerometer with leg kinematics; contact flags come
-// from the caller's plan. Output follows conventions.h: v[0:3] in BASE axes.
+// from the caller's plan, less the corners whose kinematic velocity the other
+// stance corners contradict (the contact gate, EstimatorConfig below). Output
+// follows conventions.h: v[0:3] in BASE axes.
 //
 // Usage: EstimatorState lives in static storage (~50 KB). estimator_init once,
 // estimator_reset at start-up with the robot standing, then estimator_step_rt
