@@ -109,18 +109,23 @@ void fill_process_variance(const EstimatorConfig& c, const ContactFlags& contact
   q.segment<3>(kBiasIndex).setConstant(dt_s * c.accel_bias_random_walk_m2_s5);
 }
 
-// y and R from the kinematics. Stance heights are the ground plane; a swing
-// point's height is what the base estimate and kinematics say (so it does not
-// pull the point down), with the ×1000 noise anyway.
-void fill_measurements(const model::Model& model, EstimatorState& s, const ContactFlags& contact) {
+// y's relative position and velocity rows from the kinematics (they do not depend on the
+// contact flags). Requires relative_kinematics().
+void fill_kinematic_rows(const model::Model& model, EstimatorState& s) {
+  for (int i = 0; i < kPoints; ++i) {
+    s.y.segment<3>(kPositionRows + 3 * i) = dynamics::frame_position(model, s.data, i);
+    s.y.segment<3>(kVelocityRows + 3 * i) = dynamics::frame_velocity(model, s.data, i).head<3>();
+  }
+}
+
+// y's height rows and R from the contact flags. Stance heights are the ground plane; a swing
+// point's height is what the base estimate and kinematics say (so it does not pull the point
+// down), with the ×1000 noise anyway. Requires fill_kinematic_rows().
+void fill_contact_rows(EstimatorState& s, const ContactFlags& contact) {
   const EstimatorConfig& c = s.config;
   for (int i = 0; i < kPoints; ++i) {
-    const Eigen::Vector3d r_m = dynamics::frame_position(model, s.data, i);
-    const Eigen::Vector3d v_m_s = dynamics::frame_velocity(model, s.data, i).head<3>();
     const double scale = contact[i] ? 1.0 : c.non_contact_noise_scale;
-    s.y.segment<3>(kPositionRows + 3 * i) = r_m;
-    s.y.segment<3>(kVelocityRows + 3 * i) = v_m_s;
-    s.y[kHeightRows + i] = contact[i] ? c.ground_height_m : s.x[2] + r_m.z();
+    s.y[kHeightRows + i] = contact[i] ? c.ground_height_m : s.x[2] + s.y[kPositionRows + 3 * i + 2];
     s.measurement_variance.segment<3>(kPositionRows + 3 * i).setConstant(scale * c.foot_sensor_noise_position);
     s.measurement_variance.segment<3>(kVelocityRows + 3 * i).setConstant(scale * c.foot_sensor_noise_velocity);
     s.measurement_variance[kHeightRows + i] = scale * c.foot_height_sensor_noise;
@@ -141,24 +146,21 @@ double contact_innovation_norm(const KfMeasurementVector& innovation, const Cont
 // The contact gate (EstimatorConfig::contact_velocity_gate_m_s): each planned stance corner's
 // velocity innovation ‖v_rel,i + v_base‖ against the predicted base velocity; corners more
 // than the gate beyond the smallest one leave the measurements for this tick. Requires
-// relative_kinematics(). Returns the flags the measurements use; s.gated marks the ones out.
-ContactFlags gate_contact(const model::Model& model, EstimatorState& s, const ContactFlags& planned,
-                          const Eigen::Vector3d& v_base_m_s) {
-  s.gated = {};
+// fill_kinematic_rows(). Returns the flags the measurements use.
+ContactFlags gate_contact(EstimatorState& s, const ContactFlags& planned, const Eigen::Vector3d& v_base_m_s) {
   const double gate = s.config.contact_velocity_gate_m_s;
   if (!(gate > 0.0)) return planned;
   std::array<double, kPoints> innovation{};
   double smallest = std::numeric_limits<double>::infinity();
   for (int i = 0; i < kPoints; ++i) {
     if (!planned[i]) continue;
-    innovation[i] = (dynamics::frame_velocity(model, s.data, i).head<3>() + v_base_m_s).norm();
+    innovation[i] = (s.y.segment<3>(kVelocityRows + 3 * i) + v_base_m_s).norm();
     smallest = std::min(smallest, innovation[i]);
   }
   ContactFlags used = planned;
   for (int i = 0; i < kPoints; ++i) {
     if (planned[i] && innovation[i] > smallest + gate) {
       used[i] = false;
-      s.gated[i] = true;
       ++s.gated_corner_ticks;
     }
   }
@@ -205,7 +207,6 @@ bool estimator_init(const EstimatorConfig& config, EstimatorState& state) {
   state.initialized = false;
   state.imu_rejects = state.joint_rejects = state.dt_clamps = state.divergences = state.horizontal_resets = 0;
   state.gated_corner_ticks = 0;
-  state.gated = {};
   return ok;
 }
 
@@ -280,11 +281,11 @@ void estimator_step_rt(const model::Model& model, EstimatorState& s, const hal::
   // The contact gate takes corners that move out of the measurements (their rows get the
   // swing noise); their points keep the stance process noise, so P stays as the plan has it.
   ContactFlags used = contact;
-  s.gated = {};
   if (joints_ok) {
     relative_kinematics(model, s);
-    used = gate_contact(model, s, contact, s.x.segment<3>(3));
-    fill_measurements(model, s, used);
+    fill_kinematic_rows(model, s);
+    used = gate_contact(s, contact, s.x.segment<3>(3));
+    fill_contact_rows(s, used);
     kf_update_rt(s.x, s.p, s.y, s.measurement_variance, s.innovation);
     out.innovation_norm = contact_innovation_norm(s.innovation, used);
   }

@@ -126,7 +126,6 @@ struct EstimatorState {
   std::uint64_t imu_rejects = 0, joint_rejects = 0, dt_clamps = 0, divergences = 0, horizontal_resets = 0;
   // Corner-ticks the contact gate (contact_velocity_gate_m_s) took out of contact.
   std::uint64_t gated_corner_ticks = 0;
-  ContactFlags gated{};  // this tick's
 };
 
 // Validates the configuration once: returns false (and keeps the defaults) if a
