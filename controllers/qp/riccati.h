@@ -28,7 +28,10 @@
 // beyond its leading block and diagonal (r_dense), the rows of A and B outside their declared
 // row groups (OcpQp::ab_groups_declared), and in the vector passes every zero 4-row group of
 // A and B (found by the transpose): at MPC size each stage's data is fetched from beyond L2 in
-// every call, so what is not read is what the call no longer waits for.
+// every call, so what is not read is what the call no longer waits for. And what is read is
+// asked for ahead: while stage k is factored, stage k − 1's lines are prefetched in slices
+// between its kernels (prefetch.h; after the planning task's idle the horizon's data comes from
+// beyond the caches, and the pass otherwise waits for it line by line).
 // Square-root recursion with the classical statuses: the sweep goes on into the x block, whose
 // Schur complement Pₖ is factored in place (Pₖ = Lp·Lpᵀ, the next stage's Lp, no copy). Pₖ need
 // not be definite (singular Q; barrier weights spread over 15 decades in the interior point):
@@ -47,6 +50,7 @@
 #include <limits>
 
 #include "controllers/qp/ocp_qp.h"
+#include "controllers/qp/prefetch.h"
 #include "controllers/qp/riccati_kernels.h"
 
 namespace kuavo::qp {
@@ -133,6 +137,8 @@ struct RiccatiWorkspace {
   Eigen::Matrix<double, NU, 1> qu = Eigen::Matrix<double, NU, 1>::Zero();
   Eigen::Matrix<double, NU, 1> t = Eigen::Matrix<double, NU, 1>::Zero();
   Eigen::Matrix<double, NC, 1> gamma = Eigen::Matrix<double, NC, 1>::Zero();
+  // The next stage's lines, asked for while this one runs (prefetch.h).
+  PrefetchPlan<320> prefetch;
 };
 
 namespace riccati_detail {
@@ -145,6 +151,9 @@ inline constexpr bool kRowGroups = NX <= 64;
 // Stage equalities whose Cholesky pivots of M = D Quu⁻¹ Dᵀ spread by more than this ratio
 // (condition number of M beyond 1e14, about 1/ε) are treated as dependent.
 inline constexpr double kRankPivotRatio = 1e-7;
+
+// The next stage's prefetch plan goes out in this many slices over a stage's steps.
+inline constexpr int kPrefetchSlices = 8;
 
 template <int NX, int NU, int NC>
 using FactorMap = Eigen::Map<Eigen::Matrix<double, RiccatiLayout<NX, NU, NC>::kLd, RiccatiLayout<NX, NU, NC>::kLd>>;
@@ -550,6 +559,64 @@ void backward_vector_stage(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<
   }
 }
 
+// The lines stage k's matrix pass (and its backward vector step) will touch, in about the
+// order it touches them. Written: its factor storage's lower triangle (from each column's 4×4
+// diagonal chunk; the ν block whole) and diagonal-block inverses. Read: R (its leading r_dense
+// block and diagonal), S (unless s_zero), Q's lower triangle, B's and A's columns over their
+// declared row groups (all rows when none are declared), C and D (with equalities) and the
+// stage's vectors. Not the inequality rows Gx, Gu (the MPC has none).
+template <int NX, int NU, int N, int NC, int NG>
+void plan_factor_prefetch(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU, N, NC, NG>& ws,
+                          const RiccatiVectors<NX, NU, N, NC>* vec, int k) {
+  using Layout = RiccatiLayout<NX, NU, NC>;
+  constexpr int kLd = Layout::kLd;
+  auto& plan = ws.prefetch;
+  plan.clear();
+  const auto& s = qp.stages[k];
+  const auto& w = ws.stage[k];
+  for (int j = 0; j < kLd; ++j) {  // the ν block is written whole (load_stage)
+    const int row0 = j >= Layout::kUp && j < Layout::kXo ? Layout::kUp : j / 4 * 4;
+    plan.add_rows(w.L.data(), kLd, j, j + 1, row0, kLd, true);
+  }
+  plan.add(w.dinv.data(), sizeof(w.dinv), true);
+  plan.add(w.dinvT.data(), sizeof(w.dinvT), true);
+  const int r_rows = std::clamp(s.r_dense, 0, NU);
+  for (int j = 0; j < NU; ++j) {
+    plan.add_rows(s.R.data(), NU, j, j + 1, j < r_rows ? j / 4 * 4 : j, j < r_rows ? r_rows : j + 1, false);
+  }
+  if (!s.s_zero) plan.add(s.S.data(), sizeof(s.S), false);
+  for (int j = 0; j < NX; ++j) plan.add_rows(s.Q.data(), NX, j, j + 1, j / 4 * 4, NX, false);
+  for (int j = 0; j < NU + NX; ++j) {
+    const bool b = j < NU;
+    const int col = b ? j : j - NU, cols = b ? NU : NX;
+    const double* m = b ? s.B.data() : s.A.data();
+    if (!kRowGroups<NX> || !qp.ab_groups_declared) {
+      plan.add_rows(m, NX, col, col + 1, 0, NX, false);
+      continue;
+    }
+    // The transpose reads a whole 4-column step over the union of its columns' groups.
+    const auto groups_of = [&](int c) -> unsigned { return b ? qp.b_groups[c] : qp.a_groups[c]; };
+    const int step = col / 4 * 4;
+    unsigned groups = groups_of(col);  // bit g: rows [4g, 4g + 4)
+    if (step + 4 <= cols) groups = groups_of(step) | groups_of(step + 1) | groups_of(step + 2) | groups_of(step + 3);
+    if (groups == 0) continue;
+    const int lo = 4 * __builtin_ctz(groups), hi = std::min(NX, 4 * (32 - __builtin_clz(groups)));
+    plan.add_rows(m, NX, col, col + 1, lo, hi, false);
+  }
+  if constexpr (NC > 0) {
+    if (s.num_eq > 0) {
+      plan.add(s.C.data(), sizeof(s.C), false);
+      plan.add(s.D.data(), sizeof(s.D), false);
+    }
+  }
+  if (vec != nullptr) {
+    plan.add(vec->b[k].data(), sizeof(vec->b[k]), false);
+    plan.add(vec->q[k].data(), sizeof(vec->q[k]), false);
+    plan.add(vec->r[k].data(), sizeof(vec->r[k]), false);
+    if constexpr (NC > 0) plan.add(vec->e[k].data(), sizeof(vec->e[k]), false);
+  }
+}
+
 // The matrix pass; with vec, also the vector pass's backward recursion, stage by stage right
 // after each stage's factorization while its factor, Pₖ₊₁ and [B A] are still in cache (at MPC
 // size the horizon's data lives beyond L2, and the separate backward pass reads it all again).
@@ -583,7 +650,11 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
     const int ne = NC > 0 ? s.num_eq : 0;
     const int ne_padded = kernels::round_up4(ne);
     FactorMap<NX, NU, NC> K(L);
+    // Stage k − 1's lines, a slice after each of this stage's steps (prefetch.h).
+    if (k > 0) plan_factor_prefetch(qp, ws, vec, k - 1); else ws.prefetch.clear();
+    const int slice = (ws.prefetch.lines() + kPrefetchSlices - 1) / kPrefetchSlices;
     load_stage(s, ne_padded, K, false);  // R, S, Q: the addends of the products below
+    ws.prefetch.issue(slice);
 
     if (kGroups && qp.ab_groups_declared) {  // reads only the declared groups (ocp_qp.h)
       kernels::transpose_declared(NX, NU, s.B.data(), NX, ws.BAt.data(), kLd, ws.last_b.data(), w.b_groups.data(),
@@ -596,6 +667,7 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       kernels::transpose(NX, NX, s.A.data(), NX, ws.BAt.data() + kXo, kLd, ws.last_a.data(),
                          kGroups ? w.a_groups.data() : nullptr);
     }
+    ws.prefetch.issue(slice);
     double* Yt = ws.Yt.data();
     const auto& next = ws.stage[k + 1];
     const double* P_next = next.L.data() + kXo * (kLd + 1);  // Lp or P
@@ -612,8 +684,11 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       if (column_extents<NX, NU, NC>(ws.last_b.data(), ws.last_a.data(), ws.extent.data())) {
         extent = ws.extent.data();
         zt_product_by_extents<NX>(extent, 0, kUp, ws.BAt.data(), P_next, kLd, Yt);
+        ws.prefetch.issue(slice);
         zt_product_by_extents<NX>(extent, kXo, kXp, ws.BAt.data(), P_next, kLd, Yt);
+        ws.prefetch.issue(slice);
         add_product_by_extents<true>(extent, 0, kUp, 0, NU, Yt, kLd, L, r);
+        ws.prefetch.issue(slice);
         add_product_by_extents<false, Update::kSumT>(extent, kXo, kXp, 0, NU, Yt, kLd, L + kXo, st);
       } else {
         kernels::trmm_right_lower(kUp, NX, ws.BAt.data(), kLd, P_next, kLd, Yt, kLd);
@@ -631,12 +706,15 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       gemm<true, Update::kSumT>(kXp, NU, NX, Yt + kXo, kLd, ws.BAt.data(), kLd, L + kXo, kLd, st);
     }
     for (int j = r_rows; j < NU; ++j) L[j * (kLd + 1)] += s.R(j, j);
+    ws.prefetch.issue(slice);
     add_x_product<NX, NU, NC>(Yt, ws.BAt.data() + kXo, extent, next.p_factored, s.Q, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
     add_barrier_hessian(s, w, ws.GuW, ws.GxW, false, L);
+    ws.prefetch.issue(slice);
 
     const QpStatus f = factor_stage<NX, NU, NC>(L, ne, ne_padded, w.dinv.data(), w.dinvT.data());
     if (f != QpStatus::kSolved) return f;
+    ws.prefetch.issue(slice);
     w.p_factored = factor_cost_to_go<NX, NU, NC>(L, ne_padded);
     if (!w.p_factored) {
       load_x_block<NX, NU, NC>(s.Q, K, false);
@@ -644,7 +722,9 @@ QpStatus factor_pass(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<NX, NU
       add_barrier_hessian(s, w, ws.GuW, ws.GxW, true, L);
       schur_cost_to_go<NX, NU, NC>(L, ne_padded);
     }
+    ws.prefetch.issue(slice);
     if (vec != nullptr) backward_vector_stage(qp, ws, *vec, k);
+    ws.prefetch.finish();
   }
   return QpStatus::kSolved;
 }

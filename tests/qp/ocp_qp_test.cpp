@@ -455,6 +455,143 @@ TEST(OcpQp, DeclaredDynamicsRowGroupsGiveTheSameSolutionBitForBit) {
   }
 }
 
+// PrefetchPlan's bookkeeping against hand-counted cache lines: a range's lines (partial lines
+// at both ends count whole), ranges that touch merge, a different kind does not, and a range
+// beyond the capacity is counted as dropped; issue() walks the plan in slices.
+TEST(OcpQp, PrefetchPlanCountsWholeLinesAndMergesNeighbours) {
+  alignas(64) static double buffer[64]{};  // 8 lines
+  PrefetchPlan<2> plan;
+  plan.add(buffer + 1, 2 * sizeof(double), false);  // inside line 0
+  EXPECT_EQ(plan.lines(), 1);
+  plan.add(buffer + 7, 2 * sizeof(double), false);  // lines 0–1: extends the range
+  EXPECT_EQ(plan.lines(), 2);
+  EXPECT_EQ(plan.ranges(), 1);
+  plan.add(buffer + 16, 8 * sizeof(double), false);  // line 2, right after: merges
+  EXPECT_EQ(plan.lines(), 3);
+  EXPECT_EQ(plan.ranges(), 1);
+  plan.add(buffer + 24, sizeof(double), true);  // line 3, written: a new range
+  EXPECT_EQ(plan.ranges(), 2);
+  plan.add(buffer + 48, sizeof(double), false);  // line 6: past the capacity
+  EXPECT_EQ(plan.dropped(), 1);
+  EXPECT_EQ(plan.lines(), 4);
+  EXPECT_TRUE(plan.covers(buffer + 23));
+  EXPECT_TRUE(plan.covers(buffer + 31));
+  EXPECT_FALSE(plan.covers(buffer + 32));
+  EXPECT_FALSE(plan.covers(buffer + 48));
+  plan.issue(3);
+  plan.issue(3);  // past the end: nothing more
+  plan.finish();
+  plan.clear();
+  EXPECT_EQ(plan.lines(), 0);
+  EXPECT_EQ(plan.dropped(), 0);
+  EXPECT_FALSE(plan.covers(buffer));
+}
+
+// The matrix pass prefetches stage k − 1's lines while it factors stage k (prefetch.h). The
+// plan must name what that stage's pass touches, or the prefetch is wasted: at MPC structure
+// (declared row groups of A and B, s_zero, r_dense, equalities on some stages), every entry of
+// a stage's R, S, Q, A, B, C, D and factor storage outside its plan's lines is set to NaN, and
+// the fused factor-solve returns bit for bit the unpoisoned solution (nothing outside was read)
+// and leaves the poisoned storage NaN (nothing outside was written). The plan fits its
+// capacity and is not the whole stage (the known zeros stay unfetched).
+TEST(OcpQp, PrefetchPlanCoversWhatTheMatrixPassTouches) {
+  constexpr int kNx = 38, kNu = 50, kN = 12, kNc = 12, kDense = 24;
+  using Fixture = OcpFixture<kNx, kNu, kN, kNc, 0>;
+  auto f = std::make_unique<Fixture>();
+  auto g = std::make_unique<Fixture>();
+  std::mt19937_64 rng(53);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Columns of one 4-column step declare different groups (the first one also rows 36–39):
+  // the transpose reads the step's union.
+  auto a_groups = [](int j) { return static_cast<std::uint16_t>(0b111 | 1u << (j / 4) | (j % 4 == 0 ? 1u << 9 : 0u)); };
+  auto b_groups = [](int j) { return static_cast<std::uint16_t>(j < 24 ? 0b11 : 0b111 | 1u << ((12 + j - 24) / 4)); };
+  const int T = kN;
+  make_random_ocp(f->qp, rng, T);
+  f->qp.ab_groups_declared = true;
+  for (int j = 0; j < kNx; ++j) f->qp.a_groups[j] = a_groups(j);
+  for (int j = 0; j < kNu; ++j) f->qp.b_groups[j] = b_groups(j);
+  for (int k = 0; k <= T; ++k) {
+    auto& s = f->qp.stages[k];
+    for (int j = 0; j < kNx; ++j) {
+      for (int i = 0; i < kNx; ++i) {
+        if ((a_groups(j) >> (i / 4) & 1u) == 0 || (i >= 12 && i != j)) s.A(i, j) = 0.0;
+      }
+      if (j >= 12) s.A(j, j) = 1.0;
+    }
+    for (int j = 0; j < kNu; ++j) {
+      for (int i = 0; i < kNx; ++i) {
+        if ((b_groups(j) >> (i / 4) & 1u) == 0 || (j < 24 && i >= 6) || (j >= 24 && i >= 12 && i != 12 + j - 24)) {
+          s.B(i, j) = 0.0;
+        }
+      }
+    }
+    s.S.setZero();
+    s.s_zero = true;
+    const Eigen::Matrix<double, kNu, 1> diagonal = s.R.diagonal();
+    s.R.bottomRows(kNu - kDense).setZero();
+    s.R.rightCols(kNu - kDense).setZero();
+    s.R.diagonal() = diagonal;
+    s.r_dense = kDense;
+  }
+  g->qp = f->qp;
+  copy_vectors(f->qp, f->ws.vec);
+  copy_vectors(g->qp, g->ws.vec);
+  ASSERT_EQ(riccati_factor_solve(f->qp, f->ws.riccati, f->ws.vec, f->sol), QpStatus::kSolved);
+
+  auto& rw = g->ws.riccati;
+  constexpr int kLd = RiccatiLayout<kNx, kNu, kNc>::kLd;
+  int stage_lines = 0, planned_lines = 0, with_equalities = 0;
+  const auto poison = [&](auto& M, const auto& plan) {
+    for (int i = 0; i < M.size(); ++i) {
+      if (!plan.covers(M.data() + i)) M.data()[i] = nan;
+    }
+  };
+  for (int k = 0; k < T; ++k) {
+    riccati_detail::plan_factor_prefetch(g->qp, rw, &g->ws.vec, k);
+    const auto& plan = rw.prefetch;
+    ASSERT_EQ(plan.dropped(), 0) << k;
+    auto& s = g->qp.stages[k];
+    with_equalities += s.num_eq > 0 ? 1 : 0;
+    poison(s.R, plan);
+    poison(s.S, plan);
+    poison(s.Q, plan);
+    poison(s.A, plan);
+    poison(s.B, plan);
+    poison(s.C, plan);
+    poison(s.D, plan);
+    auto& L = rw.stage[k].L;
+    for (double& l : L) {
+      if (!plan.covers(&l)) l = nan;
+    }
+    stage_lines += static_cast<int>((sizeof(L) + sizeof(s.R) + sizeof(s.S) + sizeof(s.Q) + sizeof(s.A) + sizeof(s.B) +
+                                     sizeof(s.C) + sizeof(s.D)) / kCacheLine);
+    planned_lines += plan.lines();
+  }
+  ASSERT_GT(with_equalities, 0);
+  ASSERT_LT(with_equalities, T);
+  // The poison must be somewhere the pass could have read: the known zeros and upper triangles.
+  EXPECT_LT(planned_lines, stage_lines * 2 / 3);
+  ASSERT_EQ(riccati_factor_solve(g->qp, rw, g->ws.vec, g->sol), QpStatus::kSolved);
+  for (int k = 0; k <= T; ++k) {
+    EXPECT_EQ(f->sol.x[k], g->sol.x[k]) << k;
+    EXPECT_EQ(f->sol.u[k], g->sol.u[k]) << k;
+    EXPECT_EQ(f->sol.nu[k], g->sol.nu[k]) << k;
+  }
+  EXPECT_GT(f->sol.u[0].cwiseAbs().maxCoeff(), 0.0);
+  for (int k = 0; k < T; ++k) {
+    riccati_detail::plan_factor_prefetch(g->qp, rw, &g->ws.vec, k);
+    int unwritten = 0;
+    for (int i = 0; i < kLd * kLd; ++i) {
+      const double* l = rw.stage[k].L.data() + i;
+      if (!rw.prefetch.covers(l)) {
+        EXPECT_TRUE(std::isnan(*l)) << "stage " << k << " entry " << i << " written outside the plan";
+        ++unwritten;
+      }
+    }
+    EXPECT_GT(unwritten, kLd * kLd / 4) << k;  // the upper triangle is left out
+  }
+}
+
 TEST(OcpQp, IterationCapIsHonoured) {
   auto f = std::make_unique<OcpFixture<4, 3, 5, 2, 3>>();
   std::mt19937_64 rng(29);
