@@ -53,10 +53,9 @@ class PrefetchPlan {
     ranges_[count_++] = {first, static_cast<int>((end - first) / kCacheLine), write};
     lines_ += ranges_[count_ - 1].lines;
   }
-  // Rows [row0, row1) of columns [col0, col1) of a column-major matrix (leading dimension ld).
-  void add_rows(const double* m, int ld, int col0, int col1, int row0, int row1, bool write) {
-    if (row1 <= row0) return;
-    for (int j = col0; j < col1; ++j) add(m + j * ld + row0, static_cast<std::size_t>(row1 - row0) * sizeof(double), write);
+  // Rows [row0, row1) of column j of a column-major matrix (leading dimension ld).
+  void add_column(const double* m, int ld, int j, int row0, int row1, bool write) {
+    if (row1 > row0) add(m + j * ld + row0, static_cast<std::size_t>(row1 - row0) * sizeof(double), write);
   }
   int lines() const { return lines_; }
   int ranges() const { return count_; }

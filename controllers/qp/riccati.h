@@ -576,22 +576,22 @@ void plan_factor_prefetch(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<N
   const auto& w = ws.stage[k];
   for (int j = 0; j < kLd; ++j) {  // the ν block is written whole (load_stage)
     const int row0 = j >= Layout::kUp && j < Layout::kXo ? Layout::kUp : j / 4 * 4;
-    plan.add_rows(w.L.data(), kLd, j, j + 1, row0, kLd, true);
+    plan.add_column(w.L.data(), kLd, j, row0, kLd, true);
   }
   plan.add(w.dinv.data(), sizeof(w.dinv), true);
   plan.add(w.dinvT.data(), sizeof(w.dinvT), true);
   const int r_rows = std::clamp(s.r_dense, 0, NU);
   for (int j = 0; j < NU; ++j) {
-    plan.add_rows(s.R.data(), NU, j, j + 1, j < r_rows ? j / 4 * 4 : j, j < r_rows ? r_rows : j + 1, false);
+    plan.add_column(s.R.data(), NU, j, j < r_rows ? j / 4 * 4 : j, j < r_rows ? r_rows : j + 1, false);
   }
   if (!s.s_zero) plan.add(s.S.data(), sizeof(s.S), false);
-  for (int j = 0; j < NX; ++j) plan.add_rows(s.Q.data(), NX, j, j + 1, j / 4 * 4, NX, false);
+  for (int j = 0; j < NX; ++j) plan.add_column(s.Q.data(), NX, j, j / 4 * 4, NX, false);
   for (int j = 0; j < NU + NX; ++j) {
     const bool b = j < NU;
     const int col = b ? j : j - NU, cols = b ? NU : NX;
     const double* m = b ? s.B.data() : s.A.data();
     if (!kRowGroups<NX> || !qp.ab_groups_declared) {
-      plan.add_rows(m, NX, col, col + 1, 0, NX, false);
+      plan.add_column(m, NX, col, 0, NX, false);
       continue;
     }
     // The transpose reads a whole 4-column step over the union of its columns' groups.
@@ -601,7 +601,7 @@ void plan_factor_prefetch(const OcpQp<NX, NU, N, NC, NG>& qp, RiccatiWorkspace<N
     if (step + 4 <= cols) groups = groups_of(step) | groups_of(step + 1) | groups_of(step + 2) | groups_of(step + 3);
     if (groups == 0) continue;
     const int lo = 4 * __builtin_ctz(groups), hi = std::min(NX, 4 * (32 - __builtin_clz(groups)));
-    plan.add_rows(m, NX, col, col + 1, lo, hi, false);
+    plan.add_column(m, NX, col, lo, hi, false);
   }
   if constexpr (NC > 0) {
     if (s.num_eq > 0) {
