@@ -9,8 +9,10 @@
 // DIR/summary.json (runs, falls, per motion the fall rate's 95 % Wilson interval). A run
 // that produced no summary or whose simulation failed counts as a fall (conservative) and
 // is also counted in "sim_failures". --attribute runs each fall that had both a push and
-// model errors again with each alone (DIR/attribution/, DIR/attribution.csv, and per motion
-// "fall_causes" in summary.json): whether the push or the errors topple the robot.
+// model errors again with each alone, and once more as it was but with the true base state
+// in place of the estimator's (DIR/attribution/, DIR/attribution.csv, and per motion
+// "fall_causes" in summary.json): whether the push or the errors topple the robot, and
+// whether the state estimate has a part in it.
 #include <sys/resource.h>
 
 #include <cmath>
@@ -214,7 +216,10 @@ int run_campaign(int argc, char** argv) {
   // The `kuavo simulate` of a run, its summary to BASE.json (written as .part, renamed when
   // done). Without `errors` the plant is the controller's model (--perturb none, same
   // seed); without `push`, no push: the two halves of a fall's attribution (--attribute).
-  const auto simulate_command = [&](const Run& r, bool errors, bool push, const std::string& base) {
+  // With `true_state` the controller reads the plant's state (--state truth), not the
+  // estimator's: the third run of an attribution.
+  const auto simulate_command = [&](const Run& r, bool errors, bool push, const std::string& base,
+                                    bool true_state = false) {
     std::string cmd = quote(self) + " simulate " + quote(r.motion_path) + " --planner " + spec.planner + " --ground " +
                       r.ground + " --perturb " + quote(errors ? r.perturbation_arg : "none") + " --seed " +
                       std::to_string(r.seed);
@@ -238,6 +243,7 @@ int run_campaign(int argc, char** argv) {
                     spec.push.duration_s);
       cmd += p_arg;
     }
+    if (true_state) cmd += " --state truth";
     return cmd + " --summary " + quote(base + ".json.part") + " > /dev/null 2> " + quote(base + ".err") + "; test -s " +
            quote(base + ".json.part") + " && mv " + quote(base + ".json.part") + " " + quote(base + ".json");
   };
@@ -307,8 +313,13 @@ int run_campaign(int argc, char** argv) {
   // controller's own model (--perturb none, the same seed: the same sensor noise), and the
   // model errors alone without the push. Its cause: "push" (only the push alone falls),
   // "errors" (only the errors alone), "each" (both halves fall), "together" (neither
-  // does: it takes the two), "failed" (a half did not simulate).
+  // does: it takes the two), "failed" (one of its runs did not simulate). A third run repeats the
+  // fall as it was (push and errors, the same seeds) with the controller reading the
+  // plant's true base state instead of the estimator's (--state truth): a fall that it
+  // survives is also counted as "state_estimate" (the estimate's errors have a part in it;
+  // the controller itself balances that run). Not a cause of its own: it crosses the four.
   std::vector<std::string> cause(runs.size());
+  std::vector<bool> estimate(runs.size(), false);
   if (attribute) {
     fs::create_directories(dir / "attribution", ec);
     if (ec) {
@@ -330,24 +341,36 @@ int run_campaign(int argc, char** argv) {
           jf << simulate_command(runs[i], errors, !errors, base.string()) << "\n";
           ++att_pending;
         }
+        const fs::path truth = dir / "attribution" / (runs[i].id + "__true_state");
+        if (!fs::exists(truth.string() + ".json")) {
+          jf << simulate_command(runs[i], true, true, truth.string(), true) << "\n";
+          ++att_pending;
+        }
       }
     }
     std::fprintf(stderr, "kuavo campaign: attribution of %zu falls, %d runs to do\n", fallen.size(), att_pending);
     if (att_pending > 0) run_jobs(att_jobs, dir / "attribution" / "joblog.txt");
     std::ofstream acsv(dir / "attribution.csv");
-    acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s\n";
+    acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s,true_state_fell_at_s,state_estimate\n";
     int failed = 0;
     for (const std::size_t i : fallen) {
       const Outcome p = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
       const Outcome e = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
-      cause[i] = !p.ok || !e.ok ? "failed" : p.fell && e.fell ? "each" : p.fell ? "push" : e.fell ? "errors" : "together";
+      const Outcome s = read_outcome(dir / "attribution" / (runs[i].id + "__true_state.json"));
+      cause[i] = !p.ok || !e.ok || !s.ok ? "failed"
+                 : p.fell && e.fell      ? "each"
+                 : p.fell                ? "push"
+                 : e.fell                ? "errors"
+                                         : "together";
       failed += cause[i] == "failed";
-      char times[64];
-      std::snprintf(times, sizeof times, "%.3f,%.3f", p.ok && p.fell ? p.fell_at_s : -1.0, e.ok && e.fell ? e.fell_at_s : -1.0);
+      estimate[i] = s.ok && !s.fell;
+      char times[96];
+      std::snprintf(times, sizeof times, "%.3f,%.3f,%.3f,%d", p.ok && p.fell ? p.fell_at_s : -1.0,
+                    e.ok && e.fell ? e.fell_at_s : -1.0, s.ok && s.fell ? s.fell_at_s : -1.0, estimate[i] ? 1 : 0);
       acsv << runs[i].id << ',' << runs[i].motion << ',' << cause[i] << ',' << times << '\n';
     }
     if (failed > 0) {
-      std::fprintf(stderr, "kuavo campaign: %d attributions failed: a half did not simulate (see %s/*.err)\n", failed,
+      std::fprintf(stderr, "kuavo campaign: %d attributions failed: one of their runs did not simulate (see %s/*.err)\n", failed,
                    (dir / "attribution").c_str());
     }
   }
@@ -399,6 +422,7 @@ int run_campaign(int argc, char** argv) {
     t.falls += counted_fall;
     total_falls += counted_fall;
     if (!cause[i].empty()) ++t.causes[cause[i]];
+    if (estimate[i]) ++t.causes["state_estimate"];
     failures += !run_ok;
     if (parsed && to_do[i]) sim_seconds += number_or(s, "sim_time_s", 0.0);
   }
@@ -421,7 +445,7 @@ int run_campaign(int argc, char** argv) {
                                   {"fall_rate_ci95", {std::round(lo * 1e5) / 1e5, std::round(hi * 1e5) / 1e5}}};
     if (attribute) {  // falls with a push and model errors, by what alone topples the robot
       nlohmann::ordered_json causes = nlohmann::ordered_json::object();
-      for (const char* c : {"push", "errors", "each", "together", "failed"}) {
+      for (const char* c : {"push", "errors", "each", "together", "failed", "state_estimate"}) {
         const auto it = t.causes.find(c);
         causes[c] = it == t.causes.end() ? 0 : it->second;
       }

@@ -57,7 +57,8 @@ constexpr CommandHelp kHelp[] = {
      "               --log run.csv --summary run.json [--quiet]\n"},
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
      "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet]\n"
-     "                      [--attribute]   (each fall with a push and model errors run again with each alone:\n"
+     "                      [--attribute]   (each fall with a push and model errors run again with each alone,\n"
+     "                                       and with the true base state for the estimate's:\n"
      "                                       DIR/attribution.csv, summary.json \"fall_causes\")\n"
      "       kuavo campaign --example      print the \"show conditions\" spec\n"},
     {"model", "robot model summary",
