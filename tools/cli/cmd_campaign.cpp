@@ -313,9 +313,9 @@ int run_campaign(int argc, char** argv) {
   // controller's own model (--perturb none, the same seed: the same sensor noise), and the
   // model errors alone without the push. Its cause: "push" (only the push alone falls),
   // "errors" (only the errors alone), "each" (both halves fall), "together" (neither
-  // does: it takes the two), "failed" (one of its runs did not simulate). A third run repeats the
-  // fall as it was (push and errors, the same seeds) with the controller reading the
-  // plant's true base state instead of the estimator's (--state truth): a fall that it
+  // does: it takes the two), "failed" (one of its runs did not simulate). A third run
+  // repeats the fall as it was (push and errors, the same seeds) with the controller reading
+  // the plant's true base state instead of the estimator's (--state truth): a fall that it
   // survives is also counted as "state_estimate" (the estimate's errors have a part in it;
   // the controller itself balances that run). Not a cause of its own: it crosses the four.
   std::vector<std::string> cause(runs.size());
@@ -370,8 +370,9 @@ int run_campaign(int argc, char** argv) {
       acsv << runs[i].id << ',' << runs[i].motion << ',' << cause[i] << ',' << times << '\n';
     }
     if (failed > 0) {
-      std::fprintf(stderr, "kuavo campaign: %d attributions failed: one of their runs did not simulate (see %s/*.err)\n", failed,
-                   (dir / "attribution").c_str());
+      std::fprintf(stderr,
+                   "kuavo campaign: %d attributions failed: one of their runs did not simulate (see %s/*.err)\n",
+                   failed, (dir / "attribution").c_str());
     }
   }
 
