@@ -59,7 +59,8 @@ mkdir -p "$dir/c/motions" && cp "$dir/a/motions/dance.motion" "$dir/c/motions/" 
 # with the errors alone (it stands), each the same log as `kuavo simulate` of that half:
 # cause "push". A third run repeats it with the true base state (--state truth, the same log as
 # `kuavo simulate --state truth`): it falls too, so the estimate is not counted as having a
-# part. The campaign's own table does not change; a campaign without --attribute has no
+# part. A fourth repeats it with noise-free sensors (--sensors ideal, the same log as `kuavo
+# simulate --sensors ideal`, not the fall's own): it falls too, so sensor_noise is 0. The campaign's own table does not change; a campaign without --attribute has no
 # "fall_causes"; a resumed one redoes nothing and says the same.
 grep -q -- " --planner mpc --ground floor --perturb 'show' --seed 1 --perturb-seed 1 --duration 0.6 --push " \
   "$dir/b/jobs.txt" || fail "a run's command changed: $(cat "$dir/b/jobs.txt")"
@@ -74,15 +75,16 @@ grep -q '"falls": 2' "$dir/t/summary.json" || fail "the 80 N·s push did not top
 push=$(grep -o -- "--push [^ ]*" "$dir/t/jobs.txt" | head -n 1) || fail "no push in $dir/t/jobs.txt"
 cp "$dir/t/runs.csv" "$dir/runs_before.csv"
 "$kuavo" campaign "$dir/attr.json" --out "$dir/t" --attribute > /dev/null 2> "$dir/attr.log" || fail "--attribute"
-grep -q "attribution of 1 falls, 3 runs to do" "$dir/attr.log" || fail "attribution runs: $(cat "$dir/attr.log")"
+grep -q "attribution of 1 falls, 4 runs to do" "$dir/attr.log" || fail "attribution runs: $(cat "$dir/attr.log")"
 cmp "$dir/runs_before.csv" "$dir/t/runs.csv" || fail "--attribute changed runs.csv"
-[ "$(head -n 1 "$dir/t/attribution.csv")" = "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s,true_state_fell_at_s,state_estimate" ] ||
+[ "$(head -n 1 "$dir/t/attribution.csv")" = "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s,true_state_fell_at_s,state_estimate,ideal_sensors_fell_at_s,sensor_noise" ] ||
   fail "attribution.csv header: $(head -n 1 "$dir/t/attribution.csv")"
 [ "$(tail -n +2 "$dir/t/attribution.csv" | wc -l)" -eq 1 ] || fail "expected one attributed fall: $(cat "$dir/t/attribution.csv")"
 row=$(tail -n +2 "$dir/t/attribution.csv")
 [ "$(echo "$row" | cut -d, -f1-3)" = "dance__floor__show__1,dance,push" ] || fail "attribution: $row, expected cause push"
 grep -q '"push": 1' "$dir/t/summary.json" || fail "summary.json fall_causes: $(cat "$dir/t/summary.json")"
 grep -q '"state_estimate": 0' "$dir/t/summary.json" || fail "summary.json state_estimate: $(cat "$dir/t/summary.json")"
+grep -q '"sensor_noise": 0' "$dir/t/summary.json" || fail "summary.json sensor_noise: $(cat "$dir/t/summary.json")"
 # Each half is `kuavo simulate` of that half in its own process: the same log, bit for bit.
 "$kuavo" simulate "$dir/t/motions/dance.motion" --planner mpc --ground floor --seed 1 --duration 1.5 $push \
   --summary "$dir/push_alone.json" > /dev/null 2>&1 || fail "simulate the push alone"
@@ -91,7 +93,13 @@ grep -q '"state_estimate": 0' "$dir/t/summary.json" || fail "summary.json state_
 "$kuavo" simulate "$dir/t/motions/dance.motion" --planner mpc --ground floor --seed 1 --duration 1.5 \
   --perturb show --perturb-seed 1 $push --state truth --summary "$dir/true_state.json" > /dev/null 2>&1 ||
   fail "simulate with the true state"
-for half in push_alone errors_alone true_state; do
+"$kuavo" simulate "$dir/t/motions/dance.motion" --planner mpc --ground floor --seed 1 --duration 1.5 \
+  --perturb show --perturb-seed 1 $push --sensors ideal --summary "$dir/ideal_sensors.json" > /dev/null 2>&1 ||
+  fail "simulate with ideal sensors"
+fell_log=$(grep '"log_sha256"' "$dir/t/runs/dance__floor__show__1.json" || true)
+[ -n "$fell_log" ] && [ "$fell_log" != "$(grep '"log_sha256"' "$dir/ideal_sensors.json")" ] ||
+  fail "the noise-free sensors' run is the fall's own log ($fell_log)"
+for half in push_alone errors_alone true_state ideal_sensors; do
   want=$(grep '"log_sha256"' "$dir/$half.json" || true)
   got=$(grep '"log_sha256"' "$dir/t/attribution/dance__floor__show__1__$half.json" 2> /dev/null || true)
   [ -n "$want" ] && [ "$want" = "$got" ] || fail "$half: the campaign's run is not kuavo simulate's ($got, $want)"
@@ -99,10 +107,12 @@ done
 grep -q '"fell": true' "$dir/push_alone.json" || fail "the push alone did not topple the nominal robot"
 grep -q '"fell": false' "$dir/errors_alone.json" || fail "the model errors alone toppled a standing robot"
 grep -q '"fell": true' "$dir/true_state.json" || fail "the 80 N·s push did not topple the robot with the true state"
+grep -q '"fell": true' "$dir/ideal_sensors.json" || fail "the 80 N·s push did not topple the robot on ideal sensors"
 alone=$(grep '"fell_at_s"' "$dir/push_alone.json" | tr -dc '0-9.-')
 truth=$(grep '"fell_at_s"' "$dir/true_state.json" | tr -dc '0-9.-')
-[ "$(echo "$row" | cut -d, -f4-7)" = "$(printf %.3f "$alone"),-1.000,$(printf %.3f "$truth"),0" ] ||
-  fail "the runs' fall times: $row (push alone $alone, true state $truth)"
+ideal=$(grep '"fell_at_s"' "$dir/ideal_sensors.json" | tr -dc '0-9.-')
+[ "$(echo "$row" | cut -d, -f4-9)" = "$(printf %.3f "$alone"),-1.000,$(printf %.3f "$truth"),0,$(printf %.3f "$ideal"),0" ] ||
+  fail "the runs' fall times: $row (push alone $alone, true state $truth, ideal sensors $ideal)"
 "$kuavo" campaign "$dir/attr.json" --out "$dir/t" --attribute > /dev/null 2> "$dir/attr2.log" || fail "--attribute resumed"
 grep -q "attribution of 1 falls, 0 runs to do" "$dir/attr2.log" || fail "resumed attribution: $(cat "$dir/attr2.log")"
 [ "$(tail -n +2 "$dir/t/attribution.csv")" = "$row" ] || fail "resumed attribution: $(cat "$dir/t/attribution.csv")"

@@ -216,10 +216,13 @@ int run_campaign(int argc, char** argv) {
   // The `kuavo simulate` of a run, its summary to BASE.json (written as .part, renamed when
   // done). Without `errors` the plant is the controller's model (--perturb none, same
   // seed); without `push`, no push: the two halves of a fall's attribution (--attribute).
-  // With `true_state` the controller reads the plant's state (--state truth), not the
-  // estimator's: the third run of an attribution.
+  // `state`: the third and fourth runs of an attribution. kTrueState: the controller reads
+  // the plant's state (--state truth), not the estimator's. kIdealSensors: the estimator reads
+  // sensors without the MTi model's noise, bias, tilt and quantization (--sensors ideal; the
+  // perturbation set's own sensor errors stay).
+  enum class StateSource { kEstimator, kTrueState, kIdealSensors };
   const auto simulate_command = [&](const Run& r, bool errors, bool push, const std::string& base,
-                                    bool true_state = false) {
+                                    StateSource state = StateSource::kEstimator) {
     std::string cmd = quote(self) + " simulate " + quote(r.motion_path) + " --planner " + spec.planner + " --ground " +
                       r.ground + " --perturb " + quote(errors ? r.perturbation_arg : "none") + " --seed " +
                       std::to_string(r.seed);
@@ -243,7 +246,8 @@ int run_campaign(int argc, char** argv) {
                     spec.push.duration_s);
       cmd += p_arg;
     }
-    if (true_state) cmd += " --state truth";
+    if (state == StateSource::kTrueState) cmd += " --state truth";
+    if (state == StateSource::kIdealSensors) cmd += " --sensors ideal";
     return cmd + " --summary " + quote(base + ".json.part") + " > /dev/null 2> " + quote(base + ".err") + "; test -s " +
            quote(base + ".json.part") + " && mv " + quote(base + ".json.part") + " " + quote(base + ".json");
   };
@@ -309,7 +313,7 @@ int run_campaign(int argc, char** argv) {
                        1e-6 * static_cast<double>(children.ru_utime.tv_usec + children.ru_stime.tv_usec);
 
   // Attribution (--attribute): each run that fell with both a push and model errors is run
-  // again twice in DIR/attribution/ (resumable like the runs): the push alone on the
+  // again four times in DIR/attribution/ (resumable like the runs): the push alone on the
   // controller's own model (--perturb none, the same seed: the same sensor noise), and the
   // model errors alone without the push. Its cause: "push" (only the push alone falls),
   // "errors" (only the errors alone), "each" (both halves fall), "together" (neither
@@ -318,8 +322,13 @@ int run_campaign(int argc, char** argv) {
   // the plant's true base state instead of the estimator's (--state truth): a fall that it
   // survives is also counted as "state_estimate" (the estimate's errors have a part in it;
   // the controller itself balances that run). Not a cause of its own: it crosses the four.
+  // A fourth run repeats it with the estimator reading noise-free sensors (--sensors ideal):
+  // a fall that it survives is also counted as "sensor_noise" (the MTi model's errors, its
+  // 0.2° orientation error above all, have a part in it; the filter's own lag does not
+  // topple that run). Together the two split the estimate's part: a fall counted under
+  // state_estimate but not sensor_noise is the filter's (or the show set's sensor errors').
   std::vector<std::string> cause(runs.size());
-  std::vector<bool> estimate(runs.size(), false);
+  std::vector<bool> estimate(runs.size(), false), sensor_noise(runs.size(), false);
   if (attribute) {
     fs::create_directories(dir / "attribution", ec);
     if (ec) {
@@ -341,9 +350,11 @@ int run_campaign(int argc, char** argv) {
           jf << simulate_command(runs[i], errors, !errors, base.string()) << "\n";
           ++att_pending;
         }
-        const fs::path truth = dir / "attribution" / (runs[i].id + "__true_state");
-        if (!fs::exists(truth.string() + ".json")) {
-          jf << simulate_command(runs[i], true, true, truth.string(), true) << "\n";
+        for (const auto& [suffix, state] : {std::pair{"__true_state", StateSource::kTrueState},
+                                            std::pair{"__ideal_sensors", StateSource::kIdealSensors}}) {
+          const fs::path base = dir / "attribution" / (runs[i].id + suffix);
+          if (fs::exists(base.string() + ".json")) continue;
+          jf << simulate_command(runs[i], true, true, base.string(), state) << "\n";
           ++att_pending;
         }
       }
@@ -351,22 +362,26 @@ int run_campaign(int argc, char** argv) {
     std::fprintf(stderr, "kuavo campaign: attribution of %zu falls, %d runs to do\n", fallen.size(), att_pending);
     if (att_pending > 0) run_jobs(att_jobs, dir / "attribution" / "joblog.txt");
     std::ofstream acsv(dir / "attribution.csv");
-    acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s,true_state_fell_at_s,state_estimate\n";
+    acsv << "run,motion,cause,push_alone_fell_at_s,errors_alone_fell_at_s,true_state_fell_at_s,state_estimate,"
+            "ideal_sensors_fell_at_s,sensor_noise\n";
     int failed = 0;
     for (const std::size_t i : fallen) {
       const Outcome p = read_outcome(dir / "attribution" / (runs[i].id + "__push_alone.json"));
       const Outcome e = read_outcome(dir / "attribution" / (runs[i].id + "__errors_alone.json"));
       const Outcome s = read_outcome(dir / "attribution" / (runs[i].id + "__true_state.json"));
-      cause[i] = !p.ok || !e.ok || !s.ok ? "failed"
+      const Outcome n = read_outcome(dir / "attribution" / (runs[i].id + "__ideal_sensors.json"));
+      cause[i] = !p.ok || !e.ok || !s.ok || !n.ok ? "failed"
                  : p.fell && e.fell      ? "each"
                  : p.fell                ? "push"
                  : e.fell                ? "errors"
                                          : "together";
       failed += cause[i] == "failed";
       estimate[i] = s.ok && !s.fell;
-      char times[96];
-      std::snprintf(times, sizeof times, "%.3f,%.3f,%.3f,%d", p.ok && p.fell ? p.fell_at_s : -1.0,
-                    e.ok && e.fell ? e.fell_at_s : -1.0, s.ok && s.fell ? s.fell_at_s : -1.0, estimate[i] ? 1 : 0);
+      sensor_noise[i] = n.ok && !n.fell;
+      char times[128];
+      std::snprintf(times, sizeof times, "%.3f,%.3f,%.3f,%d,%.3f,%d", p.ok && p.fell ? p.fell_at_s : -1.0,
+                    e.ok && e.fell ? e.fell_at_s : -1.0, s.ok && s.fell ? s.fell_at_s : -1.0, estimate[i] ? 1 : 0,
+                    n.ok && n.fell ? n.fell_at_s : -1.0, sensor_noise[i] ? 1 : 0);
       acsv << runs[i].id << ',' << runs[i].motion << ',' << cause[i] << ',' << times << '\n';
     }
     if (failed > 0) {
@@ -424,6 +439,7 @@ int run_campaign(int argc, char** argv) {
     total_falls += counted_fall;
     if (!cause[i].empty()) ++t.causes[cause[i]];
     if (estimate[i]) ++t.causes["state_estimate"];
+    if (sensor_noise[i]) ++t.causes["sensor_noise"];
     failures += !run_ok;
     if (parsed && to_do[i]) sim_seconds += number_or(s, "sim_time_s", 0.0);
   }
@@ -446,7 +462,7 @@ int run_campaign(int argc, char** argv) {
                                   {"fall_rate_ci95", {std::round(lo * 1e5) / 1e5, std::round(hi * 1e5) / 1e5}}};
     if (attribute) {  // falls with a push and model errors, by what alone topples the robot
       nlohmann::ordered_json causes = nlohmann::ordered_json::object();
-      for (const char* c : {"push", "errors", "each", "together", "failed", "state_estimate"}) {
+      for (const char* c : {"push", "errors", "each", "together", "failed", "state_estimate", "sensor_noise"}) {
         const auto it = t.causes.find(c);
         causes[c] = it == t.causes.end() ? 0 : it->second;
       }

@@ -58,7 +58,8 @@ constexpr CommandHelp kHelp[] = {
     {"campaign", "runs over seeds, grounds and perturbations under GNU parallel",
      "usage: kuavo campaign SPEC.json [--out DIR] [--seeds N] [--jobs N] [--sshloginfile FILE] [--quiet]\n"
      "                      [--attribute]   (each fall with a push and model errors run again with each alone,\n"
-     "                                       and with the true base state for the estimate's:\n"
+     "                                       with the true base state for the estimate's, and with\n"
+     "                                       noise-free sensors (--sensors ideal) for the sensors':\n"
      "                                       DIR/attribution.csv, summary.json \"fall_causes\")\n"
      "       kuavo campaign --example      print the \"show conditions\" spec\n"},
     {"model", "robot model summary",
