@@ -395,6 +395,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
     out.estimator_velocity_rms_m_s = std::sqrt(sq_vel / tracked);
   }
   out.estimator_gated_corner_ticks = control->estimator.gated_corner_ticks;
+  out.estimator_unloaded_foot_ticks = control->estimator_unloaded_foot_ticks;
   if (out.zmp_margin_m_min > 1e8) out.zmp_margin_m_min = 0.0;
   out.wbc_us = percentiles(wbc_us);
   out.wbc_qp_iterations = percentiles(qp_iterations);
@@ -447,7 +448,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n  \"recovery_early_touchdowns\": %llu,\n"
                 "  \"liftoff_holds\": %llu,\n  \"liftoff_released\": %llu,\n  \"motion_lag_s\": {\"max\": %.3f, \"end\": %.3f},\n"
                 "  \"plan_anchor\": {\"reanchors\": %llu, \"refused\": %llu, \"offset_m_max\": %.4f},\n"
-                "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f, \"gated_corner_ticks\": %llu}\n}\n",
+                "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f, \"gated_corner_ticks\": %llu, \"unloaded_foot_ticks\": %llu}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.com_path_m, s.com_path_plan_m, s.steps, s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
@@ -458,7 +459,8 @@ std::string motion_summary_json(const MotionSummary& s) {
                 static_cast<unsigned long long>(s.liftoff_released), s.motion_lag_s_max, s.motion_lag_s_end,
                 static_cast<unsigned long long>(s.anchor_reanchors), static_cast<unsigned long long>(s.anchor_refused),
                 s.anchor_offset_m_max, s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max,
-                static_cast<unsigned long long>(s.estimator_gated_corner_ticks));
+                static_cast<unsigned long long>(s.estimator_gated_corner_ticks),
+                static_cast<unsigned long long>(s.estimator_unloaded_foot_ticks));
   std::string json = base + buf;
   if (!s.perturbation_json.empty()) {
     json.resize(json.rfind('}'));

@@ -104,6 +104,7 @@ struct MotionSummary {
   double estimator_position_drift_m = 0.0;  // final horizontal base position error
   double estimator_position_err_m_max = 0.0;
   std::uint64_t estimator_gated_corner_ticks = 0;  // EstimatorState::gated_corner_ticks at the end
+  std::uint64_t estimator_unloaded_foot_ticks = 0;  // ControlWorkspace::estimator_unloaded_foot_ticks at the end
 };
 
 // The planning task's counters (MPC fallbacks, knots put on a stop, recovery steps taken and

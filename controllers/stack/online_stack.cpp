@@ -25,6 +25,9 @@ const char* stack_validate_config(const StackConfig& config) {
   if (!(config.estimator_touchdown_delay_s >= 0.0 && config.estimator_touchdown_delay_s <= 0.2)) {
     return "estimator touchdown delay outside 0..0.2 s";
   }
+  if (!(config.estimator_unloaded_foot_N >= 0.0 && config.estimator_unloaded_foot_N <= 1000.0)) {
+    return "estimator unloaded-foot threshold outside 0..1000 N";
+  }
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
   if (!(config.plan_blend_s >= 0.0 && config.plan_blend_s <= config.plan_period_s)) return "plan blend outside [0, plan period]";
   if (!(config.upper_body_delay_s >= 0.0 && config.upper_body_delay_s <= 0.02)) return "upper-body delay outside 0..0.02 s";
@@ -77,6 +80,11 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   for (int c = 0; c < model::kNumContactPoints; ++c) {
     ws.planned_contact_s[c] = ws.reference.in_contact[c] ? ws.planned_contact_s[c] + dt_s : 0.0;
     ws.estimator_contact[c] = ws.reference.in_contact[c] && ws.planned_contact_s[c] >= config.estimator_touchdown_delay_s;
+  }
+  if (config.estimator_unloaded_foot_N > 0.0 && ws.ticks > 0 && ws.wbc.diagnostics.status == wbc::WbcStatus::kOk) {
+    ws.estimator_unloaded_foot_ticks += static_cast<std::uint64_t>(
+        estimator_drop_unloaded_foot_rt(ws.wbc.diagnostics.contact_force_N, config.estimator_unloaded_foot_N,
+                                        ws.estimator_contact));
   }
   estimator::estimator_step_rt(model, ws.estimator, sensors, ws.estimator_contact, dt_s, ws.estimate);
   const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
@@ -161,6 +169,28 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
   return true;
 }
 
+int estimator_drop_unloaded_foot_rt(const wbc::ForceVector& force_N, double threshold_N,
+                                    estimator::ContactFlags& contact) {
+  static_assert(model::kNumContactPoints == 2 * planner::kCornersPerFoot, "two feet of kCornersPerFoot corners");
+  static_assert(wbc::ForceVector::RowsAtCompileTime == 3 * model::kNumContactPoints, "3 forces per corner");
+  if (!(threshold_N > 0.0)) return 0;
+  constexpr int kCorners = planner::kCornersPerFoot;
+  double normal_N[2] = {0.0, 0.0};
+  for (int foot = 0; foot < 2; ++foot) {
+    for (int k = 0; k < kCorners; ++k) normal_N[foot] += force_N[3 * (foot * kCorners + k) + 2];
+  }
+  for (int foot = 0; foot < 2; ++foot) {
+    if (!(normal_N[foot] < threshold_N && normal_N[1 - foot] >= threshold_N)) continue;
+    bool any = false;
+    for (int k = 0; k < kCorners; ++k) {
+      any = any || contact[foot * kCorners + k];
+      contact[foot * kCorners + k] = false;
+    }
+    return any ? 1 : 0;
+  }
+  return 0;
+}
+
 bool stack_begin_rt(const model::Model& model, const StackConfig& config, ControlWorkspace& control,
                     const planner::MotionPlan& motion, const planner::ReferencePlan& first,
                     const hal::SensorFrame& sensors, hal::TimeNs now_ns) {
@@ -185,6 +215,7 @@ bool stack_begin_rt(const model::Model& model, const StackConfig& config, Contro
   control.planned_contact_s.fill(1.0);  // standing at the start: in contact for long
   control.started = true;
   control.ticks = 0;
+  control.estimator_unloaded_foot_ticks = 0;
   return true;
 }
 

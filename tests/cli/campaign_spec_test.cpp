@@ -83,6 +83,23 @@ TEST(CampaignSpec, PlanAnchorKeysPassThroughOnlyWhenGiven) {
   EXPECT_NE(error.find("plan_anchor_home"), std::string::npos);
 }
 
+// The estimator's unloaded-foot threshold is opt-in: absent, simulate's default (off); given,
+// passed on; out of range or not a number, refused by name.
+TEST(CampaignSpec, EstimatorUnloadedFootIsOptIn) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_FALSE(s.estimator_unloaded_foot_N.has_value());
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"estimator_unloaded_foot_N":50})", s, error)) << error;
+  EXPECT_EQ(s.estimator_unloaded_foot_N.value_or(-1.0), 50.0);
+  for (const char* bad : {R"(,"estimator_unloaded_foot_N":-1})", R"(,"estimator_unloaded_foot_N":2000})",
+                          R"(,"estimator_unloaded_foot_N":"50"})"}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
+    EXPECT_NE(error.find("estimator_unloaded_foot_N"), std::string::npos) << error;
+  }
+}
+
 // A push is the impulse over its duration, starts inside the window, and depends only on
 // the seed; its directions cover the circle.
 // A spec's push and run length within what `kuavo simulate` takes (sim/push_option.h): refused

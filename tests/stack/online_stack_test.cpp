@@ -187,11 +187,59 @@ TEST(OnlineStack, RefusesABadConfiguration) {
   cfg.plan_blend_s = 0.03;  // longer than the plan period
   EXPECT_NE(stack_validate_config(cfg), nullptr);
   cfg = StackConfig{};
+  for (const double bad : {-1.0, 2000.0, std::nan("")}) {
+    cfg.estimator_unloaded_foot_N = bad;
+    EXPECT_NE(stack_validate_config(cfg), nullptr) << bad;
+  }
+  cfg = StackConfig{};
+  cfg.estimator_unloaded_foot_N = 50.0;
+  EXPECT_EQ(stack_validate_config(cfg), nullptr);
+  cfg = StackConfig{};
   EXPECT_EQ(stack_validate_config(cfg), nullptr);
   PlannerKind k;
   EXPECT_TRUE(parse_planner("kinematic", k));
   EXPECT_EQ(k, PlannerKind::kKinematic);
   EXPECT_FALSE(parse_planner("magic", k));
+}
+
+// The estimator's stance set less a foot the WBC has let go of (estimator_unloaded_foot_N):
+// the foot whose corners' normal forces sum below the threshold leaves it, the other stays;
+// nothing changes when both feet are light (no foot to trust more), when the threshold is
+// off, or for tangential forces alone. Expected flags written out by hand from the corners'
+// forces (corners 0-3 the left sole, 4-7 the right; 3 forces per corner, z last).
+TEST(OnlineStack, AnUnloadedFootLeavesTheEstimatorsStanceSet) {
+  wbc::ForceVector f = wbc::ForceVector::Zero();
+  const auto set_normal = [&f](int corner, double fz, double ft) {
+    f[3 * corner] = ft;
+    f[3 * corner + 1] = -ft;
+    f[3 * corner + 2] = fz;
+  };
+  for (int c = 0; c < 4; ++c) set_normal(c, 100.0, 10.0);  // left: 400 N
+  for (int c = 4; c < 8; ++c) set_normal(c, 5.0, 40.0);    // right: 20 N normal, large tangential
+  const estimator::ContactFlags all{true, true, true, true, true, true, true, true};
+  estimator::ContactFlags flags = all;
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 50.0, flags), 1);
+  EXPECT_EQ(flags, (estimator::ContactFlags{true, true, true, true, false, false, false, false}));
+  flags = all;
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 0.0, flags), 0);  // off
+  EXPECT_EQ(flags, all);
+  flags = all;
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 19.0, flags), 0);  // 20 N is not below 19 N
+  EXPECT_EQ(flags, all);
+  // The right foot already planned off the ground: nothing to take out.
+  flags = {true, true, true, true, false, false, false, false};
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 50.0, flags), 0);
+  // The mirror case: the left foot light.
+  for (int c = 0; c < 4; ++c) set_normal(c, 2.0, 0.0);
+  for (int c = 4; c < 8; ++c) set_normal(c, 120.0, 0.0);
+  flags = all;
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 50.0, flags), 1);
+  EXPECT_EQ(flags, (estimator::ContactFlags{false, false, false, false, true, true, true, true}));
+  // Both light (8 N and 40 N under 50 N): the plan's flags stay.
+  for (int c = 4; c < 8; ++c) set_normal(c, 10.0, 0.0);
+  flags = all;
+  EXPECT_EQ(estimator_drop_unloaded_foot_rt(f, 50.0, flags), 0);
+  EXPECT_EQ(flags, all);
 }
 
 // The MPC keeps joint limits by a relaxed barrier, so its knots may pass a stop; the plan

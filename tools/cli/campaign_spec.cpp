@@ -51,7 +51,8 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
-                                      "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home", "duration_s", "push"};
+                                      "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home",
+                                      "estimator_unloaded_foot_N", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -112,6 +113,15 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
       return false;
     }
     s.plan_anchor_home = home;
+  }
+  if (j.contains("estimator_unloaded_foot_N")) {
+    double newtons = 0.0;
+    if (!number(j, "estimator_unloaded_foot_N", newtons, error)) return false;
+    if (!(newtons >= 0.0 && newtons <= 1000.0)) {
+      error = "\"estimator_unloaded_foot_N\" must be 0..1000 N";
+      return false;
+    }
+    s.estimator_unloaded_foot_N = newtons;
   }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {

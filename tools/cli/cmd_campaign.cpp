@@ -234,6 +234,11 @@ int run_campaign(int argc, char** argv) {
       std::snprintf(h, sizeof h, " --plan-anchor-home %.6g", *spec.plan_anchor_home);
       cmd += h;
     }
+    if (spec.estimator_unloaded_foot_N) {
+      char n[64];
+      std::snprintf(n, sizeof n, " --estimator-unloaded-foot %.6g", *spec.estimator_unloaded_foot_N);
+      cmd += n;
+    }
     if (spec.duration_s > 0.0) {
       char d[64];
       std::snprintf(d, sizeof d, " --duration %.6g", spec.duration_s);

@@ -3,6 +3,7 @@
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
 //                [--engine simbody|mujoco|both]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
+//                [--estimator-unloaded-foot N]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]
 //                [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off] [--plan-anchor-home SHARE]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
@@ -86,6 +87,10 @@ int run_simulate(int argc, char** argv) {
   // The online MPC's window: mpc_validate_config's range with plan output (checked again there).
   p.number("--horizon", "SECONDS", 0.6, 1.4, "s", &motion_cfg.stack.mpc.horizon_s).modes = kMotionRun | kStepRun;
   p.choice("--sensors", {"mti", "ideal"}, &sensors).modes = kMotionRun | kStepRun;
+  // Opt-in: a foot the WBC loads with less than N newtons leaves the estimator's stance set
+  // (controllers/stack/online_stack.h, estimator_unloaded_foot_N); 0 (default): off.
+  p.number("--estimator-unloaded-foot", "N", 0.0, 1000.0, "N", &motion_cfg.stack.estimator_unloaded_foot_N).modes =
+      kMotionRun | kStepRun;
   p.custom("--plan-latency-ms", "MS in 0..100 ms or measured", [&](const char* v) {
      double ms = 0.0;
      if (!std::strcmp(v, "measured")) return motion_cfg.measured_plan_latency = true;

@@ -50,6 +50,7 @@ constexpr CommandHelp kHelp[] = {
      "               [--engine simbody|mujoco|both]   (mujoco: Leju's MJCF and MuJoCo's contact; floor only;\n"
      "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
+     "               [--estimator-unloaded-foot N]   (opt-in: a foot the WBC loads below N leaves the estimator's stance set)\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
      "               [--plan-anchor-home SHARE]\n"
