@@ -52,7 +52,7 @@ struct StackConfig {
   // gate (contact_velocity_gate_m_s) takes its corners out only past 0.3 m/s, and the base
   // velocity estimate runs 0.03-0.06 m/s off for 1.5 s (position 5.2 cm off), and the run
   // falls at 8.28 s (with the true state it dances to the end). With 50 N: the error stays
-  // within 0.003 m/s, the position within 3 mm, and the run dances on. Not yet the default:
+  // within 0.003 m/s, the position within 4 mm, and the run dances to the end. Not yet the default:
   // its show campaign (and the retargets whose closed-loop check runs this stack) are to come.
   double estimator_unloaded_foot_N = 0.0;
   // A newly applied plan takes over from the previous one linearly over this long (the WBC

@@ -60,8 +60,9 @@ mkdir -p "$dir/c/motions" && cp "$dir/a/motions/dance.motion" "$dir/c/motions/" 
 # cause "push". A third run repeats it with the true base state (--state truth, the same log as
 # `kuavo simulate --state truth`): it falls too, so the estimate is not counted as having a
 # part. A fourth repeats it with noise-free sensors (--sensors ideal, the same log as `kuavo
-# simulate --sensors ideal`, not the fall's own): it falls too, so sensor_noise is 0. The campaign's own table does not change; a campaign without --attribute has no
-# "fall_causes"; a resumed one redoes nothing and says the same.
+# simulate --sensors ideal`, not the fall's own): it falls too, so sensor_noise is 0. The
+# campaign's own table does not change; a campaign without --attribute has no "fall_causes";
+# a resumed one redoes nothing and says the same.
 grep -q -- " --planner mpc --ground floor --perturb 'show' --seed 1 --perturb-seed 1 --duration 0.6 --push " \
   "$dir/b/jobs.txt" || fail "a run's command changed: $(cat "$dir/b/jobs.txt")"
 cat > "$dir/attr.json" <<'SPEC'
