@@ -42,6 +42,20 @@ bool number(const nlohmann::json& j, const char* key, double& out, std::string& 
   return true;
 }
 
+// An optional key in [lo, hi] (range: the bounds as the message says them); absent: out unset.
+bool optional_number(const nlohmann::json& j, const char* key, double lo, double hi, const char* range,
+                     std::optional<double>& out, std::string& error) {
+  if (!j.contains(key)) return true;
+  double value = 0.0;
+  if (!number(j, key, value, error)) return false;
+  if (!(value >= lo && value <= hi)) {
+    error = std::string("\"") + key + "\" must be " + range;
+    return false;
+  }
+  out = value;
+  return true;
+}
+
 }  // namespace
 
 bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string& error) {
@@ -105,23 +119,9 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     }
     s.plan_anchor = j["plan_anchor"].get<bool>();
   }
-  if (j.contains("plan_anchor_home")) {
-    double home = 0.0;
-    if (!number(j, "plan_anchor_home", home, error)) return false;
-    if (!(home >= 0.0 && home <= 0.5)) {
-      error = "\"plan_anchor_home\" must be 0..0.5";
-      return false;
-    }
-    s.plan_anchor_home = home;
-  }
-  if (j.contains("estimator_unloaded_foot_N")) {
-    double newtons = 0.0;
-    if (!number(j, "estimator_unloaded_foot_N", newtons, error)) return false;
-    if (!(newtons >= 0.0 && newtons <= 1000.0)) {
-      error = "\"estimator_unloaded_foot_N\" must be 0..1000 N";
-      return false;
-    }
-    s.estimator_unloaded_foot_N = newtons;
+  if (!optional_number(j, "plan_anchor_home", 0.0, 0.5, "0..0.5", s.plan_anchor_home, error)) return false;
+  if (!optional_number(j, "estimator_unloaded_foot_N", 0.0, 1000.0, "0..1000 N", s.estimator_unloaded_foot_N, error)) {
+    return false;
   }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {

@@ -229,21 +229,14 @@ int run_campaign(int argc, char** argv) {
     if (errors) cmd += " --perturb-seed " + std::to_string(r.seed);
     if (spec.liftoff_hold) cmd += " --liftoff-hold on";
     if (spec.plan_anchor) cmd += *spec.plan_anchor ? " --plan-anchor on" : " --plan-anchor off";
-    if (spec.plan_anchor_home) {
-      char h[64];
-      std::snprintf(h, sizeof h, " --plan-anchor-home %.6g", *spec.plan_anchor_home);
-      cmd += h;
-    }
-    if (spec.estimator_unloaded_foot_N) {
-      char n[64];
-      std::snprintf(n, sizeof n, " --estimator-unloaded-foot %.6g", *spec.estimator_unloaded_foot_N);
-      cmd += n;
-    }
-    if (spec.duration_s > 0.0) {
-      char d[64];
-      std::snprintf(d, sizeof d, " --duration %.6g", spec.duration_s);
-      cmd += d;
-    }
+    const auto add_number = [&cmd](const char* flag, double value) {
+      char text[64];
+      std::snprintf(text, sizeof text, " %s %.6g", flag, value);
+      cmd += text;
+    };
+    if (spec.plan_anchor_home) add_number("--plan-anchor-home", *spec.plan_anchor_home);
+    if (spec.estimator_unloaded_foot_N) add_number("--estimator-unloaded-foot", *spec.estimator_unloaded_foot_N);
+    if (spec.duration_s > 0.0) add_number("--duration", spec.duration_s);
     if (push && r.pushed) {
       char p_arg[128];
       std::snprintf(p_arg, sizeof p_arg, " --push %.3f:%.6f,%.6f,0:%.6g", r.push.start_s,
@@ -383,10 +376,10 @@ int run_campaign(int argc, char** argv) {
       failed += cause[i] == "failed";
       estimate[i] = s.ok && !s.fell;
       sensor_noise[i] = n.ok && !n.fell;
+      const auto fell_at = [](const Outcome& o) { return o.ok && o.fell ? o.fell_at_s : -1.0; };
       char times[128];
-      std::snprintf(times, sizeof times, "%.3f,%.3f,%.3f,%d,%.3f,%d", p.ok && p.fell ? p.fell_at_s : -1.0,
-                    e.ok && e.fell ? e.fell_at_s : -1.0, s.ok && s.fell ? s.fell_at_s : -1.0, estimate[i] ? 1 : 0,
-                    n.ok && n.fell ? n.fell_at_s : -1.0, sensor_noise[i] ? 1 : 0);
+      std::snprintf(times, sizeof times, "%.3f,%.3f,%.3f,%d,%.3f,%d", fell_at(p), fell_at(e), fell_at(s),
+                    estimate[i] ? 1 : 0, fell_at(n), sensor_noise[i] ? 1 : 0);
       acsv << runs[i].id << ',' << runs[i].motion << ',' << cause[i] << ',' << times << '\n';
     }
     if (failed > 0) {
