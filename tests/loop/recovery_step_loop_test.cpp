@@ -26,12 +26,7 @@ sim::MotionRunConfig pushed_mpc_run(double start_s, double impulse_Ns, double di
 }
 
 sim::MotionSummary push_standing(double impulse_Ns, double direction_deg, bool recovery) {
-  static auto plan = std::make_unique<planner::MotionPlan>();
-  plan->rate_hz = 50.0;
-  plan->frame_count = 251;  // 5 s
-  const dynamics::ConfigVector q0 = standing_configuration();
-  for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = q0, plan->foot_contact[i] = {true, true};
-  EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
+  static const auto plan = standing_motion(50.0, 251);  // 5 s
   sim::MotionRunConfig cfg = pushed_mpc_run(2.0, impulse_Ns, direction_deg);
   cfg.stack.recovery.enabled = recovery;
   return sim::run_motion(s45_robot(), *plan, cfg);

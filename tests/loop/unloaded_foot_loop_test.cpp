@@ -16,12 +16,7 @@ namespace kuavo::test {
 namespace {
 
 sim::MotionSummary push_standing_sideways(double impulse_Ns, double unloaded_foot_N) {
-  static auto plan = std::make_unique<planner::MotionPlan>();
-  plan->rate_hz = 50.0;
-  plan->frame_count = 201;  // 4 s
-  const dynamics::ConfigVector q0 = standing_configuration();
-  for (int i = 0; i < plan->frame_count; ++i) plan->q[i] = q0, plan->foot_contact[i] = {true, true};
-  EXPECT_EQ(planner::motion_plan_finish(*plan), nullptr);
+  static const auto plan = standing_motion(50.0, 201);  // 4 s
   sim::MotionRunConfig cfg;
   cfg.stack.planner = stack::PlannerKind::kMpc;
   cfg.stack.estimator_unloaded_foot_N = unloaded_foot_N;

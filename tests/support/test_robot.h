@@ -39,13 +39,20 @@ inline const planner::PlanKnot& measured_knot(const dynamics::ConfigVector& q, c
   return knot;
 }
 
+// Standing in standing_configuration(), both feet down, frame_count frames at rate_hz.
+inline std::unique_ptr<planner::MotionPlan> standing_motion(double rate_hz, int frame_count) {
+  auto m = std::make_unique<planner::MotionPlan>();
+  m->rate_hz = rate_hz;
+  m->frame_count = frame_count;
+  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
+  EXPECT_EQ(planner::motion_plan_finish(*m), nullptr);
+  return m;
+}
+
 // Standing 6 s at 100 Hz in standing_configuration(); the right foot up over [2.0, 2.4) s
 // (the planner tests' one step).
 inline std::unique_ptr<planner::MotionPlan> stepping_motion() {
-  auto m = std::make_unique<planner::MotionPlan>();
-  m->rate_hz = 100.0;
-  m->frame_count = 600;
-  for (int i = 0; i < m->frame_count; ++i) m->q[i] = standing_configuration(), m->foot_contact[i] = {true, true};
+  auto m = standing_motion(100.0, 600);
   for (int i = 200; i < 240; ++i) m->foot_contact[i][1] = false;
   EXPECT_EQ(planner::motion_plan_finish(*m), nullptr);
   return m;
