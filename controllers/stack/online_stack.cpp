@@ -28,6 +28,9 @@ const char* stack_validate_config(const StackConfig& config) {
   if (!(config.estimator_unloaded_foot_N >= 0.0 && config.estimator_unloaded_foot_N <= 1000.0)) {
     return "estimator unloaded-foot threshold outside 0..1000 N";
   }
+  if (config.lean_trim.enabled) {
+    if (const char* why = lean_trim_validate(config.lean_trim)) return why;
+  }
   if (!(config.plan_period_s >= config.wbc.dt_s && config.plan_period_s <= 0.1)) return "plan period outside [WBC period, 0.1 s]";
   if (!(config.plan_blend_s >= 0.0 && config.plan_blend_s <= config.plan_period_s)) return "plan blend outside [0, plan period]";
   if (!(config.upper_body_delay_s >= 0.0 && config.upper_body_delay_s <= 0.02)) return "upper-body delay outside 0..0.02 s";
@@ -87,6 +90,8 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
                                         ws.estimator_contact));
   }
   estimator::estimator_step_rt(model, ws.estimator, sensors, ws.estimator_contact, dt_s, ws.estimate);
+  const bool trim = config.lean_trim.enabled && state.q == nullptr;
+  if (trim) lean_trim_apply_rt(config.lean_trim, ws.lean_trim, ws.estimate.q);
   const dynamics::ConfigVector& q = state.q != nullptr ? *state.q : ws.estimate.q;
   const dynamics::VelocityVector& v = state.v != nullptr ? *state.v : ws.estimate.v;
   ++ws.ticks;
@@ -104,6 +109,10 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
     q_wbc = &ws.predicted_q;
   }
   const wbc::WbcStatus status = wbc::wbc_step_rt(model, config.wbc, ws.wbc, *q_wbc, v, ws.reference, now_ns, command);
+  if (trim) {
+    lean_trim_update_rt(config.lean_trim, ws.lean_trim, ws.wbc.data, ws.wbc.point_position_m,
+                        ws.wbc.diagnostics.contact_force_N, v, status == wbc::WbcStatus::kOk, model::kGravity_m_s2, dt_s);
+  }
   if (ws.stage_clock != nullptr) ws.stamps.wbc_done_ns = ws.stage_clock();
   return status;
 }
@@ -216,6 +225,7 @@ bool stack_begin_rt(const model::Model& model, const StackConfig& config, Contro
   control.started = true;
   control.ticks = 0;
   control.estimator_unloaded_foot_ticks = 0;
+  lean_trim_reset(control.lean_trim);
   return true;
 }
 

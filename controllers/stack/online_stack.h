@@ -22,6 +22,7 @@
 #include "controllers/planner/plan_anchor.h"
 #include "controllers/planner/recovery_step.h"
 #include "controllers/planner/reference_plan.h"
+#include "controllers/stack/lean_trim.h"
 #include "controllers/wbc/wbc.h"
 
 namespace kuavo::stack {
@@ -55,6 +56,9 @@ struct StackConfig {
   // within 0.003 m/s, the position within 4 mm, and the run dances to the end. Not yet the default:
   // its show campaign (and the retargets whose closed-loop check runs this stack) are to come.
   double estimator_unloaded_foot_N = 0.0;
+  // Opt-in: the estimate's base tilt trimmed until the WBC's horizontal forces are the ones
+  // the CoM obeys (lean_trim.h), for the IMU's tilt error and the model's CoM error.
+  LeanTrimConfig lean_trim{};
   // A newly applied plan takes over from the previous one linearly over this long (the WBC
   // reference is the blend of both plans at the tick's time; contact flags are the new
   // plan's). 0: switch at once. Measured (stack_bench, the built-in dance with the MPC):
@@ -128,6 +132,7 @@ struct ControlWorkspace {
   std::array<double, model::kNumContactPoints> planned_contact_s{};  // how long each corner has been planned in contact
   estimator::ContactFlags estimator_contact{};
   std::uint64_t estimator_unloaded_foot_ticks = 0;  // foot-ticks config.estimator_unloaded_foot_N took out
+  LeanTrimState lean_trim;  // config.lean_trim's observer and trim (applied to estimate.q)
   hal::TimeNs last_tick_ns = 0;
   bool started = false;
   std::uint64_t ticks = 0, plans_applied = 0;
