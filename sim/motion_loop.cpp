@@ -164,6 +164,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   SensorNoise noise;
   if (config.ideal_sensors) noise = SensorNoise{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   SensorModel sensors(config.run.seed, noise);
+  if (!config.imu_tilt_rad.isZero(0.0)) sensors.add_tilt(config.imu_tilt_rad.x(), config.imu_tilt_rad.y());
   if (perturb.active) sensors.set_errors(&perturb.sensors);
   // Command latency jitter: each tick's command reaches the drives a drawn delay into the
   // plant interval (the previous one acts until then); its own generator, so the other
@@ -213,7 +214,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   std::size_t slot = 0;
   hal::CommandFrame command;
   planner::PlanKnot motion_now;  // the motion at this tick (metrics)
-  double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0;
+  double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0, sq_tilt = 0.0;
   std::uint64_t tracked = 0;
   bool have_com = false;
   Vec3 com_before = Vec3::Zero(), com_plan_before = Vec3::Zero();
@@ -306,6 +307,8 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
         sq_legs += e.head<2 * model::kLegJoints>().squaredNorm() / (2 * model::kLegJoints);
         sq_arms += e.segment<2 * model::kArmJoints>(model::kLeftArmFirst).squaredNorm() / (2 * model::kArmJoints);
         sq_vel += (est.base_velocity_world_m_s - v_world).squaredNorm();
+        sq_tilt += std::pow(tilt_error_deg(est.q, t.q), 2);
+        out.com_over_feet_err_m_end = com_over_feet_error_m(control->wbc, t);
         ++tracked;
         out.com_err_m_max = std::max(out.com_err_m_max, (t.com_m - motion_now.com_position_m).norm());
         if (have_com) {
@@ -393,9 +396,15 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
     out.tracking_rms_legs_rad = std::sqrt(sq_legs / tracked);
     out.tracking_rms_arms_rad = std::sqrt(sq_arms / tracked);
     out.estimator_velocity_rms_m_s = std::sqrt(sq_vel / tracked);
+    out.estimator_tilt_err_deg_rms = std::sqrt(sq_tilt / tracked);
   }
   out.estimator_gated_corner_ticks = control->estimator.gated_corner_ticks;
   out.estimator_unloaded_foot_ticks = control->estimator_unloaded_foot_ticks;
+  out.lean_trim = config.stack.lean_trim.enabled;
+  out.lean_trim_roll_deg = control->lean_trim.theta_rad.x() * 180.0 / 3.14159265358979323846;
+  out.lean_trim_pitch_deg = control->lean_trim.theta_rad.y() * 180.0 / 3.14159265358979323846;
+  out.lean_trim_integrated_ticks = control->lean_trim.integrated_ticks;
+  out.lean_trim_saturated_ticks = control->lean_trim.saturated_ticks;
   if (out.zmp_margin_m_min > 1e8) out.zmp_margin_m_min = 0.0;
   out.wbc_us = percentiles(wbc_us);
   out.wbc_qp_iterations = percentiles(qp_iterations);
@@ -407,6 +416,22 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
 }
 
 }  // namespace
+
+double tilt_error_deg(const dynamics::ConfigVector& believed_q, const dynamics::ConfigVector& true_q) {
+  const Eigen::Quaterniond believed(believed_q[6], believed_q[3], believed_q[4], believed_q[5]);
+  const Eigen::Quaterniond truth(true_q[6], true_q[3], true_q[4], true_q[5]);
+  const double cos_tilt = std::clamp((believed * Vec3::UnitZ()).dot(truth * Vec3::UnitZ()), -1.0, 1.0);
+  return std::acos(cos_tilt) * 180.0 / 3.14159265358979323846;
+}
+
+double com_over_feet_error_m(const wbc::WbcWorkspace& wbc, const PlantTruth& truth) {
+  Vec3 feet_believed = Vec3::Zero(), feet_true = Vec3::Zero();
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    feet_believed += wbc.point_position_m.segment<3>(3 * c) / model::kNumContactPoints;
+    feet_true += truth.contact_point_m[c] / model::kNumContactPoints;
+  }
+  return ((wbc.data.com_m - feet_believed) - (truth.com_m - feet_true)).head<2>().norm();
+}
 
 void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out) {
   out.mpc_failures = ws.mpc_failures;
@@ -433,7 +458,7 @@ std::string motion_summary_json(const MotionSummary& s) {
   std::string base = summary_json(s.run);
   base.resize(base.rfind('}'));  // reopen the object
   while (!base.empty() && (base.back() == '\n' || base.back() == ' ')) base.pop_back();
-  char buf[2048];
+  char buf[4096];
   std::snprintf(buf, sizeof buf,
                 ",\n  \"planner\": \"%s\",\n  \"motion_duration_s\": %.3f,\n"
                 "  \"tracking_rms_rad\": {\"legs\": %.5f, \"arms\": %.5f},\n"
@@ -448,7 +473,7 @@ std::string motion_summary_json(const MotionSummary& s) {
                 "  \"plan_positions_on_a_stop\": %llu,\n  \"recovery_steps\": %llu,\n  \"recovery_declined\": %llu,\n  \"recovery_early_touchdowns\": %llu,\n"
                 "  \"liftoff_holds\": %llu,\n  \"liftoff_released\": %llu,\n  \"motion_lag_s\": {\"max\": %.3f, \"end\": %.3f},\n"
                 "  \"plan_anchor\": {\"reanchors\": %llu, \"refused\": %llu, \"offset_m_max\": %.4f},\n"
-                "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f, \"gated_corner_ticks\": %llu, \"unloaded_foot_ticks\": %llu}\n}\n",
+                "  \"estimator\": {\"velocity_rms_m_s\": %.5f, \"position_drift_m\": %.5f, \"position_err_m_max\": %.5f, \"gated_corner_ticks\": %llu, \"unloaded_foot_ticks\": %llu, \"tilt_err_deg_rms\": %.4f, \"com_over_feet_err_m_end\": %.5f}\n}\n",
                 s.planner.c_str(), s.motion_duration_s, s.tracking_rms_legs_rad, s.tracking_rms_arms_rad, s.com_err_m_max,
                 s.com_path_m, s.com_path_plan_m, s.steps, s.zmp_margin_m_min, s.zmp_at_edge_s, s.torque_ratio_max, s.mpc_ms.p50, s.mpc_ms.p99, s.mpc_ms.max, s.wbc_us.p50, s.wbc_us.p99, s.wbc_us.max,
                 s.wbc_qp_iterations.p50, s.wbc_qp_iterations.p99, s.wbc_qp_iterations.max,
@@ -460,8 +485,18 @@ std::string motion_summary_json(const MotionSummary& s) {
                 static_cast<unsigned long long>(s.anchor_reanchors), static_cast<unsigned long long>(s.anchor_refused),
                 s.anchor_offset_m_max, s.estimator_velocity_rms_m_s, s.estimator_position_drift_m, s.estimator_position_err_m_max,
                 static_cast<unsigned long long>(s.estimator_gated_corner_ticks),
-                static_cast<unsigned long long>(s.estimator_unloaded_foot_ticks));
+                static_cast<unsigned long long>(s.estimator_unloaded_foot_ticks), s.estimator_tilt_err_deg_rms,
+                s.com_over_feet_err_m_end);
   std::string json = base + buf;
+  if (s.lean_trim) {
+    json.resize(json.rfind('}'));
+    while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();
+    std::snprintf(buf, sizeof buf,
+                  ",\n  \"lean_trim\": {\"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, \"saturated_ticks\": %llu}\n}\n",
+                  s.lean_trim_roll_deg, s.lean_trim_pitch_deg, static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
+                  static_cast<unsigned long long>(s.lean_trim_saturated_ticks));
+    json += buf;
+  }
   if (!s.perturbation_json.empty()) {
     json.resize(json.rfind('}'));
     while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();

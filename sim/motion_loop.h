@@ -30,6 +30,8 @@ struct MotionRunConfig {
   bool measured_plan_latency = false;
   bool use_truth_state = false;    // comparison runs: the WBC on the simulator's truth
   bool ideal_sensors = false;      // diagnostics: no noise, bias or quantization (SensorNoise zeroed)
+  // Tests: a fixed IMU tilt error (roll, pitch) [rad] on top of the sensor model's own.
+  Eigen::Vector2d imu_tilt_rad = Eigen::Vector2d::Zero();
   // Model mismatch (sim/perturbation.h): the plant and the sensors get the drawn errors,
   // the controller keeps `model`. Inactive (the default): the unperturbed run, bit for bit.
   PlantPerturbation perturbation;
@@ -105,12 +107,29 @@ struct MotionSummary {
   double estimator_position_err_m_max = 0.0;
   std::uint64_t estimator_gated_corner_ticks = 0;  // EstimatorState::gated_corner_ticks at the end
   std::uint64_t estimator_unloaded_foot_ticks = 0;  // ControlWorkspace::estimator_unloaded_foot_ticks at the end
+  // The state the controller ran on against the truth: the tilt of its base (the angle between
+  // the two base z axes; with the lean trim, the trimmed one), RMS over the run before a fall,
+  // and, on the last tick, the horizontal distance between its CoM over the mean of the sole
+  // corners and the plant's (the model's CoM errors and the tilt together) [m].
+  double estimator_tilt_err_deg_rms = 0.0;
+  double com_over_feet_err_m_end = 0.0;
+  // The lean trim (controllers/stack/lean_trim.h), in the summary only when it is on.
+  bool lean_trim = false;
+  double lean_trim_roll_deg = 0.0, lean_trim_pitch_deg = 0.0;  // at the end
+  std::uint64_t lean_trim_integrated_ticks = 0, lean_trim_saturated_ticks = 0;
 };
 
 // The planning task's counters (MPC fallbacks, knots put on a stop, recovery steps taken and
 // declined) into a summary: `kuavo simulate` and `kuavo_fw_sim` read the same workspace, so one
 // copy keeps their summaries from drifting apart (kuavo_fw_sim once left recovery_steps at 0).
 void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out);
+
+// The state the controller ran on against the plant's truth (MotionSummary's figures, shared
+// with kuavo_fw_sim): the angle between the believed and the true base z axes [deg], and the
+// horizontal distance between the controller's CoM over the mean of its sole corners (the WBC
+// tick's) and the plant's [m].
+double tilt_error_deg(const dynamics::ConfigVector& believed_q, const dynamics::ConfigVector& true_q);
+double com_over_feet_error_m(const wbc::WbcWorkspace& wbc, const PlantTruth& truth);
 
 // Decimated traces for the report's plots (every `stride` control ticks).
 struct MotionTrace {

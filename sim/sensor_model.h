@@ -38,6 +38,8 @@ class SensorModel {
   // scale (reading = scale·(what the noise model reads) + bias). nullptr: none.
   // Must outlive the model's use.
   void set_errors(const SensorErrors* errors) { errors_ = errors; }
+  // A fixed roll/pitch error added to the drawn tilt bias (tests).
+  void add_tilt(double roll_rad, double pitch_rad) { tilt_bias_ += Eigen::Vector3d(roll_rad, pitch_rad, 0.0); }
 
  private:
   double gauss(double sigma);

@@ -90,7 +90,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   const DanceControl& dc = FirmwareLoop::dance();
   auto metrics_data = std::make_unique<dynamics::Data>();
   planner::PlanKnot knot;
-  double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0;
+  double sq_legs = 0.0, sq_arms = 0.0, sq_vel = 0.0, sq_tilt = 0.0;
   std::uint64_t tracked = 0;
   ms.zmp_margin_m_min = 1e9;
   run.min_base_height_m = loop->plant().truth().q[2];
@@ -134,6 +134,8 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
         const sim::Vec3 v_world = base * truth.v.head<3>();
         const estimator::EstimateOutput& est = dc.stack.estimate;
         sq_vel += (est.base_velocity_world_m_s - v_world).squaredNorm();
+        sq_tilt += std::pow(sim::tilt_error_deg(est.q, truth.q), 2);
+        ms.com_over_feet_err_m_end = sim::com_over_feet_error_m(dc.stack.wbc, truth);
         ++tracked;
         ms.com_err_m_max = std::max(ms.com_err_m_max, (truth.com_m - knot.com_position_m).norm());
         const sim::Balance bal = sim::balance_of(truth);
@@ -215,6 +217,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     ms.tracking_rms_legs_rad = std::sqrt(sq_legs / static_cast<double>(tracked));
     ms.tracking_rms_arms_rad = std::sqrt(sq_arms / static_cast<double>(tracked));
     ms.estimator_velocity_rms_m_s = std::sqrt(sq_vel / static_cast<double>(tracked));
+    ms.estimator_tilt_err_deg_rms = std::sqrt(sq_tilt / static_cast<double>(tracked));
   }
   if (ms.zmp_margin_m_min > 1e8) ms.zmp_margin_m_min = 0.0;
   ms.wbc_us = sim::percentiles(loop->dance_cycle_us());
