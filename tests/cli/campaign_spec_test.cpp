@@ -100,6 +100,21 @@ TEST(CampaignSpec, EstimatorUnloadedFootIsOptIn) {
   }
 }
 
+// The lean trim is opt-in: absent or false, off; true, on; anything but a boolean, refused by name.
+TEST(CampaignSpec, LeanTrimIsOptIn) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_FALSE(s.lean_trim);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"lean_trim":true})", s, error)) << error;
+  EXPECT_TRUE(s.lean_trim);
+  for (const char* bad : {R"(,"lean_trim":1})", R"(,"lean_trim":"on"})"}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
+    EXPECT_NE(error.find("lean_trim"), std::string::npos) << error;
+  }
+}
+
 // A push is the impulse over its duration, starts inside the window, and depends only on
 // the seed; its directions cover the circle.
 // A spec's push and run length within what `kuavo simulate` takes (sim/push_option.h): refused

@@ -66,7 +66,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
                                       "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home",
-                                      "estimator_unloaded_foot_N", "duration_s", "push"};
+                                      "estimator_unloaded_foot_N", "lean_trim", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -118,6 +118,13 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
       return false;
     }
     s.plan_anchor = j["plan_anchor"].get<bool>();
+  }
+  if (j.contains("lean_trim")) {
+    if (!j["lean_trim"].is_boolean()) {
+      error = "\"lean_trim\" must be true or false";
+      return false;
+    }
+    s.lean_trim = j["lean_trim"].get<bool>();
   }
   if (!optional_number(j, "plan_anchor_home", 0.0, 0.5, "0..0.5", s.plan_anchor_home, error)) return false;
   if (!optional_number(j, "estimator_unloaded_foot_N", 0.0, 1000.0, "0..1000 N", s.estimator_unloaded_foot_N, error)) {

@@ -59,7 +59,7 @@ int run_simulate(int argc, char** argv) {
   long long steps = 0, latency_ticks = cfg.command_latency_ticks;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
-  std::string summary_path, balance = "off", recovery = "on", early_touchdown = "on", liftoff_hold = "off", anchor = "on", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
+  std::string summary_path, balance = "off", recovery = "on", early_touchdown = "on", liftoff_hold = "off", lean_trim = "off", anchor = "on", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
   std::string integrator = "cvode", variant_name = "s45", perturb, engine = "simbody";
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
@@ -91,6 +91,9 @@ int run_simulate(int argc, char** argv) {
   // (controllers/stack/online_stack.h, estimator_unloaded_foot_N); 0 (default): off.
   p.number("--estimator-unloaded-foot", "N", 0.0, 1000.0, "N", &motion_cfg.stack.estimator_unloaded_foot_N).modes =
       kMotionRun | kStepRun;
+  // Opt-in: the estimate's base tilt trimmed until the WBC's horizontal forces are the ones the
+  // CoM obeys (controllers/stack/lean_trim.h); off (default): the estimator's tilt.
+  p.choice("--lean-trim", {"on", "off"}, &lean_trim).modes = kMotionRun | kStepRun;
   p.custom("--plan-latency-ms", "MS in 0..100 ms or measured", [&](const char* v) {
      double ms = 0.0;
      if (!std::strcmp(v, "measured")) return motion_cfg.measured_plan_latency = true;
@@ -148,6 +151,7 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.stack.recovery.enabled = recovery == "on";
   motion_cfg.stack.recovery.early_touchdown = early_touchdown == "on";
   motion_cfg.stack.liftoff_hold.enabled = liftoff_hold == "on";
+  motion_cfg.stack.lean_trim.enabled = lean_trim == "on";
   motion_cfg.stack.anchor.enabled = anchor == "on";
   motion_cfg.ideal_sensors = sensors == "ideal";
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
