@@ -31,8 +31,8 @@
 //             min_load_share of the weight and |r| ≤ residual_gate_N: a push (10 N·s over
 //             0.1 s is 100 N) or a foot leaving the ground is not an offset.
 //
-// Off by default. Measured (Simbody, carpet, `show` set, one 10 N·s push; the motions of
-// 2e6abcb; `kuavo simulate --lean-trim on`, campaign key "lean_trim"):
+// Off by default (`kuavo simulate --lean-trim on`, campaign key "lean_trim"). Measured on
+// Simbody; the campaigns on carpet, the `show` set, one 10 N·s push, the motions of 2e6abcb:
 //  - standing, ideal sensors (LeanTrimLoop): an injected IMU tilt of (0.6°, −0.8°) is trimmed
 //    to (−0.56°, +0.75°) in 10 s, the CoM over the feet 14.2 → 1.0 mm off the truth; every
 //    link's CoM 1.5 cm off in the plant: 20.4 → 11.1 mm only (the residual reaches zero with
