@@ -28,8 +28,9 @@
 //             believed feet move −h·θ under the base, so the believed CoM moves over them
 //             by δ. As the trim converges the WBC's forces stop fighting it and r → 0.
 //   gate      the trim only integrates while the WBC's QP answered, the feet carry at least
-//             min_load_share of the weight and |r| ≤ residual_gate_N: a push (10 N·s over
-//             0.1 s is 100 N) or a foot leaving the ground is not an offset.
+//             min_load_share of the weight, |r| ≤ residual_gate_N and the CoM stands over
+//             0.2 m above the lowest sole corner: a push (10 N·s over 0.1 s is 100 N), a
+//             foot leaving the ground or a robot on the floor is not an offset.
 //
 // Off by default (`kuavo simulate --lean-trim on`, campaign key "lean_trim"). Measured on
 // Simbody; the campaigns on carpet, the `show` set, one 10 N·s push, the motions of 2e6abcb:

@@ -36,53 +36,67 @@ Rig& the_rig() {
   return rig;
 }
 
-TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
+// The rig's plan run through the stack for `ticks` control ticks on sensors that replay it
+// (ideal, the plan as the truth), the planner every 10th tick and its plan applied at once,
+// under the allocation trap. on_tick(truth, command) sees each tick's oracle and output.
+struct TickCounts {
+  bool started = false;
+  std::size_t allocations = 0;
+  int not_ok = 0;  // ticks whose WBC status was not kOk
+};
+template <class OnTick>
+TickCounts run_on_plan(const StackConfig& cfg, int ticks, OnTick on_tick) {
   const model::Model& m = robot();
-  Rig& rig = the_rig();
-  auto& [plan, control, planner_ws, pending, data] = rig;
-  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
-  planner::StepInPlaceConfig gait;
-  gait.steps = 124;
-  gait.rate_hz = 50.0;  // 200 s within the plan's frame capacity
-  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
-
-  const StackConfig cfg;
+  auto& [plan, control, planner_ws, pending, data] = the_rig();
   static hal::SensorFrame frame;
   static hal::CommandFrame command;
   static planner::PlanKnot truth;
+  TickCounts out;
   planner::motion_plan_sample_rt(m, *data, *plan, 0, truth);
   sim::ideal_sensor_frame(truth, Eigen::Vector3d::Zero(), 0, frame);
-  ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
+  out.started = stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0);
+  if (!out.started) return out;
+  constexpr hal::TimeNs kPeriod_ns = 2'000'000;
+  kuavo::test::AllocTrap trap;
+  for (int tick = 0; tick < ticks; ++tick) {
+    const hal::TimeNs now = tick * kPeriod_ns;
+    sim::ideal_sensor_frame_on_plan(m, *data, *plan, now, truth, frame);  // truth: the test's oracle
+    if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++out.not_ok;
+    on_tick(truth, command);
+    if (tick % 10 == 0) {  // the 50 Hz planner, its result applied at once
+      stack_plan_rt(m, cfg, *planner_ws, *plan, control->estimate.q, control->estimate.v, now, *pending);
+      stack_apply_plan_rt(*control, *pending);
+    }
+  }
+  out.allocations = trap.count();
+  return out;
+}
+
+TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
+  const model::Model& m = robot();
+  auto& [plan, control, planner_ws, pending, data] = the_rig();
+  planner::StepInPlaceConfig gait;
+  gait.steps = 124;
+  gait.rate_hz = 50.0;  // 200 s within the plan's frame capacity
+  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
 
   constexpr int kTicks = 100'000;
-  constexpr hal::TimeNs kPeriod_ns = 2'000'000;
-  int not_ok = 0, bad_commands = 0;
+  int bad_commands = 0;
   double worst_position_error = 0.0;
-  std::size_t allocations = 0;
-  {
-    kuavo::test::AllocTrap trap;
-    for (int tick = 0; tick < kTicks; ++tick) {
-      const hal::TimeNs now = tick * kPeriod_ns;
-      sim::ideal_sensor_frame_on_plan(m, *data, *plan, now, truth, frame);  // truth: the test's oracle
-      if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++not_ok;
-      for (const auto& c : command.joints) {
-        const bool finite = std::isfinite(c.torque_ff_Nm) && std::isfinite(c.position_ref_rad) &&
-                            std::isfinite(c.velocity_ref_rad_s) && std::isfinite(c.kp_Nm_per_rad) &&
-                            std::isfinite(c.kd_Nm_s_per_rad);
-        if (!finite || c.mode != hal::JointMode::kPdTorque) ++bad_commands;
-      }
-      worst_position_error = std::max(worst_position_error, (control->estimate.q.head<3>() - truth.q.head<3>()).norm());
-      if (tick % 10 == 0) {  // the 50 Hz planner, its result applied at once
-        stack_plan_rt(m, cfg, *planner_ws, *plan, control->estimate.q, control->estimate.v, now, *pending);
-        stack_apply_plan_rt(*control, *pending);
-      }
+  const TickCounts run = run_on_plan(StackConfig{}, kTicks, [&](const planner::PlanKnot& truth, const hal::CommandFrame& command) {
+    for (const auto& c : command.joints) {
+      const bool finite = std::isfinite(c.torque_ff_Nm) && std::isfinite(c.position_ref_rad) &&
+                          std::isfinite(c.velocity_ref_rad_s) && std::isfinite(c.kp_Nm_per_rad) &&
+                          std::isfinite(c.kd_Nm_s_per_rad);
+      if (!finite || c.mode != hal::JointMode::kPdTorque) ++bad_commands;
     }
-    allocations = trap.count();
-  }
+    worst_position_error = std::max(worst_position_error, (control->estimate.q.head<3>() - truth.q.head<3>()).norm());
+  });
+  ASSERT_TRUE(run.started);
   std::printf("100000 ticks: %zu allocations, %d not-ok WBC ticks, %d bad commands, estimator position error <= %.4f m\n",
-              allocations, not_ok, bad_commands, worst_position_error);
-  EXPECT_EQ(allocations, 0u);
-  EXPECT_EQ(not_ok, 0);
+              run.allocations, run.not_ok, bad_commands, worst_position_error);
+  EXPECT_EQ(run.allocations, 0u);
+  EXPECT_EQ(run.not_ok, 0);
   EXPECT_EQ(bad_commands, 0);
   EXPECT_LT(worst_position_error, 0.01);
   EXPECT_EQ(control->ticks, static_cast<std::uint64_t>(kTicks));
@@ -92,42 +106,21 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
 // The sensors replay the kinematic plan (no physics), whose motion the WBC's forces need not
 // quite produce, so the trim moves a little: 0.078° at the time of writing, held under 0.15°.
 TEST(OnlineStack, LeanTrimTicksWithoutAllocation) {
-  const model::Model& m = robot();
-  Rig& rig = the_rig();
-  auto& [plan, control, planner_ws, pending, data] = rig;
+  auto& [plan, control, planner_ws, pending, data] = the_rig();
   planner::StepInPlaceConfig gait;
   gait.steps = 10;
   gait.rate_hz = 50.0;
-  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  ASSERT_EQ(planner::make_step_in_place(robot(), kuavo::test::standing_configuration(), gait, *plan), nullptr);
   StackConfig cfg;
   cfg.lean_trim.enabled = true;
-  static hal::SensorFrame frame;
-  static hal::CommandFrame command;
-  static planner::PlanKnot truth;
-  planner::motion_plan_sample_rt(m, *data, *plan, 0, truth);
-  sim::ideal_sensor_frame(truth, Eigen::Vector3d::Zero(), 0, frame);
-  ASSERT_TRUE(stack_start(m, cfg, *control, *planner_ws, *plan, frame, 0));
   constexpr int kTicks = 8'000;  // 16 s, within the plan's 18
-  int not_ok = 0;
-  std::size_t allocations = 0;
-  {
-    kuavo::test::AllocTrap trap;
-    for (int tick = 0; tick < kTicks; ++tick) {
-      const hal::TimeNs now = static_cast<hal::TimeNs>(tick) * 2'000'000;
-      sim::ideal_sensor_frame_on_plan(m, *data, *plan, now, truth, frame);
-      if (stack_control_tick_rt(m, cfg, *control, frame, now, StateOverride{}, command) != wbc::WbcStatus::kOk) ++not_ok;
-      if (tick % 10 == 0) {
-        stack_plan_rt(m, cfg, *planner_ws, *plan, control->estimate.q, control->estimate.v, now, *pending);
-        stack_apply_plan_rt(*control, *pending);
-      }
-    }
-    allocations = trap.count();
-  }
+  const TickCounts run = run_on_plan(cfg, kTicks, [](const planner::PlanKnot&, const hal::CommandFrame&) {});
+  ASSERT_TRUE(run.started);
   const double trim_deg = control->lean_trim.theta_rad.norm() * 180.0 / 3.14159265358979323846;
-  std::printf("%d ticks with the lean trim: %zu allocations, trim %.4f deg over %llu ticks\n", kTicks, allocations, trim_deg,
-              static_cast<unsigned long long>(control->lean_trim.integrated_ticks));
-  EXPECT_EQ(allocations, 0u);
-  EXPECT_EQ(not_ok, 0);
+  std::printf("%d ticks with the lean trim: %zu allocations, trim %.4f deg over %llu ticks\n", kTicks, run.allocations,
+              trim_deg, static_cast<unsigned long long>(control->lean_trim.integrated_ticks));
+  EXPECT_EQ(run.allocations, 0u);
+  EXPECT_EQ(run.not_ok, 0);
   EXPECT_GT(control->lean_trim.integrated_ticks, 0u);
   EXPECT_LT(trim_deg, 0.15);
 }

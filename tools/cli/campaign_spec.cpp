@@ -42,6 +42,18 @@ bool number(const nlohmann::json& j, const char* key, double& out, std::string& 
   return true;
 }
 
+// A boolean key; absent: out untouched (Out: bool, or std::optional<bool> left unset).
+template <class Out>
+bool boolean(const nlohmann::json& j, const char* key, Out& out, std::string& error) {
+  if (!j.contains(key)) return true;
+  if (!j[key].is_boolean()) {
+    error = std::string("\"") + key + "\" must be true or false";
+    return false;
+  }
+  out = j[key].get<bool>();
+  return true;
+}
+
 // An optional key in [lo, hi] (range: the bounds as the message says them); absent: out unset.
 bool optional_number(const nlohmann::json& j, const char* key, double lo, double hi, const char* range,
                      std::optional<double>& out, std::string& error) {
@@ -105,26 +117,9 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     error = "\"planner\" must be mpc or kinematic";
     return false;
   }
-  if (j.contains("liftoff_hold")) {
-    if (!j["liftoff_hold"].is_boolean()) {
-      error = "\"liftoff_hold\" must be true or false";
-      return false;
-    }
-    s.liftoff_hold = j["liftoff_hold"].get<bool>();
-  }
-  if (j.contains("plan_anchor")) {
-    if (!j["plan_anchor"].is_boolean()) {
-      error = "\"plan_anchor\" must be true or false";
-      return false;
-    }
-    s.plan_anchor = j["plan_anchor"].get<bool>();
-  }
-  if (j.contains("lean_trim")) {
-    if (!j["lean_trim"].is_boolean()) {
-      error = "\"lean_trim\" must be true or false";
-      return false;
-    }
-    s.lean_trim = j["lean_trim"].get<bool>();
+  if (!boolean(j, "liftoff_hold", s.liftoff_hold, error) || !boolean(j, "plan_anchor", s.plan_anchor, error) ||
+      !boolean(j, "lean_trim", s.lean_trim, error)) {
+    return false;
   }
   if (!optional_number(j, "plan_anchor_home", 0.0, 0.5, "0..0.5", s.plan_anchor_home, error)) return false;
   if (!optional_number(j, "estimator_unloaded_foot_N", 0.0, 1000.0, "0..1000 N", s.estimator_unloaded_foot_N, error)) {
