@@ -13,6 +13,11 @@ const char* lean_trim_validate(const LeanTrimConfig& c) {
   if (!(c.max_rad > 0.0 && c.max_rad <= 0.1)) return "lean trim bound outside (0, 0.1] rad";
   if (!(c.residual_gate_N > 0.0 && c.residual_gate_N <= 1000.0)) return "lean trim residual gate outside (0, 1000] N";
   if (!(c.min_load_share >= 0.0 && c.min_load_share <= 1.0)) return "lean trim load share outside 0..1";
+  if (!(c.quasi_static_force_N > 0.0 && c.quasi_static_force_N <= 1e4)) return "lean trim quasi-static force outside (0, 1e4] N";
+  if (!(c.quasi_static_speed_m_s > 0.0 && c.quasi_static_speed_m_s <= 10.0)) {
+    return "lean trim quasi-static speed outside (0, 10] m/s";
+  }
+  if (!(c.quasi_static_hold_s >= 0.0 && c.quasi_static_hold_s <= 10.0)) return "lean trim quasi-static hold outside 0..10 s";
   return nullptr;
 }
 
@@ -58,10 +63,13 @@ void lean_trim_update_rt(const LeanTrimConfig& config, LeanTrimState& s, const d
   s.integral_Ns += dt_s * (s.last_force_N + s.residual_N);
   s.residual_N = config.observer_gain_1_s * (momentum - s.momentum0_Ns - s.integral_Ns);
   s.last_force_N = force;
+  const bool quiet = force.norm() <= config.quasi_static_force_N &&
+                     momentum.norm() <= config.quasi_static_speed_m_s * mass;
+  s.quiet_s = quiet ? s.quiet_s + dt_s : 0.0;
 
   const double height_m = data.com_m.z() - lowest_z;
   if (!(normal_N >= config.min_load_share * mass * gravity_m_s2) || !(s.residual_N.norm() <= config.residual_gate_N) ||
-      !(height_m > 0.2)) {
+      !(height_m > 0.2) || !(s.quiet_s >= config.quasi_static_hold_s)) {
     return;
   }
   // δ = r·h/(m·g); θ moves by dt/τ · δ/h, so h cancels.

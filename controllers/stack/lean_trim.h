@@ -30,7 +30,11 @@
 //   gate      the trim only integrates while the WBC's QP answered, the feet carry at least
 //             min_load_share of the weight, |r| ≤ residual_gate_N and the CoM stands over
 //             0.2 m above the lowest sole corner: a push (10 N·s over 0.1 s is 100 N), a
-//             foot leaving the ground or a robot on the floor is not an offset.
+//             foot leaving the ground or a robot on the floor is not an offset. And only in
+//             quasi-static phases: the WBC's horizontal force at most quasi_static_force_N
+//             and the CoM slower than quasi_static_speed_m_s, both for quasi_static_hold_s
+//             (the observer's transient, 1/K, has passed): in a dance's fast phases the
+//             WBC's forces and the plant part for more reasons than an offset.
 //
 // Off by default (`kuavo simulate --lean-trim on`, campaign key "lean_trim"). Measured on
 // Simbody; the campaigns on carpet, the `show` set, one 10 N·s push, the motions of 2e6abcb:
@@ -66,6 +70,11 @@ struct LeanTrimConfig {
   double max_rad = 0.035;           // 2°: beyond any IMU or model error the show set draws
   double residual_gate_N = 40.0;    // a 1 cm offset is 7 N; a 10 N·s push 100 N
   double min_load_share = 0.5;      // of m·g on the soles
+  // Quasi-static gate: the trim integrates only after the WBC's horizontal force and the CoM's
+  // speed have both stayed small for quasi_static_hold_s (a dance's fast phases are not an offset).
+  double quasi_static_force_N = 20.0;     // 0.36 m/s² of CoM acceleration at 55 kg
+  double quasi_static_speed_m_s = 0.1;
+  double quasi_static_hold_s = 0.3;
 };
 // nullptr if usable, else what is wrong.
 const char* lean_trim_validate(const LeanTrimConfig& config);
@@ -77,6 +86,7 @@ struct LeanTrimState {
   Eigen::Vector2d momentum0_Ns = Eigen::Vector2d::Zero();
   Eigen::Vector2d last_force_N = Eigen::Vector2d::Zero();  // the previous tick's WBC answer
   bool primed = false;
+  double quiet_s = 0.0;                // how long the quasi-static gate has held
   std::uint64_t integrated_ticks = 0;  // ticks the gate let the trim move
   std::uint64_t saturated_ticks = 0;   // ticks the trim sat at ±max_rad
 };

@@ -1,10 +1,12 @@
 // The lean trim's observer and integrator (controllers/stack/lean_trim.h) on synthetic ticks,
 // against closed forms: a constant force the WBC did not plan is followed by the residual
 // as the discrete first-order filter r_k = K·dt·Σ(d − r) predicts, the trim integrates
-// r/(m·g·τ) per second, and the gate, the bound and a failed QP do what they say.
+// r/(m·g·τ) per second once the quasi-static gate has held, and the gates, the bound and a
+// failed QP do what they say.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "controllers/model/model.h"
 #include "controllers/stack/lean_trim.h"
@@ -30,6 +32,8 @@ struct Ticks {
     forces.setZero();
     for (int p = 0; p < model::kNumContactPoints; ++p) forces[3 * p + 2] = share * kMass * kG / model::kNumContactPoints;
   }
+  // The horizontal force the WBC plans, all on the first point (the trim reads the sum).
+  void plan(const Eigen::Vector2d& f) { forces.segment<2>(0) = f; }
 };
 
 TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
@@ -37,19 +41,29 @@ TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
   cfg.enabled = true;
   LeanTrimState s;
   Ticks t;
-  const Eigen::Vector2d d(6.0, -3.0);  // N: pushes the CoM, the WBC plans no horizontal force
-  // Discrete oracle: I_k = I_{k-1} + dt·r_{k-1}, P_k = P_{k-1} + dt·d, r_k = K(P_k − I_k), so
-  // r_k = r_{k-1} + K·dt·(d − r_{k-1}) and θ += dt·(r_y, r_x)·(−1, 1)/(m·g·τ) after each.
+  // Standing with the true CoM off the believed one: the ground pushes the CoM with d, the WBC
+  // plans −d against it and the CoM stays (P constant): the residual reads the d it did not plan.
+  const Eigen::Vector2d d(6.0, -3.0);
+  t.plan(-d);
+  // Discrete oracle: I_k = I_{k-1} + dt·(−d + r_{k-1}), P_k = P_0, r_k = K(P_k − P_0 − I_k), so
+  // r_k = r_{k-1} + K·dt·(d − r_{k-1}); θ += dt·(r_y, r_x)·(−1, 1)/(m·g·τ) once the quiet time
+  // (all ticks here are quasi-static: 6.7 N planned, the CoM still) has reached the hold.
   Eigen::Vector2d r = Eigen::Vector2d::Zero(), theta = Eigen::Vector2d::Zero();
+  double quiet_s = 0.0;
+  std::uint64_t integrated = 0;
   lean_trim_update_rt(cfg, s, t.data, t.points, t.forces, t.v, true, kG, kDt);  // primes
   for (int k = 1; k <= 1000; ++k) {
-    t.v.head<2>() += kDt * d / kMass;
     lean_trim_update_rt(cfg, s, t.data, t.points, t.forces, t.v, true, kG, kDt);
     r += cfg.observer_gain_1_s * kDt * (d - r);
-    theta.x() -= kDt * r.y() / (kMass * kG * cfg.time_constant_s);
-    theta.y() += kDt * r.x() / (kMass * kG * cfg.time_constant_s);
+    quiet_s += kDt;
+    if (quiet_s >= cfg.quasi_static_hold_s) {
+      theta.x() -= kDt * r.y() / (kMass * kG * cfg.time_constant_s);
+      theta.y() += kDt * r.x() / (kMass * kG * cfg.time_constant_s);
+      ++integrated;
+    }
     if (k == 50) {
       EXPECT_NEAR(s.residual_N.x(), d.x() * (1.0 - std::exp(-0.1 * cfg.observer_gain_1_s)), 0.05);
+      EXPECT_EQ(s.integrated_ticks, 0u);  // 0.1 s quiet, the hold is 0.3 s
     }
   }
   EXPECT_NEAR((s.residual_N - r).norm(), 0.0, 1e-9);
@@ -57,7 +71,8 @@ TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
   EXPECT_NEAR((s.theta_rad - theta).norm(), 0.0, 1e-12);
   EXPECT_GT(s.theta_rad.y(), 0.0);  // CoM pushed forward (+x): the base trimmed pitched forward
   EXPECT_GT(s.theta_rad.x(), 0.0);  // pushed right (−y): rolled right (+x rotation)
-  EXPECT_EQ(s.integrated_ticks, 1000u);
+  EXPECT_EQ(s.integrated_ticks, integrated);
+  EXPECT_NEAR(static_cast<double>(integrated), 1000.0 - cfg.quasi_static_hold_s / kDt, 1.0);
   EXPECT_EQ(s.saturated_ticks, 0u);
 
   // Applied to a level base: the rotation (roll about x, then pitch about y) of the trim.
@@ -74,16 +89,25 @@ TEST(LeanTrim, TheGateTheBoundAndAFailedQpHoldTheTrim) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
   Ticks t;
+  // The WBC plans −d against an unplanned d and the CoM stays: quasi-static while |d| ≤ 20 N.
   const auto run = [&](LeanTrimState& s, const Eigen::Vector2d& d, int ticks, bool ok) {
-    for (int k = 0; k < ticks; ++k) {
-      t.v.head<2>() += kDt * d / kMass;
-      lean_trim_update_rt(cfg, s, t.data, t.points, t.forces, t.v, ok, kG, kDt);
-    }
+    t.plan(-d);
+    for (int k = 0; k < ticks; ++k) lean_trim_update_rt(cfg, s, t.data, t.points, t.forces, t.v, ok, kG, kDt);
   };
-  {  // a push: 100 N is over the 40 N gate once the residual has caught up with it
+  {  // a push moves the CoM: 100 N is over the 40 N gate once the residual has caught up
+    LeanTrimConfig wide = cfg;  // the residual gate alone: the quasi-static gate wide open
+    wide.quasi_static_force_N = 1e3;
+    wide.quasi_static_speed_m_s = 10.0;
+    wide.quasi_static_hold_s = 0.0;
     LeanTrimState s;
-    run(s, Eigen::Vector2d(100.0, 0.0), 500, true);
+    t.plan(Eigen::Vector2d::Zero());
+    for (int k = 0; k < 500; ++k) {
+      t.v.x() += kDt * 100.0 / kMass;
+      lean_trim_update_rt(wide, s, t.data, t.points, t.forces, t.v, true, kG, kDt);
+    }
+    t.v.setZero();
     EXPECT_GT(s.residual_N.x(), 99.0);
+    EXPECT_GT(s.integrated_ticks, 0u);
     EXPECT_LT(s.integrated_ticks, 60u);  // only while the residual rose through 40 N
   }
   {  // the feet carry a third of the weight (a jump, a fall): nothing moves
@@ -102,9 +126,9 @@ TEST(LeanTrim, TheGateTheBoundAndAFailedQpHoldTheTrim) {
     EXPECT_FALSE(s.primed);
     EXPECT_EQ(s.theta_rad, held);
   }
-  {  // a persistent 30 N reaches the 2° bound within 2 s and is held there, counted
+  {  // a persistent 18 N reaches the 2° bound within 10 s and is held there, counted
     LeanTrimState s;
-    run(s, Eigen::Vector2d(30.0, 0.0), 5000, true);
+    run(s, Eigen::Vector2d(18.0, 0.0), 5000, true);
     EXPECT_DOUBLE_EQ(s.theta_rad.y(), cfg.max_rad);
     EXPECT_GT(s.saturated_ticks, 0u);
   }
@@ -121,6 +145,55 @@ TEST(LeanTrim, TheGateTheBoundAndAFailedQpHoldTheTrim) {
   }
 }
 
+TEST(LeanTrim, OnlyQuasiStaticPhasesMoveTheTrim) {
+  LeanTrimConfig cfg;
+  cfg.enabled = true;
+  Ticks t;
+  const Eigen::Vector2d d(6.0, 0.0);  // the offset's unplanned force in every case
+  // After priming, 399 ticks of the first-order filter: r = d·(1 − (1 − K·dt)^399).
+  const double settled = 1.0 - std::pow(1.0 - cfg.observer_gain_1_s * kDt, 399);
+  const auto tick = [&](LeanTrimState& s) { lean_trim_update_rt(cfg, s, t.data, t.points, t.forces, t.v, true, kG, kDt); };
+  {  // a fast phase: the WBC plans 30 N (> 20 N) and the CoM follows it and d
+    LeanTrimState s;
+    t.plan(Eigen::Vector2d(30.0, 0.0));
+    for (int k = 0; k < 400; ++k) {
+      t.v.x() += kDt * (30.0 + d.x()) / kMass;
+      tick(s);
+    }
+    EXPECT_NEAR(s.residual_N.x(), d.x() * settled, 1e-9);
+    EXPECT_EQ(s.integrated_ticks, 0u);
+    EXPECT_TRUE(s.theta_rad.isZero(0.0));
+    t.v.setZero();
+  }
+  {  // the CoM glides at 0.2 m/s (> 0.1) while the WBC plans −d: the residual is d, no trim
+    LeanTrimState s;
+    t.v.x() = 0.2;
+    t.plan(-d);
+    for (int k = 0; k < 400; ++k) tick(s);
+    EXPECT_NEAR(s.residual_N.x(), d.x() * settled, 1e-9);
+    EXPECT_EQ(s.integrated_ticks, 0u);
+    t.v.x() = 0.099;  // under the speed gate: the trim moves after the hold
+    for (int k = 0; k < 400; ++k) tick(s);
+    EXPECT_GT(s.integrated_ticks, 0u);
+    EXPECT_GT(s.theta_rad.y(), 0.0);
+    t.v.setZero();
+  }
+  {  // the hold: 0.2 s quiet is not enough; one loud tick starts the count again
+    LeanTrimState s;
+    t.plan(-d);
+    for (int k = 0; k < 100; ++k) tick(s);  // primes, then 0.198 s quiet
+    EXPECT_EQ(s.integrated_ticks, 0u);
+    t.plan(Eigen::Vector2d(-25.0, 0.0));
+    tick(s);
+    t.plan(-d);
+    for (int k = 0; k < 140; ++k) tick(s);  // 0.28 s quiet since the loud tick
+    EXPECT_EQ(s.integrated_ticks, 0u);
+    for (int k = 0; k < 20; ++k) tick(s);  // 0.32 s: the trim moves from 0.30 s
+    EXPECT_GT(s.integrated_ticks, 5u);
+    EXPECT_LT(s.integrated_ticks, 15u);
+  }
+}
+
 TEST(LeanTrim, RefusesABadConfiguration) {
   EXPECT_EQ(lean_trim_validate(LeanTrimConfig{}), nullptr);
   for (const double bad : {0.0, -1.0, 1000.0, std::nan("")}) {
@@ -132,6 +205,17 @@ TEST(LeanTrim, RefusesABadConfiguration) {
     EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
     c = LeanTrimConfig{};
     c.max_rad = bad;
+    EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
+    c = LeanTrimConfig{};
+    c.quasi_static_force_N = bad == 1000.0 ? 1e5 : bad;
+    EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
+    c = LeanTrimConfig{};
+    c.quasi_static_speed_m_s = bad == 1000.0 ? 11.0 : bad;
+    EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
+  }
+  for (const double bad : {-0.1, 11.0, std::nan("")}) {
+    LeanTrimConfig c;
+    c.quasi_static_hold_s = bad;
     EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
   }
 }
