@@ -50,6 +50,16 @@
 //    96). In a dance the residual is not only an offset (the WBC's forces and the plant part
 //    in every fast phase): the trim wanders to a median 0.32° (max 0.96°) by the end of a
 //    run, more than the MTi's error it is for.
+//  - with the quasi-static gate (033879f), the trim alone: 12/400 (built-in 0, perfume 7,
+//    cmu_05_07 3, cmu_05_20 2) against 11/400 off. It saves 5 (built-in 39, cmu_05_07 100,
+//    cmu_05_20 77, perfume 64, 98) and makes 6 (cmu_05_07 27, 42, cmu_05_20 39, perfume 9,
+//    23, 96); the trim still ends a median 0.30° (max 0.72°) from zero. The CoM over the
+//    feet at the end, seeds 1-10 of the four motions (39 runs up in both): median 5.4 →
+//    3.3 mm (max 10.1 → 7.4), closer in 31. Bounded at 0.03° the same runs fall as off
+//    (13 screened): the new falls are the trim's. They come at the motions' thin places:
+//    all three cmu_05_07 ones in its last 0.6 s (seed 42's log: its last step lands with
+//    the lateral capture point at the sole's outer edge, the robot stays on that foot, its
+//    ankle pitch at 49-52 N·m, the motors' share, and tips forward).
 // Real-time: fixed-size state, no allocation, no kinematics of its own (it reads what the
 // WBC's tick computed: the CoM, the momentum matrix, the sole corners, the forces).
 #pragma once
