@@ -132,6 +132,12 @@ struct MpcConfig {
   // joint-space box on pitch and roll allows combinations the two motors cannot hold together
   // (pitch ≈ τ_A + τ_B, roll ≈ 0.46 (τ_A − τ_B)). 0 = off.
   double stance_leg_torque_share = 0.9;
+  // The ankles' (pitch, roll and their motors') share while both feet stand; 0 = the share
+  // above. Offline only for now (`kuavo retarget --double-support-ankle-share S`): a lower
+  // share keeps the plan's CoM off the edge the ankles can hold in long double supports,
+  // leaving them the reserve a push needs (perfume's 12–18 s plan holds both ankle pitches at
+  // 23–25 N·m of the TO's 27, and 10 N·s pushes there are its falls the true state does not save).
+  double double_support_ankle_share = 0.0;
   double leg_torque_barrier_mu = 0.01;
   double leg_torque_barrier_delta_Nm = 0.2;
 
