@@ -390,11 +390,6 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
   constexpr int kFootForces = 3 * kPointsPerFoot;
   using FootRow = Eigen::Matrix<double, kFootForces, 1>;
   const hal::AnkleMotorLimits& motors = ws.ankle_motor_limits;
-  bool feet_down[2] = {false, false};
-  for (int c = 0; c < kNumPoints; ++c) feet_down[c / kPointsPerFoot] = feet_down[c / kPointsPerFoot] || knot.in_contact[c];
-  const double ankle_share = feet_down[0] && feet_down[1] && cfg.double_support_ankle_share > 0.0
-                                 ? cfg.double_support_ankle_share
-                                 : cfg.stance_leg_torque_share;
   for (int foot = 0; foot < 2; ++foot) {
     const int first = foot * kPointsPerFoot;
     const int col = kUForces + 3 * first;
@@ -427,8 +422,7 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
         g.segment<3>(3 * (c - first)) = gc;
         tau += gc.dot(ws.u[k].segment<3>(kUForces + 3 * c));
       }
-      const double share = joint >= model::kAnklePitchInLeg ? ankle_share : cfg.stance_leg_torque_share;
-      barrier(g, tau, share * model.limits.torque_Nm[j]);
+      barrier(g, tau, cfg.stance_leg_torque_share * model.limits.torque_Nm[j]);
       if (joint >= model::kAnklePitchInLeg) {
         ankle_g[joint - model::kAnklePitchInLeg] = g;
         ankle_tau[joint - model::kAnklePitchInLeg] = tau;
@@ -439,7 +433,7 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
     for (int m = 0; m < 2; ++m) {
       const double a = motors.joint_to_motor[foot](m, 0), b = motors.joint_to_motor[foot](m, 1);
       barrier(a * ankle_g[0] + b * ankle_g[1], a * ankle_tau[0] + b * ankle_tau[1],
-              ankle_share * motors.limit_Nm[foot](m));
+              cfg.stance_leg_torque_share * motors.limit_Nm[foot](m));
     }
   }
 }
@@ -504,12 +498,6 @@ const char* mpc_validate_config(const MpcConfig& c) {
   if (!(c.stance_leg_torque_share >= 0.0 && c.stance_leg_torque_share <= 1.0) || !(c.leg_torque_barrier_mu > 0.0) ||
       !(c.leg_torque_barrier_delta_Nm > 0.0) || !std::isfinite(c.leg_torque_barrier_mu + c.leg_torque_barrier_delta_Nm)) {
     return "stance_leg_torque_share must be in [0, 1], its barrier mu and delta finite and > 0";
-  }
-  if (!(c.double_support_ankle_share >= 0.0 && c.double_support_ankle_share <= 1.0)) {
-    return "double_support_ankle_share must be in [0, 1] (0: stance_leg_torque_share)";
-  }
-  if (c.double_support_ankle_share > 0.0 && !(c.stance_leg_torque_share > 0.0)) {
-    return "double_support_ankle_share needs stance_leg_torque_share > 0 (the barrier it shares)";
   }
   if (!(c.stance_position_gain_1_s >= 0.0 && c.stance_position_gain_1_s <= 100.0)) {
     return "stance_position_gain_1_s must be in [0, 100]";

@@ -131,13 +131,17 @@ struct MpcConfig {
   // ankle pair's two motor torques are held to the same share of the motors' limits too: the
   // joint-space box on pitch and roll allows combinations the two motors cannot hold together
   // (pitch ≈ τ_A + τ_B, roll ≈ 0.46 (τ_A − τ_B)). 0 = off.
+  // A lower share for the ankles while both feet stand, to keep a reserve for pushes, was
+  // tried at 4035c5d and reverted. Danced on carpet (nominal plant, seed 1), perfume's motion
+  // holds both ankle pitches at 23–25 N·m through its 12–18 s double support (its TO plans at
+  // 0.9 of 27 N·m), and the show campaign's pushes there are falls the true state does not
+  // save (seeds 29, 58, 75).
+  // At 0.6 in the TO, perfume's check kept round 4 (was 6; steps 15/15, CoM path 47 %), but
+  // the same run's ankles still held 19.5–21.6 N·m there; the show campaign fell 28/100
+  // against 6/100: 29, 58, 75 still fell, and 20 of the 28 came in 21.9–25.0 s, where that
+  // plan loads the right ankle to 36–40 N·m (same run). At 0.6 in the online MPC instead, on the
+  // current motion, 14 runs (the 6 falls and seeds 1–8) gave 8 falls against 6; none was saved.
   double stance_leg_torque_share = 0.9;
-  // The ankles' (pitch, roll and their motors') share while both feet stand; 0 = the share
-  // above. Offline only for now (`kuavo retarget --double-support-ankle-share S`): a lower
-  // share keeps the plan's CoM off the edge the ankles can hold in long double supports,
-  // leaving them the reserve a push needs (perfume's 12–18 s plan holds both ankle pitches at
-  // 23–25 N·m of the TO's 27, and 10 N·s pushes there are its falls the true state does not save).
-  double double_support_ankle_share = 0.0;
   double leg_torque_barrier_mu = 0.01;
   double leg_torque_barrier_delta_Nm = 0.2;
 

@@ -43,9 +43,6 @@ expect 2 "" "usage: kuavo replay" replay --out "$dir/r"
 expect 2 "" "support-margin" retarget -o "$dir/never.motion" --support-margin 0.05
 expect 2 "" "support-margin" retarget -o "$dir/never.motion" --stage geometric --support-margin 0.01
 [ ! -e "$dir/never.motion" ] || fail "kuavo retarget wrote a motion with a refused --support-margin"
-expect 2 "" "double-support-ankle-share" retarget -o "$dir/never.motion" --double-support-ankle-share 1.5
-expect 2 "" "double-support-ankle-share" retarget -o "$dir/never.motion" --stage geometric --double-support-ankle-share 0.6
-[ ! -e "$dir/never.motion" ] || fail "kuavo retarget wrote a motion with a refused --double-support-ankle-share"
 expect 2 "" "no such file" demo "$dir/missing.bvh" --out "$dir/never"
 [ ! -e "$dir/never" ] || fail "kuavo demo with a missing BVH made its report folder"
 # A run piped or with --quiet shows no progress line (no carriage return); --quiet also drops the

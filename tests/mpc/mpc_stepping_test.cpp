@@ -3,10 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <array>
-#include <limits>
 #include <memory>
-#include <string>
 
 #include "tests/mpc/mpc_fixture.h"
 
@@ -303,14 +300,10 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
   // kinematics of the whole configuration (the MPC works in base axes).
   if (c.stance_leg_torque_share > 0.0) {
     dynamics::forward_kinematics(f.model, data, mpc::configuration_from_state(f.ws.x[k], f.ws.head_rad[k]));
-    bool feet_down[2] = {false, false};
-    for (int p = 0; p < 8; ++p) feet_down[p / 4] = feet_down[p / 4] || knot.in_contact[p];
-    // While both feet stand the ankles (joints and motors) take double_support_ankle_share if set.
-    const double ankle_share = feet_down[0] && feet_down[1] && c.double_support_ankle_share > 0.0
-                                   ? c.double_support_ankle_share
-                                   : c.stance_leg_torque_share;
     for (int foot = 0; foot < 2; ++foot) {
-      if (!feet_down[foot]) continue;
+      bool down = false;
+      for (int p = 4 * foot; p < 4 * foot + 4; ++p) down = down || knot.in_contact[p];
+      if (!down) continue;
       Eigen::Vector2d ankle = Eigen::Vector2d::Zero();
       for (int joint = 0; joint < 6; ++joint) {
         const int body = 1 + 6 * foot + joint;
@@ -321,7 +314,7 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
           const dynamics::Vec3 r = dynamics::frame_position(f.model, data, p) - data.position_m[body];
           tau += axis.dot(r.cross(dynamics::Vec3(u.segment<3>(3 * p))));
         }
-        const double limit = (joint >= 4 ? ankle_share : c.stance_leg_torque_share) * f.model.limits.torque_Nm[6 * foot + joint];
+        const double limit = c.stance_leg_torque_share * f.model.limits.torque_Nm[6 * foot + joint];
         cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
                           barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
         if (joint >= 4) ankle[joint - 4] = tau;  // pitch, roll
@@ -330,7 +323,7 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
       const hal::AnkleMotorLimits& m = f.ws.ankle_motor_limits;
       for (int k2 = 0; m.active && k2 < 2; ++k2) {
         const double tau = m.joint_to_motor[foot].row(k2).dot(ankle);
-        const double limit = ankle_share * m.limit_Nm[foot](k2);
+        const double limit = c.stance_leg_torque_share * m.limit_Nm[foot](k2);
         cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
                           barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
       }
@@ -362,14 +355,12 @@ dynamics::VelocityVector warm_stepping(MpcFixture& f, double vy) {
   return v0;
 }
 
-constexpr int kGradientStages[] = {3, 22, 50};
-
 void expect_stage_cost_gradient(MpcFixture& f) {
   const dynamics::VelocityVector v0 = warm_stepping(f, 0.15);
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
   static dynamics::Data data;
   constexpr double kStep = 1e-6;
-  for (const int k : kGradientStages) {
+  for (const int k : {3, 22, 50}) {
     const auto& st = f.ws.qp.stages[k];
     mpc::StateVector gx;
     mpc::InputVector gu;
@@ -419,59 +410,6 @@ TEST(MpcStepping, StageCostGradientWithTheAnkleMotorsMatchesFiniteDifferences) {
   }
   expect_stage_cost_gradient(f);
   m = hal::AnkleMotorLimits{};  // the fixture is shared
-}
-
-// The ankles' own share while both feet stand (MpcConfig::double_support_ankle_share, the
-// offline TO's reserve for pushes): at 0.25 of the 36 N·m box (9 N·m, about what a standing
-// ankle holds) the barrier is steep in the double-support stages. The gradient must match the
-// definition's, and the share must move r in the double-support stages and in no other.
-TEST(MpcStepping, StageCostGradientWithADoubleSupportAnkleShareMatchesFiniteDifferences) {
-  MpcFixture& f = mpc_fixture();
-  f.config.double_support_ankle_share = 0.25;
-  ASSERT_EQ(mpc::mpc_validate_config(f.config), nullptr);
-  expect_stage_cost_gradient(f);
-  // At one linearization point (the one just warmed), the QP with and without the share: r
-  // differs in the stages standing on both feet and is bit for bit the same in the others.
-  mpc::MpcConfig plain = f.config;
-  plain.double_support_ankle_share = 0.0;
-  const dynamics::VelocityVector v0 = warm_stepping(f, 0.15);
-  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, plain, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
-  std::array<mpc::InputVector, 3> r_plain;
-  for (int i = 0; i < 3; ++i) r_plain[i] = f.ws.qp.stages[kGradientStages[i]].r;
-  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
-  int double_support = 0;
-  for (int i = 0; i < 3; ++i) {
-    const int k = kGradientStages[i];
-    bool down[2] = {false, false};
-    for (int p = 0; p < 8; ++p) down[p / 4] = down[p / 4] || f.window.knots[k].in_contact[p];
-    const double moved = (f.ws.qp.stages[k].r - r_plain[i]).cwiseAbs().maxCoeff();
-    if (down[0] && down[1]) {
-      ++double_support;
-      // (at a 9 N·m share the barrier's pull is ~8 % of this stage's gradient; the FD check
-      // above would miss a wrong share by as much)
-      EXPECT_GT(moved, 0.02 * r_plain[i].cwiseAbs().maxCoeff()) << "stage " << k << " stands on both feet";
-    } else {
-      EXPECT_EQ(moved, 0.0) << "stage " << k << " stands on one foot at most";
-    }
-  }
-  EXPECT_GE(double_support, 1) << "no double-support stage among those checked";
-  EXPECT_LT(double_support, 3) << "no single-support stage among those checked";
-  f.config.double_support_ankle_share = mpc::MpcConfig{}.double_support_ankle_share;  // the fixture is shared
-}
-
-TEST(MpcStepping, DoubleSupportAnkleShareOutsideItsRangeIsRefused) {
-  mpc::MpcConfig c;
-  for (const double share : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
-    c.double_support_ankle_share = share;
-    const char* why = mpc::mpc_validate_config(c);
-    ASSERT_NE(why, nullptr) << share;
-    EXPECT_NE(std::string(why).find("double_support_ankle_share"), std::string::npos) << why;
-  }
-  c.double_support_ankle_share = 0.5;
-  c.stance_leg_torque_share = 0.0;
-  ASSERT_NE(mpc::mpc_validate_config(c), nullptr);
-  c.stance_leg_torque_share = 0.9;
-  EXPECT_EQ(mpc::mpc_validate_config(c), nullptr);
 }
 
 // The swing corners' zero force as fixed inputs: in the QP their B columns are zero (folded into

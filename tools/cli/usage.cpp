@@ -34,7 +34,6 @@ constexpr CommandHelp kHelp[] = {
      "                      [--verify-mujoco on|off] [--verify-firmware on|off] [--support-margin M]\n"
      "                      [--verify-show SEEDS] [--human-csv OUT.csv] [--force-reference static|motion]\n"
      "                      [--ankle-motor-weight W]   (the TO's hinge on the stance ankles' motor torques; 0: off)\n"
-     "                      [--double-support-ankle-share S]   (the TO's ankle torque share while both feet stand, 0..1; 0: the stance legs' 0.9)\n"
      "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
      "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 12)\n"
