@@ -137,10 +137,11 @@ struct MpcConfig {
   // 0.9 of 27 N·m), and the show campaign's pushes there are falls the true state does not
   // save (seeds 29, 58, 75).
   // At 0.6 in the TO, perfume's check kept round 4 (was 6; steps 15/15, CoM path 47 %), but
-  // the same run's ankles still held 19.5–21.6 N·m there; the show campaign fell 28/100
-  // against 6/100: 29, 58, 75 still fell, and 20 of the 28 came in 21.9–25.0 s, where that
-  // plan loads the right ankle to 36–40 N·m (same run). At 0.6 in the online MPC instead, on the
-  // current motion, 14 runs (the 6 falls and seeds 1–8) gave 8 falls against 6; none was saved.
+  // the new motion, danced the same way, still held 19.5–21.6 N·m there and loads the right
+  // ankle to 36–40 N·m at 21–23 s. Its show campaign fell 28/100 against 6/100: 29, 58, 75
+  // still fell, and 20 of the 28 came in 21.9–25.0 s. At 0.6 in the online MPC instead, on
+  // the current motion, 14 runs (its 6 falls and seeds 1–8) gave 8 falls against 6; none
+  // was saved.
   double stance_leg_torque_share = 0.9;
   double leg_torque_barrier_mu = 0.01;
   double leg_torque_barrier_delta_Nm = 0.2;
