@@ -158,7 +158,7 @@ void add_joint_limit_barrier(const MpcConfig& c, const MpcWorkspace& ws, const S
 
 // Friction pyramid μ f_z ± f_x ≥ 0, μ f_z ± f_y ≥ 0 of one stance corner, on (R, r).
 template <class StageT>
-void add_friction_barrier(const MpcConfig& c, const Vec3& f, int corner, StageT& st) {
+void add_friction_barrier(const MpcConfig& c, double dt, const Vec3& f, int corner, StageT& st) {
   const double mu = c.friction_coefficient;
   for (int axis = 0; axis < 2; ++axis) {
     for (const double sign : {1.0, -1.0}) {
@@ -167,8 +167,8 @@ void add_friction_barrier(const MpcConfig& c, const Vec3& f, int corner, StageT&
       a[axis] = -sign;
       double d1, d2;
       relaxed_barrier(a.dot(f), c.friction_barrier_mu, c.friction_barrier_delta_N, d1, d2);
-      st.R.template block<3, 3>(kUForces + 3 * corner, kUForces + 3 * corner).noalias() += (c.dt_s * d2) * a * a.transpose();
-      st.r.template segment<3>(kUForces + 3 * corner) += (c.dt_s * d1) * a;
+      st.R.template block<3, 3>(kUForces + 3 * corner, kUForces + 3 * corner).noalias() += (dt * d2) * a * a.transpose();
+      st.r.template segment<3>(kUForces + 3 * corner) += (dt * d1) * a;
     }
   }
 }
@@ -300,7 +300,7 @@ double build_equalities(const model::Model& model, const MpcConfig& cfg, MpcWork
 
 void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::PlanKnot& knot, int k, bool terminal) {
   auto& st = ws.qp.stages[k];
-  const double scale = terminal ? cfg.dt_s * cfg.terminal_weight_scale : cfg.dt_s;
+  const double scale = terminal ? cfg.dt_s * cfg.terminal_weight_scale : ws.stage_dt_s[k];
   // Q and R are diagonal but for the swing x-y cost's block of Q and the friction barriers'
   // 3×3 force blocks of R; only those are cleared (mpc_init zeroed the rest).
   if (ws.swing_block_written[k]) {
@@ -316,10 +316,10 @@ void build_stage_cost(const MpcConfig& cfg, MpcWorkspace& ws, const planner::Pla
   } else {
     for (int c = 0; c < kNumPoints; ++c) st.R.template block<3, 3>(kUForces + 3 * c, kUForces + 3 * c).setZero();
   }
-  st.R.diagonal() = cfg.dt_s * ws.weight_input;
-  st.r = (cfg.dt_s * ws.weight_input).cwiseProduct(ws.u[k] - ws.u_ref[k]);
+  st.R.diagonal() = scale * ws.weight_input;
+  st.r = (scale * ws.weight_input).cwiseProduct(ws.u[k] - ws.u_ref[k]);
   for (int c = 0; c < kNumPoints; ++c) {
-    if (knot.in_contact[c]) add_friction_barrier(cfg, ws.u[k].segment<3>(kUForces + 3 * c), c, st);
+    if (knot.in_contact[c]) add_friction_barrier(cfg, scale, ws.u[k].segment<3>(kUForces + 3 * c), c, st);
   }
 }
 
@@ -350,7 +350,7 @@ void add_swing_xy_cost(const model::Model& model, const MpcConfig& cfg, MpcWorks
       j.block<2, kNumMpcJoints>(0, kXJoints).noalias() = p.rotation.topRows<2>() * jp;
     }
     const Eigen::Vector2d error = (base + p.rotation * point).head<2>() - knot.point_position_m.segment<2>(3 * c);
-    const double w = cfg.dt_s * cfg.weight_swing_xy;
+    const double w = ws.stage_dt_s[k] * cfg.weight_swing_xy;
     // j is zero in the momentum columns: only Q's base-and-joint block changes.
     if (lo >= 0) {
       // and zero but in base x-y, the Euler angles and the leg's joints: the Gauss-Newton
@@ -390,6 +390,7 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
   constexpr int kFootForces = 3 * kPointsPerFoot;
   using FootRow = Eigen::Matrix<double, kFootForces, 1>;
   const hal::AnkleMotorLimits& motors = ws.ankle_motor_limits;
+  const double dt = ws.stage_dt_s[k];
   for (int foot = 0; foot < 2; ++foot) {
     const int first = foot * kPointsPerFoot;
     const int col = kUForces + 3 * first;
@@ -400,8 +401,8 @@ void add_stance_leg_torque_barrier(const model::Model& model, const MpcConfig& c
       for (const double sign : {1.0, -1.0}) {
         double d1, d2;
         relaxed_barrier(limit - sign * tau, cfg.leg_torque_barrier_mu, cfg.leg_torque_barrier_delta_Nm, d1, d2);
-        st.R.template block<kFootForces, kFootForces>(col, col).noalias() += (cfg.dt_s * d2) * g * g.transpose();
-        st.r.template segment<kFootForces>(col) -= (cfg.dt_s * d1 * sign) * g;
+        st.R.template block<kFootForces, kFootForces>(col, col).noalias() += (dt * d2) * g * g.transpose();
+        st.r.template segment<kFootForces>(col) -= (dt * d1 * sign) * g;
       }
     };
     std::array<Vec3, kPointsPerFoot> corner;  // base axes, once per foot (not per joint)
@@ -443,11 +444,11 @@ double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
   const int T = ws.horizon;
   for (int k = 0; k <= T; ++k) {
     const StateVector e = state_error(ws.x[k], ws.x_ref[k]);
-    const double scale = k == T ? cfg.dt_s * cfg.terminal_weight_scale : cfg.dt_s;
+    const double scale = k == T ? cfg.dt_s * cfg.terminal_weight_scale : ws.stage_dt_s[k];
     cost += 0.5 * scale * e.dot(ws.weight_state.cwiseProduct(e));
     if (k < T) {
       const InputVector du = ws.u[k] - ws.u_ref[k];
-      cost += 0.5 * cfg.dt_s * du.dot(ws.weight_input.cwiseProduct(du));
+      cost += 0.5 * scale * du.dot(ws.weight_input.cwiseProduct(du));
     }
   }
   return cost;
@@ -455,7 +456,33 @@ double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
 
 }  // namespace
 
-int mpc_num_stages(const MpcConfig& c) { return static_cast<int>(std::lround(c.horizon_s / c.dt_s)); }
+namespace {
+
+int window_intervals(const MpcConfig& c) { return static_cast<int>(std::lround(c.horizon_s / c.dt_s)); }
+
+// Stages at dt_s before the coarse tail (all of them with a uniform grid).
+int fine_stages(const MpcConfig& c) {
+  const int n = window_intervals(c);
+  if (c.tail_stride <= 1) return n;
+  return std::min(n, static_cast<int>(std::lround(c.fine_horizon_s / c.dt_s)));
+}
+
+// The window knot stage k starts at (k = T: the window's last knot).
+int stage_knot_of(const MpcConfig& c, int k) {
+  const int f = fine_stages(c);
+  if (k <= f) return k;
+  return std::min(f + (k - f) * c.tail_stride, window_intervals(c));
+}
+
+}  // namespace
+
+int mpc_window_knots(const MpcConfig& c) { return window_intervals(c) + 1; }
+
+int mpc_num_stages(const MpcConfig& c) {
+  const int n = window_intervals(c), f = fine_stages(c);
+  if (f >= n) return n;
+  return f + (n - f + c.tail_stride - 1) / c.tail_stride;
+}
 
 const char* mpc_validate_config(const MpcConfig& c) {
   if (!(c.dt_s >= 0.005 && c.dt_s <= 0.05)) return "dt_s must be in [0.005, 0.05] s";
@@ -465,10 +492,25 @@ const char* mpc_validate_config(const MpcConfig& c) {
   if (!c.plan_output && !(c.horizon_s >= 0.2 - 1e-9 && c.horizon_s <= 1.4 + 1e-9)) {
     return "horizon_s (an offline window) must be in [0.2, 1.4] s";
   }
-  const int n = mpc_num_stages(c);
+  const int n = window_intervals(c);
   if (n > kMaxStages || n + 1 > planner::kMaxWindowKnots) return "horizon_s / dt_s exceeds kMaxStages (70)";
   if (c.plan_output && n < kMpcPlanKnots + 1) return "horizon shorter than the plan handed to the WBC";
   if (n < 2) return "horizon shorter than two stages";
+  if (!(c.tail_stride >= 1 && c.tail_stride <= 4)) return "tail_stride must be in [1, 4]";
+  if (c.tail_stride > 1) {
+    if (!(std::isfinite(c.fine_horizon_s) && c.fine_horizon_s >= 2.0 * c.dt_s - 1e-9)) {
+      return "fine_horizon_s must be at least two stages";
+    }
+    if (c.plan_output && fine_stages(c) < kMpcPlanKnots) {
+      return "fine_horizon_s shorter than the plan handed to the WBC (0.2 s)";
+    }
+  }
+  // The swing and stance rows v = k (p_ref − p), Euler-integrated over a stage, close the loop
+  // p_err ← (1 − k·dt_k) p_err: stable for k·dt_k < 2 on the longest stage.
+  const double longest_s = c.tail_stride * c.dt_s;
+  if (!(c.swing_position_gain_1_s * longest_s < 2.0) || !(c.stance_position_gain_1_s * longest_s < 2.0)) {
+    return "swing/stance position gain × the longest stage must be < 2 (a shorter tail stride)";
+  }
   if (!(c.friction_coefficient > 0.0 && c.friction_coefficient <= 2.0)) return "friction_coefficient must be in (0, 2]";
   auto bad = [](double w) { return !(std::isfinite(w) && w >= 0.0); };
   for (int i = 0; i < 3; ++i) {
@@ -522,6 +564,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.reference_cached = 0;
   if (mpc_validate_config(config) != nullptr) return;
   ws.horizon = mpc_num_stages(config);
+  for (int k = 0; k <= ws.horizon; ++k) ws.stage_knot[k] = stage_knot_of(config, k);
+  for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * config.dt_s;
   fill_weights(model, config, ws);
   ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
   ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
@@ -530,6 +574,9 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
     st.B.setZero();
     st.Q.setZero();
     st.R.setZero();
+    st.q.setZero();                  // (a stage past this config's horizon keeps no stale gradient)
+    st.r.setZero();
+    st.b.setZero();
     st.S.setZero();                  // no cross terms: never written, and the Riccati skips it
     st.s_zero = true;
     st.r_dense = 3 * kNumPoints;     // R: the force block and the joint velocities' diagonal
@@ -578,17 +625,18 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
   if (!ws.initialized) return MpcStatus::kNotInitialized;
   if (!x_initial.allFinite()) return MpcStatus::kBadInput;
   const int T = ws.horizon;
-  if (reference.count < T + 1 || reference.count > planner::kMaxWindowKnots ||
+  const int W = ws.stage_knot[T] + 1;  // window knots the stages read
+  if (reference.count < W || reference.count > planner::kMaxWindowKnots ||
       !(std::abs(reference.dt_s - cfg.dt_s) <= kDtTolerance_s)) {
     return MpcStatus::kBadReference;
   }
-  for (int k = 0; k <= T; ++k) {
+  for (int k = 0; k < W; ++k) {
     if (!knot_finite(reference.knots[k])) return MpcStatus::kBadReference;
   }
 
-  // Reference trajectory in MPC coordinates (yaw kept continuous along the horizon). Knots
-  // of the previous call are taken from the cache: slot k + s held the knot now at k when the
-  // window moved s ≥ 0 stages (read before it is overwritten, k ascending).
+  // Reference trajectory in MPC coordinates, per window knot. Knots of the previous call are
+  // taken from the cache: slot j + s held the knot now at j when the window moved s ≥ 0 knots
+  // (read before it is overwritten, j ascending).
   const double mg = model.total_mass_kg * model::kGravity_m_s2;
   Vec6 weight = Vec6::Zero();
   weight[2] = mg;
@@ -599,72 +647,91 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     if (moved >= 0 && moved % dt_ns == 0 && moved / dt_ns < ws.reference_cached) s = static_cast<int>(moved / dt_ns);
   }
   const int cached = ws.reference_cached;
-  for (int k = 0; k <= T; ++k) {
+  for (int k = 0; k < W; ++k) {
     const planner::PlanKnot& knot = reference.knots[k];
     const int j = s >= 0 ? k + s : -1;
     if (j >= 0 && j < cached && same_reference_knot(knot, ws.reference_knot[j])) {
       if (j != k) {
         ws.reference_knot[k] = ws.reference_knot[j];
         ws.reference_state[k] = ws.reference_state[j];
-        ws.u_ref[k] = ws.u_ref[j];
+        ws.reference_input[k] = ws.reference_input[j];
         ws.reference_wrench[k] = ws.reference_wrench[j];
       }
     } else {
       ws.reference_knot[k] = knot;
       state_from_configuration(model, ws.world_data, knot.q, knot.v, ws.reference_state[k]);
-      reference_forces(knot, weight, ws.u_ref[k]);
-      ws.u_ref[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
+      reference_forces(knot, weight, ws.reference_input[k]);
+      ws.reference_input[k].segment<kNumMpcJoints>(kUJointVelocity) = knot.v.segment<kNumMpcJoints>(6);
       ws.reference_wrench[k].setConstant(std::numeric_limits<double>::quiet_NaN());  // never equal: solved below
     }
-    ws.x_ref[k] = ws.reference_state[k];
-    if (k > 0) {
-      ws.x_ref[k][kXEuler] = ws.x_ref[k - 1][kXEuler] + wrap_angle(ws.x_ref[k][kXEuler] - ws.x_ref[k - 1][kXEuler]);
-    }
-    ws.head_rad[k] = knot.q.segment<2>(7 + kNumMpcJoints);
   }
-  ws.reference_cached = T + 1;
+  ws.reference_cached = W;
   if (cfg.reference_forces_from_motion) {
     // The wrench the reference itself needs: m (r̈ + g) and ḣ, forward differences of its
     // states (the last knot takes the difference before it), carried by forces within the
     // pyramids. A knot whose wrench is the one its cached forces were solved for keeps them
     // (within a window's SQP iterations, all of them).
     for (int k = 0; k <= T; ++k) {
-      const int a = std::min(k, T - 1), b = a + 1;
+      const int j = ws.stage_knot[k];
+      const int a = std::min(j, W - 2), b = a + 1;
       Vec6 w = weight;
       w.head<3>() += model.total_mass_kg / cfg.dt_s *
                      (ws.reference_state[b].segment<3>(kXComVelocity) - ws.reference_state[a].segment<3>(kXComVelocity));
       w.tail<3>() = (ws.reference_state[b].segment<3>(kXMomentum) - ws.reference_state[a].segment<3>(kXMomentum)) / cfg.dt_s;
-      if (w == ws.reference_wrench[k]) continue;
-      if (!reference_forces_in_cones(reference.knots[k], w, cfg.friction_coefficient, ws, ws.u_ref[k])) {
-        reference_forces(reference.knots[k], w, ws.u_ref[k]);
+      if (w == ws.reference_wrench[j]) continue;
+      if (!reference_forces_in_cones(reference.knots[j], w, cfg.friction_coefficient, ws, ws.reference_input[j])) {
+        reference_forces(reference.knots[j], w, ws.reference_input[j]);
         ++ws.reference_wrench_failures;
       }
-      ws.reference_wrench[k] = w;
+      ws.reference_wrench[j] = w;
     }
+  }
+  // The stages' reference (yaw kept continuous along the horizon).
+  for (int k = 0; k <= T; ++k) {
+    const int j = ws.stage_knot[k];
+    ws.x_ref[k] = ws.reference_state[j];
+    if (k > 0) {
+      ws.x_ref[k][kXEuler] = ws.x_ref[k - 1][kXEuler] + wrap_angle(ws.x_ref[k][kXEuler] - ws.x_ref[k - 1][kXEuler]);
+    }
+    ws.u_ref[k] = ws.reference_input[j];
+    ws.head_rad[k] = reference.knots[j].q.segment<2>(7 + kNumMpcJoints);
   }
 
   StateVector x0 = x_initial;
   x0[kXEuler] = ws.x_ref[0][kXEuler] + wrap_angle(x0[kXEuler] - ws.x_ref[0][kXEuler]);
 
-  // Warm start: the previous solution shifted by the stages elapsed since its knot 0.
+  // Warm start: the previous solution shifted by the knots elapsed since its knot 0. Stage k
+  // now starts at old window time τ = stage_knot[k] + shift: a stage of the old grid starting
+  // there gives its state and input; inside an old stage, the state is interpolated along it
+  // and the input is that stage's (held over the stage); past the old horizon, the new tail
+  // repeats the last state and its inputs come from the reference, whose forces respect the
+  // new stages' contacts (a repeated input would put force on a foot that has just entered
+  // the horizon as lifted). With a uniform grid: the solution shifted by `shift` stages.
   bool warm = ws.warm;
   int shift = 0;
   if (warm) {
     const double elapsed = static_cast<double>(reference.knots[0].stamp_ns - ws.last_stamp_ns) * 1e-9;
     const double stages = elapsed / cfg.dt_s;
-    warm = stages > -0.5 && stages < T;
+    warm = stages > -0.5 && stages < W - 1;
     shift = warm ? static_cast<int>(std::lround(stages)) : 0;
   }
   if (warm) {
-    // The new tail repeats the last state; its inputs come from the reference, whose forces
-    // respect the new stages' contacts (a repeated input would put force on a foot that has
-    // just entered the horizon as lifted).
+    // Ascending k reads old stages j ≥ k only, so the shift runs in place.
+    int j = 0;
     for (int k = 0; k <= T; ++k) {
-      ws.x[k] = ws.x[std::min(k + shift, T)];
-      if (k + shift <= T - 1) {
-        ws.u[k] = ws.u[k + shift];
-      } else {
+      const int tau = ws.stage_knot[k] + shift;
+      while (j < T && ws.stage_knot[j + 1] <= tau) ++j;
+      if (j == T) {
+        ws.x[k] = ws.x[T];
         ws.u[k] = ws.u_ref[k];
+      } else if (ws.stage_knot[j] == tau) {
+        ws.x[k] = ws.x[j];
+        ws.u[k] = ws.u[j];
+      } else {
+        const double a = static_cast<double>(tau - ws.stage_knot[j]) / (ws.stage_knot[j + 1] - ws.stage_knot[j]);
+        const StateVector xk = ws.x[j] + a * (ws.x[j + 1] - ws.x[j]);
+        ws.x[k] = xk;
+        ws.u[k] = ws.u[j];
       }
     }
     // Keep the warm yaw on the reference's branch (the reference's yaw may have wrapped).
@@ -684,7 +751,8 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
 
   double violation = 0.0;
   for (int k = 0; k < T; ++k) {
-    const planner::PlanKnot& knot = reference.knots[k];
+    const planner::PlanKnot& knot = reference.knots[ws.stage_knot[k]];
+    const double dt = ws.stage_dt_s[k];
     auto& st = ws.qp.stages[k];
     centroidal_evaluate(model, ws.x[k], ws.u[k], ws.head_rad[k], ws.point);
     const CentroidalPoint& p = ws.point;
@@ -693,12 +761,12 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     // the rest of B zero, as mpc_init wrote them (nothing else writes A or B), and only the
     // varying rows and B's diagonal dt are written (the same values as the whole products).
     st.A.template middleRows<kXJoints - kXMomentum>(kXMomentum).noalias() =
-        cfg.dt_s * p.fx.template middleRows<kXJoints - kXMomentum>(kXMomentum);
+        dt * p.fx.template middleRows<kXJoints - kXMomentum>(kXMomentum);
     st.A.diagonal().template segment<kXJoints - kXMomentum>(kXMomentum).array() += 1.0;
-    st.B.template topRows<kXJoints>().noalias() = cfg.dt_s * p.fu.template topRows<kXJoints>();
+    st.B.template topRows<kXJoints>().noalias() = dt * p.fu.template topRows<kXJoints>();
     st.B.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal() =
-        cfg.dt_s * p.fu.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal();
-    st.b = ws.x[k] + cfg.dt_s * p.f - ws.x[k + 1];
+        dt * p.fu.template block<kNumMpcJoints, kNumMpcJoints>(kXJoints, kUJointVelocity).diagonal();
+    st.b = ws.x[k] + dt * p.f - ws.x[k + 1];
     violation = std::max(violation, st.b.cwiseAbs().maxCoeff());
     if (k <= kMpcPlanKnots) {
       ws.twist[k] = p.base_twist;
@@ -710,7 +778,7 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     add_stance_leg_torque_barrier(model, cfg, ws, knot, k);
     violation = std::max(violation, build_equalities(model, cfg, ws, knot, k));
   }
-  build_stage_cost(cfg, ws, reference.knots[T], T, true);
+  build_stage_cost(cfg, ws, reference.knots[ws.stage_knot[T]], T, true);
   {
     auto& terminal = ws.qp.stages[T];  // no equalities at the terminal stage (ocp_qp.h)
     terminal.C.topRows(terminal.num_eq).setZero();

@@ -3,9 +3,11 @@
 // Model: centroidal_model.h (x = [ṙ, h, base position, ZYX Euler, 26 joints], u = [8 sole-corner
 // forces (world), 26 joint velocities]).
 //
-// Discretization: explicit Euler, x_{k+1} = x_k + dt·f(x_k, u_k), dt = cfg.dt_s (0.02 s). At
-// 20 ms the centroidal dynamics are slow (the fastest mode, the ~0.3 s pendulum, is 15 steps);
-// Leju's RK2 at 15 ms buys little here and would double the linearization cost.
+// Discretization: explicit Euler, x_{k+1} = x_k + dt_k·f(x_k, u_k), dt_k = cfg.dt_s (0.02 s),
+// or a multiple of it in a coarse tail (MpcConfig::tail_stride). At 20 ms the centroidal
+// dynamics are slow (the fastest mode, the ~0.3 s pendulum, is 15 steps); Leju's RK2 at 15 ms
+// buys little here and would double the linearization cost. Every stage term of the cost and
+// the barriers is multiplied by its stage's dt_k (the integral, whatever the grid).
 //
 // One SQP iteration per call (real-time iteration, as Leju: 1 SQP iteration per MPC call):
 // linearize about the previous solution shifted by the elapsed stages (or about the reference
@@ -43,8 +45,10 @@
 //   velocities, and the least-norm stance forces carrying m·g with no moment about the CoM
 //   (the weight split over the stance corners, moment-balanced).
 //
-// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) stages; the
-// new tail repeats the last state and takes the reference inputs. x̄₀ is set to the
+// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) knots (in a
+// coarse tail a stage now starts inside an old one: its state is interpolated along that stage,
+// its input is that stage's); the new tail repeats the last state and takes the reference
+// inputs. x̄₀ is set to the
 // measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a QP failure, a stamp jump
 // backwards or beyond the horizon) linearizes about the reference.
 //
@@ -76,7 +80,23 @@ inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s a
 
 struct MpcConfig {
   double horizon_s = 1.2;  // 0.6 … 1.4 s (the issue); Leju: 1.0 s
-  double dt_s = 0.02;      // stage length; the plan window must use the same dt
+  double dt_s = 0.02;      // the reference window's knot spacing and the fine stages' length
+  // Horizon grid: stages of dt_s up to fine_horizon_s, then stages of tail_stride · dt_s (each
+  // ends on a knot of the dt_s reference window: the tail reads every tail_stride-th knot; the
+  // last stage ends at horizon_s and may be shorter). 1 = uniform. The plan handed to the WBC
+  // (kMpcPlanKnots) lies in the fine part. The offline trajectory optimization reads its
+  // trajectory stage by stage at dt_s and keeps 1.
+  // Default 0.4 s × 4: 30 stages (20 of 20 ms, 10 of 80 ms) instead of 60 of 20 ms. The
+  // iteration's cost is linear in the stages: `kuavo_fw --timing` MPC p50 1.57–1.59 ms against
+  // 2.89–3.99 ms uniform (BENCHMARKS.md). The first 0.4 s is the pendulum's time constant
+  // and then some, and holds the 0.2 s plan; beyond it the stages only have to carry the
+  // trend. Screened on 25 show-campaign runs (its 11 falls and 14 others): uniform and
+  // 0.4 s × 3 fell on the 11, 0.4 s × 2, × 4 and 0.3 s × 3 on 10 of them (not cmu_05_07
+  // seed 71), none on the 14. Converged on a 0.2 m/s sideways push, the plan's CoM velocity
+  // differs from the uniform grid's by 0.5 % of the push's response. 80 ms keeps the swing
+  // row's discrete loop stable: 1 − k·dt_k = −0.6 at k = 20/s (mpc_validate_config).
+  double fine_horizon_s = 0.4;
+  int tail_stride = 4;
   double friction_coefficient = 0.5;  // Leju frictionConeSoftConstraint μ
 
   // State weights Q (diagonal). Leju's task.info Q, with its normalized momentum (v_com, L/m)
@@ -183,7 +203,10 @@ struct MpcConfig {
 
 // nullptr if usable, else what is wrong. Load time.
 const char* mpc_validate_config(const MpcConfig& config);
-// Stages of the horizon for a valid config: round(horizon_s / dt_s).
+// Knots of the reference window a valid config reads: round(horizon_s / dt_s) + 1.
+int mpc_window_knots(const MpcConfig& config);
+// Stages of the horizon for a valid config: round(horizon_s / dt_s) with a uniform grid, fewer
+// with a coarse tail (tail_stride > 1).
 int mpc_num_stages(const MpcConfig& config);
 
 // Stable numbers (logs, fault records): never renumber or reuse.
@@ -223,6 +246,10 @@ using WrenchQpSolution = qp::DenseQpSolution<3 * kNumPoints, 0, 4 * kNumPoints>;
 struct MpcWorkspace {
   bool initialized = false;
   int horizon = 0;  // T (stages)
+  // The grid: stage k starts at reference window knot stage_knot[k] (stage_knot[T] = the
+  // window's last) and lasts stage_dt_s[k].
+  std::array<int, kMaxStages + 1> stage_knot{};
+  std::array<double, kMaxStages> stage_dt_s{};
   StateVector weight_state = StateVector::Zero();   // diag Q (not yet × dt)
   InputVector weight_input = InputVector::Zero();   // diag R
   Eigen::Matrix<double, kNumMpcJoints, 1> joint_min_rad, joint_max_rad;
@@ -234,15 +261,17 @@ struct MpcWorkspace {
   std::array<InputVector, kMaxStages + 1> u_ref{};
   std::array<HeadVector, kMaxStages + 1> head_rad{};
   // The reference in MPC coordinates is a function of its knot alone: the previous call's
-  // knots and their (pre-unwrap) states and inputs are kept, and a knot met again (same stamp,
-  // same values, as consecutive windows of one motion share all but their tail) is not
-  // recomputed. reference_cached counts the valid entries.
-  std::array<planner::PlanKnot, kMaxStages + 1> reference_knot{};
-  std::array<StateVector, kMaxStages + 1> reference_state{};
+  // window knots and their (pre-unwrap) states and inputs are kept, indexed by window knot
+  // (a coarse tail reads other knots of the same window after a shift), and a knot met again
+  // (same stamp, same values, as consecutive windows of one motion share all but their tail)
+  // is not recomputed. reference_cached counts the valid entries.
+  std::array<planner::PlanKnot, planner::kMaxWindowKnots> reference_knot{};
+  std::array<StateVector, planner::kMaxWindowKnots> reference_state{};
+  std::array<InputVector, planner::kMaxWindowKnots> reference_input{};
   int reference_cached = 0;
   // reference_forces_from_motion: the wrench each knot's u_ref forces were solved for (kept
   // with the knot, so a knot whose wrench is unchanged is not solved again) and the QP.
-  std::array<Vec6, kMaxStages + 1> reference_wrench{};
+  std::array<Vec6, planner::kMaxWindowKnots> reference_wrench{};
   WrenchQp wrench_qp;
   WrenchQpWorkspace wrench_qp_workspace;
   WrenchQpSolution wrench_qp_solution;
@@ -280,8 +309,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
 void mpc_reset(MpcWorkspace& ws);
 
 // One real-time iteration. q, v: measured/estimated state (conventions.h), at
-// reference.knots[0].stamp_ns. reference: the plan at the stage times (dt = cfg.dt_s,
-// count ≥ N + 1). No allocation, no exceptions, no printing, bounded time.
+// reference.knots[0].stamp_ns. reference: the plan at dt = cfg.dt_s, count ≥
+// mpc_window_knots(config). No allocation, no exceptions, no printing, bounded time.
 MpcStatus mpc_step_rt(const model::Model& model, const MpcConfig& config, MpcWorkspace& ws,
                       const dynamics::ConfigVector& q, const dynamics::VelocityVector& v,
                       const planner::PlanWindow& reference, MpcPlan& out);

@@ -36,7 +36,7 @@ const char* stack_validate_config(const StackConfig& config) {
   if (!(config.upper_body_delay_s >= 0.0 && config.upper_body_delay_s <= 0.02)) return "upper-body delay outside 0..0.02 s";
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
-    if (mpc::mpc_num_stages(config.mpc) + 1 > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
+    if (mpc::mpc_window_knots(config.mpc) > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
     if (const char* why = planner::recovery_step_validate(config.recovery)) return why;
     if (const char* why = planner::liftoff_hold_validate(config.liftoff_hold)) return why;
     if (const char* why = planner::plan_anchor_validate(config.anchor)) return why;
@@ -121,14 +121,14 @@ void stack_plan_rt(const model::Model& model, const StackConfig& config, Planner
                    const planner::MotionPlan& motion, const dynamics::ConfigVector& q,
                    const dynamics::VelocityVector& v, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
   if (config.planner == PlannerKind::kMpc) {
-    const int stages = mpc::mpc_num_stages(config.mpc);
+    const int knots = mpc::mpc_window_knots(config.mpc);
     const bool recovering = ws.recovery.foot[0].active || ws.recovery.foot[1].active;
     // The measured state's kinematics, once for the three that read it.
     if (config.liftoff_hold.enabled || config.recovery.enabled || config.anchor.enabled) {
       planner::plan_knot_measured(model, ws.data, q, v, t_state_ns, ws.measured);
     }
     planner::liftoff_hold_window_rt(model, config.liftoff_hold, ws.liftoff, motion, ws.measured, t_state_ns,
-                                    config.mpc.dt_s, stages + 1, !recovering, ws.window);
+                                    config.mpc.dt_s, knots, !recovering, ws.window);
     // The anchor's offset as the previous call left it: this call's differs by a ramp step at
     // most, and not at all between re-anchorings.
     planner::recovery_step_rt(model, config.recovery, ws.recovery, motion, ws.measured, ws.window, ws.liftoff.lag_ns,

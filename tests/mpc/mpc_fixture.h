@@ -33,6 +33,13 @@ inline MpcFixture& mpc_fixture(const mpc::MpcConfig& config = {}) {
   return *f;
 }
 
+// The first stage starting at or after reference window knot `knot` (MpcConfig::tail_stride).
+inline int first_stage_from(const MpcFixture& f, int knot) {
+  int k = 0;
+  while (k < f.ws.horizon && f.ws.stage_knot[k] < knot) ++k;
+  return k;
+}
+
 inline planner::ContactFlags all_contacts() {
   planner::ContactFlags c{};
   c.fill(true);

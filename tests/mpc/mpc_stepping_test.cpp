@@ -33,10 +33,10 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
   EXPECT_LT(f.plan.constraint_violation, 1e-6);
   const int T = f.ws.horizon;
   const double y_left = f.window.knots[0].point_position_m[1], y_right = f.window.knots[0].point_position_m[13];
-  double max_z_err = 0.0, max_swing_force = 0.0, min_stance_fz = 1e9;
+  double max_z_err = 0.0, max_z_err_coarse = 0.0, max_swing_force = 0.0, min_stance_fz = 1e9;
   bool saw_swing = false;
   for (int k = 0; k < T; ++k) {
-    const planner::PlanKnot& knot = f.window.knots[k];
+    const planner::PlanKnot& knot = f.window.knots[f.ws.stage_knot[k]];
     const Eigen::Matrix<double, 24, 1> p = predicted_corners(f, k);
     for (int c = 0; c < 8; ++c) {
       if (knot.in_contact[c]) {
@@ -47,19 +47,29 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
       const int first = c < 4 ? 0 : 4;
       if (knot.in_contact[first] || knot.in_contact[first + 1]) continue;  // heel-off: the heel pivots up freely
       saw_swing = true;
-      max_z_err = std::max(max_z_err, std::abs(p[3 * c + 2] - knot.point_position_m[3 * c + 2]));
+      double& worst = f.ws.stage_dt_s[k] < 1.5 * f.config.dt_s ? max_z_err : max_z_err_coarse;
+      worst = std::max(worst, std::abs(p[3 * c + 2] - knot.point_position_m[3 * c + 2]));
     }
   }
-  // Where is the CoM (from the plan knots' kinematics) in the middle of the left swing (k = 25)?
-  const dynamics::ConfigVector q25 = mpc::configuration_from_state(f.ws.x[25], f.ws.head_rad[25]);
+  // Where is the CoM (from the plan knots' kinematics) in the middle of the left swing (0.5 s;
+  // the stage starting there or, in a coarse tail, just after)?
+  const int mid = first_stage_from(f, 25);
+  const dynamics::ConfigVector q25 = mpc::configuration_from_state(f.ws.x[mid], f.ws.head_rad[mid]);
   dynamics::forward_kinematics(f.model, f.data, q25);
   dynamics::crba(f.model, f.data);
   const double lean = (f.data.com_m.y() - 0.5 * (y_left + y_right)) / (y_right - 0.5 * (y_left + y_right));
-  std::printf("swing corner z error max %.2f mm, swing force max %.2e N, min stance fz %.1f N, CoM at mid-swing %.0f %% of the way to the stance foot\n",
-              1e3 * max_z_err, max_swing_force, min_stance_fz, 100 * lean);
+  std::printf("swing corner z error max %.2f mm (in the coarse tail: %.2f mm), swing force max %.2e N, min stance fz %.1f N, CoM at mid-swing %.0f %% of the way to the stance foot\n",
+              1e3 * max_z_err, 1e3 * max_z_err_coarse, max_swing_force, min_stance_fz, 100 * lean);
   EXPECT_TRUE(saw_swing);
   EXPECT_LT(max_swing_force, 1e-6);
   EXPECT_LT(max_z_err, 0.01);  // the normal-velocity rows track z with gain 20/s
+  // Beyond the first 0.4 s, over the tail's stages (dt_k = 0.08 s by default), Euler's local
+  // error on the sine swing is dt_k²/2 · h (π / swing)², and the row carries an error over by
+  // (1 − k dt_k): at most that local error / (1 − |1 − k dt_k|).
+  const double dt_tail = f.ws.stage_dt_s[f.ws.horizon - 2];
+  const double loop = std::abs(1.0 - f.config.swing_position_gain_1_s * dt_tail);
+  const double local = 0.5 * dt_tail * dt_tail * plan.height_m * std::pow(M_PI / plan.swing_s, 2);
+  EXPECT_LT(max_z_err_coarse, std::max(0.01, local / (1.0 - loop)));
   EXPECT_GT(min_stance_fz, -1.0);
   EXPECT_GT(lean, 0.5);  // the CoM is moved over the stance foot
 }
@@ -133,7 +143,7 @@ TEST_P(MpcHorizon, ConvergesOnTheSteppingProblem) {
   mpc::MpcConfig cfg;
   cfg.horizon_s = GetParam();
   MpcFixture& f = mpc_fixture(cfg);
-  EXPECT_EQ(f.ws.horizon, static_cast<int>(std::lround(GetParam() / 0.02)));
+  EXPECT_EQ(f.ws.stage_knot[f.ws.horizon], static_cast<int>(std::lround(GetParam() / 0.02)));
   stepping_window(f, 0, SteppingPlan{});
   for (int it = 0; it < 12; ++it) {
     ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, dynamics::VelocityVector::Zero(), f.window, f.plan),
@@ -235,10 +245,13 @@ TEST(MpcStepping, EqualityRowsMatchFiniteDifferencesOfTheWorldKinematics) {
   constexpr double kStep = 1e-6;
   int swing_stages = 0;
   int partial_stages = 0;
-  for (const int k : {2, 12, 20, 25, 40, 47, 55}) {
+  // The stages starting at (or, in a coarse tail, first after) knots 2, 12 (toes), 20, 30
+  // (swing), 40, 48 (toes), 56 (swing).
+  for (const int knot : {2, 12, 20, 30, 40, 48, 56}) {
+    const int k = first_stage_from(f, knot);
     const auto& st = f.ws.qp.stages[k];
     oracle.f = &f;
-    oracle.knot = &f.window.knots[k];
+    oracle.knot = &f.window.knots[f.ws.stage_knot[k]];
     oracle.head = f.ws.head_rad[k];
     const Eigen::VectorXd value = oracle.rows(f.ws.x[k], f.ws.u[k]);
     ASSERT_EQ(value.size(), st.num_eq) << k;
@@ -285,14 +298,15 @@ double barrier(double h, double mu, double delta) {  // OCS2's relaxed log barri
 // corners: its finite-difference gradient must be the QP's (q, r) at the linearization point.
 double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::InputVector& u, dynamics::Data& data) {
   const mpc::MpcConfig& c = f.config;
-  const planner::PlanKnot& knot = f.window.knots[k];
+  const planner::PlanKnot& knot = f.window.knots[f.ws.stage_knot[k]];
+  const double dt = f.ws.stage_dt_s[k];  // a coarse tail's stages integrate over 2 dt
   mpc::StateVector e = x - f.ws.x_ref[k];
   e[mpc::kXEuler] = std::remainder(e[mpc::kXEuler], 2 * M_PI);
   const mpc::InputVector du = u - f.ws.u_ref[k];
-  double cost = 0.5 * c.dt_s * (e.dot(f.ws.weight_state.cwiseProduct(e)) + du.dot(f.ws.weight_input.cwiseProduct(du)));
+  double cost = 0.5 * dt * (e.dot(f.ws.weight_state.cwiseProduct(e)) + du.dot(f.ws.weight_input.cwiseProduct(du)));
   for (int j = 0; j < mpc::kNumMpcJoints; ++j) {
     const double qj = x[mpc::kXJoints + j];
-    cost += c.dt_s * (barrier(qj - f.model.limits.position_min_rad[j], c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad) +
+    cost += dt * (barrier(qj - f.model.limits.position_min_rad[j], c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad) +
                       barrier(f.model.limits.position_max_rad[j] - qj, c.joint_limit_barrier_mu, c.joint_limit_barrier_delta_rad));
   }
   // Leg joint torques of the stance feet from their corner forces (mpc.h: the
@@ -315,8 +329,8 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
           tau += axis.dot(r.cross(dynamics::Vec3(u.segment<3>(3 * p))));
         }
         const double limit = c.stance_leg_torque_share * f.model.limits.torque_Nm[6 * foot + joint];
-        cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
-                          barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
+        cost += dt * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
+                      barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
         if (joint >= 4) ankle[joint - 4] = tau;  // pitch, roll
       }
       // The ankle motors: (A, B) = joint_to_motor · (pitch, roll), each within its share.
@@ -324,8 +338,8 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
       for (int k2 = 0; m.active && k2 < 2; ++k2) {
         const double tau = m.joint_to_motor[foot].row(k2).dot(ankle);
         const double limit = c.stance_leg_torque_share * m.limit_Nm[foot](k2);
-        cost += c.dt_s * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
-                          barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
+        cost += dt * (barrier(limit - tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm) +
+                      barrier(limit + tau, c.leg_torque_barrier_mu, c.leg_torque_barrier_delta_Nm));
       }
     }
   }
@@ -335,11 +349,11 @@ double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::In
     if (knot.in_contact[p]) {
       const double mu = c.friction_coefficient;
       for (const double h : {mu * fp.z() - fp.x(), mu * fp.z() + fp.x(), mu * fp.z() - fp.y(), mu * fp.z() + fp.y()}) {
-        cost += c.dt_s * barrier(h, c.friction_barrier_mu, c.friction_barrier_delta_N);
+        cost += dt * barrier(h, c.friction_barrier_mu, c.friction_barrier_delta_N);
       }
     } else {
       const Eigen::Vector2d d = dynamics::frame_position(f.model, data, p).head<2>() - knot.point_position_m.segment<2>(3 * p);
-      cost += 0.5 * c.dt_s * c.weight_swing_xy * d.squaredNorm();
+      cost += 0.5 * dt * c.weight_swing_xy * d.squaredNorm();
     }
   }
   return cost;
@@ -360,7 +374,8 @@ void expect_stage_cost_gradient(MpcFixture& f) {
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v0, f.window), mpc::MpcStatus::kOk);
   static dynamics::Data data;
   constexpr double kStep = 1e-6;
-  for (const int k : {3, 22, 50}) {
+  for (const int knot : {3, 24, 50}) {  // stance, then swing stages (coarse in the default tail)
+    const int k = first_stage_from(f, knot);
     const auto& st = f.ws.qp.stages[k];
     mpc::StateVector gx;
     mpc::InputVector gu;
@@ -380,7 +395,7 @@ void expect_stage_cost_gradient(MpcFixture& f) {
     // cost gradient; checked in SwingForcesAreFixedInputsWithExactZeroResult.
     mpc::InputVector r = st.r;
     for (int c = 0; c < mpc::kNumPoints; ++c) {
-      if (!f.window.knots[k].in_contact[c]) {
+      if (!f.window.knots[f.ws.stage_knot[k]].in_contact[c]) {
         r.segment<3>(3 * c).setZero();
         gu.segment<3>(3 * c).setZero();
       }
@@ -428,12 +443,13 @@ TEST(MpcStepping, SwingForcesAreFixedInputsWithExactZeroResult) {
     // The unfixed dynamics from the model, as mpc_build_qp_rt forms them before fixing.
     static mpc::CentroidalPoint point;
     mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], point);
-    mpc::StateVector b = f.ws.x[k] + f.config.dt_s * point.f - f.ws.x[k + 1];
+    const double dt = f.ws.stage_dt_s[k];
+    mpc::StateVector b = f.ws.x[k] + dt * point.f - f.ws.x[k + 1];
     for (int c = 0; c < mpc::kNumPoints; ++c) {
-      if (f.window.knots[k].in_contact[c]) continue;
+      if (f.window.knots[f.ws.stage_knot[k]].in_contact[c]) continue;
       for (int i = 0; i < 3; ++i) {
         const int col = 3 * c + i;
-        b += f.config.dt_s * point.fu.col(col) * (-f.ws.u[k][col]);
+        b += dt * point.fu.col(col) * (-f.ws.u[k][col]);
         EXPECT_EQ(st.B.col(col).cwiseAbs().maxCoeff(), 0.0) << k;
         EXPECT_EQ(st.R(col, col), 1.0) << k;
         EXPECT_EQ(st.R.row(col).cwiseAbs().sum(), 1.0) << k;
@@ -448,7 +464,7 @@ TEST(MpcStepping, SwingForcesAreFixedInputsWithExactZeroResult) {
   double stance_fz = 0.0;
   for (int k = 0; k < f.ws.horizon; ++k) {
     for (int c = 0; c < mpc::kNumPoints; ++c) {
-      if (!f.window.knots[k].in_contact[c]) {
+      if (!f.window.knots[f.ws.stage_knot[k]].in_contact[c]) {
         EXPECT_EQ(f.ws.u[k].segment<3>(3 * c).cwiseAbs().maxCoeff(), 0.0) << k << " " << c;
       } else if (k == 0) {
         stance_fz += f.ws.u[k][3 * c + 2];

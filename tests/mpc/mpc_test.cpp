@@ -24,7 +24,8 @@ double total_fz(const mpc::InputVector& u) {
 TEST(MpcConfig, DefaultsAreValidAndBadValuesAreRefused) {
   mpc::MpcConfig c;
   EXPECT_EQ(mpc::mpc_validate_config(c), nullptr);
-  EXPECT_EQ(mpc::mpc_num_stages(c), 60);
+  EXPECT_EQ(mpc::mpc_window_knots(c), 61);
+  EXPECT_EQ(mpc::mpc_num_stages(c), 30);  // 20 stages of 0.02 s, 10 of 0.08 s
   c.horizon_s = 1.5;
   EXPECT_NE(mpc::mpc_validate_config(c), nullptr);
   c = {};
@@ -110,7 +111,7 @@ TEST(MpcStep, OneIterationSolvesItsQpAndSatisfiesTheLinearizedConstraints) {
   EXPECT_LT(primal, 1e-9);
   // Every stance stage carried its 12 foot-twist rows.
   EXPECT_EQ(f.ws.qp.stages[0].num_eq, 12);
-  EXPECT_EQ(f.ws.qp.stages[59].num_eq, 12);
+  EXPECT_EQ(f.ws.qp.stages[f.ws.horizon - 1].num_eq, 12);
 }
 
 TEST(MpcStep, StandingWithTheExactStateHoldsStill) {
@@ -273,7 +274,7 @@ TEST(MpcStep, CachedReferenceAndPartialClearingBuildTheSameQp) {
     ASSERT_EQ(mpc::mpc_solve_qp_rt(f.ws), MpcStatus::kOk);
     ASSERT_EQ(mpc::mpc_solve_qp_rt(plain), MpcStatus::kOk);
   }
-  EXPECT_EQ(compared, 60 * 61);
+  EXPECT_EQ(compared, 60 * (f.ws.horizon + 1));
 }
 
 // The build writes only the varying rows of A = I + dt·fx and B = dt·fu (the rest is mpc_init's
@@ -302,11 +303,11 @@ TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
     for (int k = 0; k < f.ws.horizon; k += 7) {
       fresh = mpc::CentroidalPoint{};
       mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], fresh);
-      a = f.config.dt_s * fresh.fx;
+      a = f.ws.stage_dt_s[k] * fresh.fx;  // the stage's own length (a coarse tail's is 2 dt)
       a.diagonal().array() += 1.0;
-      b = f.config.dt_s * fresh.fu;
+      b = f.ws.stage_dt_s[k] * fresh.fu;
       for (int c = 0; c < mpc::kNumPoints; ++c) {  // a swing corner's force is a fixed input (mpc.h)
-        if (!f.window.knots[k].in_contact[c]) b.middleCols<3>(3 * c).setZero();
+        if (!f.window.knots[f.ws.stage_knot[k]].in_contact[c]) b.middleCols<3>(3 * c).setZero();
       }
       const auto& st = f.ws.qp.stages[k];
       ASSERT_TRUE(st.A == a) << call << " " << k;
@@ -366,15 +367,15 @@ TEST(MpcStep, SwingXyHessianIsTheWholeGaussNewtonProduct) {
   static mpc::StateJacobian expected;
   Eigen::Matrix<double, 3, mpc::kNumMpcJoints> jp;
   Eigen::Matrix<double, 2, kNx> j;
-  const double w = f.config.dt_s * f.config.weight_swing_xy;
   int swing_stages = 0;
   for (int k = 0; k < with.horizon; ++k) {
+    const double w = with.stage_dt_s[k] * f.config.weight_swing_xy;
     ASSERT_TRUE(with.x[k] == without.x[k] && with.u[k] == without.u[k]);
     mpc::centroidal_evaluate(f.model, with.x[k], with.u[k], with.head_rad[k], p);
     expected.setZero();
     bool swing = false;
     for (int c = 0; c < mpc::kNumPoints; ++c) {
-      if (f.window.knots[k].in_contact[c]) continue;
+      if (f.window.knots[with.stage_knot[k]].in_contact[c]) continue;
       swing = true;
       const int body = f.model.frames[c].body;
       const dynamics::Vec3 point = dynamics::frame_position(f.model, p.data, c);
@@ -444,7 +445,7 @@ namespace {
 // contact, one knot per MPC stage over the whole horizon. Returns the knot count.
 int accelerating_window(MpcFixture& f, const dynamics::Vec3& accel) {
   const Eigen::Quaterniond base(f.q0[6], f.q0[3], f.q0[4], f.q0[5]);
-  const int count = mpc::mpc_num_stages(f.config) + 1;
+  const int count = mpc::mpc_window_knots(f.config);
   f.window.count = count;
   f.window.dt_s = f.config.dt_s;
   for (int k = 0; k < count; ++k) {
@@ -469,15 +470,15 @@ TEST(MpcReferenceForces, FromTheMotionTheyCarryItsAcceleration) {
     mpc::MpcConfig cfg;
     cfg.reference_forces_from_motion = from_motion;
     MpcFixture& f = mpc_fixture(cfg);
-    const int count = accelerating_window(f, accel);
+    accelerating_window(f, accel);
     ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.window.knots[0].q, f.window.knots[0].v, f.window),
               MpcStatus::kOk);
     const double m = f.model.total_mass_kg;
     const dynamics::Vec3 expected =
         m * ((from_motion ? accel : dynamics::Vec3::Zero()) + dynamics::Vec3(0.0, 0.0, model::kGravity_m_s2));
-    for (int k = 0; k < count - 1; k += 7) {
+    for (int k = 0; k <= f.ws.horizon; k += 3) {  // stages, fine and coarse
       dynamics::Vec3 sum = dynamics::Vec3::Zero(), moment = dynamics::Vec3::Zero();
-      const planner::PlanKnot& knot = f.window.knots[k];
+      const planner::PlanKnot& knot = f.window.knots[f.ws.stage_knot[k]];
       for (int c = 0; c < mpc::kNumPoints; ++c) {
         const dynamics::Vec3 fc = f.ws.u_ref[k].segment<3>(3 * c);
         sum += fc;
@@ -504,7 +505,7 @@ TEST(MpcReferenceForces, AWrenchBeyondFrictionComesBackInsideThePyramids) {
             MpcStatus::kOk);
   EXPECT_EQ(f.ws.reference_wrench_failures, 0);
   const double m = f.model.total_mass_kg;
-  for (int k = 0; k < count; k += 5) {
+  for (int k = 0; k <= f.ws.horizon; k += 3) {  // stages, fine and coarse
     dynamics::Vec3 sum = dynamics::Vec3::Zero();
     for (int c = 0; c < mpc::kNumPoints; ++c) {
       const dynamics::Vec3 fc = f.ws.u_ref[k].segment<3>(3 * c);
@@ -517,7 +518,9 @@ TEST(MpcReferenceForces, AWrenchBeyondFrictionComesBackInsideThePyramids) {
     EXPECT_NEAR(sum.y(), mu * sum.z(), 1e-3 * m) << "knot " << k;
     EXPECT_LT(sum.y(), m * accel.y() - 0.2 * m * model::kGravity_m_s2) << "knot " << k;
   }
-  // KKT of the last knot's QP (the last solved): stationarity from the problem's own data.
+  // KKT of the last knot's QP (the last solved, the last stage's): stationarity from the
+  // problem's own data.
+  ASSERT_EQ(f.ws.stage_knot[f.ws.horizon], count - 1);
   const planner::PlanKnot& last = f.window.knots[count - 1];
   constexpr int kF = 3 * mpc::kNumPoints;
   Eigen::Matrix<double, 6, kF> a = Eigen::Matrix<double, 6, kF>::Zero();

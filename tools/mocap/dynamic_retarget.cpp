@@ -141,6 +141,8 @@ mpc::MpcConfig DynamicRetargetConfig::default_ocp() {
   // MPC keeps 50 so the robot may step out of trouble).
   c.weight_swing_xy = 2.0e4;
   c.stance_position_gain_1_s = 10.0;
+  // Its windows commit stages read at dt_s (and take windows from 0.2 s): a uniform grid.
+  c.tail_stride = 1;
   return c;
 }
 
@@ -244,6 +246,10 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
   const auto t_start = std::chrono::steady_clock::now();
   if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
     error = std::string("dynamic retargeting: ") + why;
+    return false;
+  }
+  if (cfg.ocp.tail_stride != 1) {  // the windows commit and read stages as frames dt_s apart
+    error = "dynamic retargeting: the OCP must use a uniform grid (tail_stride 1)";
     return false;
   }
   if (cfg.stage_smoothing_passes < 0 || cfg.stage_smoothing_passes > 8) {
