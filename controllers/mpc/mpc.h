@@ -86,17 +86,19 @@ struct MpcConfig {
   // last stage ends at horizon_s and may be shorter). 1 = uniform. The plan handed to the WBC
   // (kMpcPlanKnots) lies in the fine part. The offline trajectory optimization reads its
   // trajectory stage by stage at dt_s and keeps 1.
-  // Default 0.4 s × 4: 30 stages (20 of 20 ms, 10 of 80 ms) instead of 60 of 20 ms. The
-  // iteration's cost is linear in the stages: `kuavo_fw --timing` MPC p50 1.57–1.59 ms against
-  // 2.89–3.99 ms uniform (BENCHMARKS.md). The first 0.4 s is the pendulum's time constant
-  // and then some, and holds the 0.2 s plan; beyond it the stages only have to carry the
-  // trend. Screened on 25 show-campaign runs (its 11 falls and 14 others): uniform and
-  // 0.4 s × 3 fell on the 11, 0.4 s × 2, × 4 and 0.3 s × 3 on 10 of them (not cmu_05_07
-  // seed 71), none on the 14. Converged on a 0.2 m/s sideways push, the plan's CoM velocity
-  // differs from the uniform grid's by 0.5 % of the push's response. 80 ms keeps the swing
-  // row's discrete loop stable: 1 − k·dt_k = −0.6 at k = 20/s (mpc_validate_config).
+  // Default uniform (1). A coarse tail is opt-in: 0.4 s × 4 (30 stages: 20 of 20 ms, 10 of
+  // 80 ms) halves the iteration (`kuavo_fw --timing` MPC p50 1.57–1.59 ms against 2.89–3.99 ms
+  // uniform; BENCHMARKS.md) and converged on a 0.2 m/s sideways push plans the same 0.2 s
+  // (CoM velocity within 0.5 % of the push's response), but as the default the show campaign
+  // (4 × 100 seeds, carpet, the show set, 10 N·s pushes) fell 16/400 against 11/400: the 11
+  // but cmu_05_07 seed 71, and dance 20, perfume 10, cmu_05_07 27, 44, 68, cmu_05_20 27.
+  // 0.4 s × 2 (40 stages, p50 2.42–2.78 ms) fell on 13 of those 17 runs (of the 6 new, on
+  // cmu_05_07 27, 68 and cmu_05_20 27). A coarse stage takes its contacts from its first knot,
+  // so the tail sees lift-offs and touchdowns up to 60 ms off: a candidate for what costs.
+  // 80 ms keeps the swing row's discrete loop stable: 1 − k·dt_k = −0.6 at k = 20/s
+  // (mpc_validate_config).
   double fine_horizon_s = 0.4;
-  int tail_stride = 4;
+  int tail_stride = 1;
   double friction_coefficient = 0.5;  // Leju frictionConeSoftConstraint μ
 
   // State weights Q (diagonal). Leju's task.info Q, with its normalized momentum (v_com, L/m)

@@ -25,7 +25,7 @@ TEST(MpcConfig, DefaultsAreValidAndBadValuesAreRefused) {
   mpc::MpcConfig c;
   EXPECT_EQ(mpc::mpc_validate_config(c), nullptr);
   EXPECT_EQ(mpc::mpc_window_knots(c), 61);
-  EXPECT_EQ(mpc::mpc_num_stages(c), 30);  // 20 stages of 0.02 s, 10 of 0.08 s
+  EXPECT_EQ(mpc::mpc_num_stages(c), 60);  // uniform by default (MpcConfig::tail_stride)
   c.horizon_s = 1.5;
   EXPECT_NE(mpc::mpc_validate_config(c), nullptr);
   c = {};
