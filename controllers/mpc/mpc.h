@@ -48,9 +48,8 @@
 // Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) knots (in a
 // coarse tail a stage now starts inside an old one: its state is interpolated along that stage,
 // its input is that stage's); the new tail repeats the last state and takes the reference
-// inputs. x̄₀ is set to the
-// measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a QP failure, a stamp jump
-// backwards or beyond the horizon) linearizes about the reference.
+// inputs. x̄₀ is set to the measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a
+// QP failure, a stamp jump backwards or beyond the horizon) linearizes about the reference.
 //
 // Using the plan (for the closed loop): plan.knots[i] describes stamp_ns + i·dt; interpolate
 // with wbc::wbc_interpolate_reference between the two knots around "now". Base twist, point
@@ -87,7 +86,7 @@ struct MpcConfig {
   // (kMpcPlanKnots) lies in the fine part. The offline trajectory optimization reads its
   // trajectory stage by stage at dt_s and keeps 1.
   // Default uniform (1). A coarse tail is opt-in: 0.4 s × 4 (30 stages: 20 of 20 ms, 10 of
-  // 80 ms) halves the iteration (`kuavo_fw --timing` MPC p50 1.57–1.59 ms against 2.89–3.99 ms
+  // 80 ms) halves the iteration (`kuavo_fw --timing` MPC p50 1.57–1.59 ms against 2.89–4.24 ms
   // uniform; BENCHMARKS.md) and converged on a 0.2 m/s sideways push plans the same 0.2 s
   // (CoM velocity within 0.5 % of the push's response), but as the default the show campaign
   // (4 × 100 seeds, carpet, the show set, 10 N·s pushes) fell 16/400 against 11/400: the 11
