@@ -454,10 +454,6 @@ double tracking_cost(const MpcConfig& cfg, const MpcWorkspace& ws) {
   return cost;
 }
 
-}  // namespace
-
-namespace {
-
 int window_intervals(const MpcConfig& c) { return static_cast<int>(std::lround(c.horizon_s / c.dt_s)); }
 
 // Stages at dt_s before the coarse tail (all of them with a uniform grid).
