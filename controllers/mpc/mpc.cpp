@@ -470,6 +470,28 @@ int stage_knot_of(const MpcConfig& c, int k) {
   return std::min(f + (k - f) * c.tail_stride, window_intervals(c));
 }
 
+// The grid of one build: the fine stages, then tail stages of tail_stride knots that end early
+// at a knot where a contact flag changes, so every knot of a stage has its first knot's
+// contacts (a lift-off or touchdown is never moved to a stage boundary). Returns T.
+int contact_aligned_grid(const MpcConfig& c, const planner::PlanWindow& reference,
+                         std::array<int, kMaxStages + 1>& knots) {
+  const int n = window_intervals(c), f = fine_stages(c);
+  int k = 0;
+  for (; k <= f; ++k) knots[k] = k;
+  for (int j = f; j < n;) {
+    int end = std::min(j + c.tail_stride, n);
+    for (int i = j + 1; i < end; ++i) {
+      if (reference.knots[i].in_contact != reference.knots[j].in_contact) {
+        end = i;
+        break;
+      }
+    }
+    knots[k++] = end;
+    j = end;
+  }
+  return k - 1;
+}
+
 }  // namespace
 
 int mpc_window_knots(const MpcConfig& c) { return window_intervals(c) + 1; }
@@ -562,6 +584,8 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   ws.horizon = mpc_num_stages(config);
   for (int k = 0; k <= ws.horizon; ++k) ws.stage_knot[k] = stage_knot_of(config, k);
   for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * config.dt_s;
+  ws.previous_horizon = ws.horizon;
+  ws.previous_stage_knot = ws.stage_knot;
   fill_weights(model, config, ws);
   ws.joint_min_rad = model.limits.position_min_rad.head<kNumMpcJoints>();
   ws.joint_max_rad = model.limits.position_max_rad.head<kNumMpcJoints>();
@@ -620,8 +644,7 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
                                      const StateVector& x_initial, const planner::PlanWindow& reference) {
   if (!ws.initialized) return MpcStatus::kNotInitialized;
   if (!x_initial.allFinite()) return MpcStatus::kBadInput;
-  const int T = ws.horizon;
-  const int W = ws.stage_knot[T] + 1;  // window knots the stages read
+  const int W = mpc_window_knots(cfg);  // window knots the stages read
   if (reference.count < W || reference.count > planner::kMaxWindowKnots ||
       !(std::abs(reference.dt_s - cfg.dt_s) <= kDtTolerance_s)) {
     return MpcStatus::kBadReference;
@@ -629,6 +652,14 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
   for (int k = 0; k < W; ++k) {
     if (!knot_finite(reference.knots[k])) return MpcStatus::kBadReference;
   }
+  // This window's grid (fixed with a uniform one); the previous one stays for the warm start.
+  ws.previous_horizon = ws.horizon;
+  ws.previous_stage_knot = ws.stage_knot;
+  if (cfg.tail_stride > 1) {
+    ws.horizon = contact_aligned_grid(cfg, reference, ws.stage_knot);
+    for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * cfg.dt_s;
+  }
+  const int T = ws.horizon;
 
   // Reference trajectory in MPC coordinates, per window knot. Knots of the previous call are
   // taken from the cache: slot j + s held the knot now at j when the window moved s ≥ 0 knots
@@ -712,22 +743,35 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     shift = warm ? static_cast<int>(std::lround(stages)) : 0;
   }
   if (warm) {
-    // Ascending k reads old stages j ≥ k only, so the shift runs in place.
+    // On an unchanged grid, ascending k reads old stages j ≥ k only, so the shift runs in
+    // place; a grid that moved (a contact switch entered or moved in the tail) reads a copy.
+    const int T_old = ws.previous_horizon;
+    const std::array<int, kMaxStages + 1>& old_knot = ws.previous_stage_knot;
+    bool moved = T_old != T;
+    for (int k = 0; k <= T && !moved; ++k) moved = old_knot[k] != ws.stage_knot[k];
+    if (moved) {
+      for (int k = 0; k <= T_old; ++k) {
+        ws.x_previous[k] = ws.x[k];
+        ws.u_previous[k] = ws.u[k];
+      }
+    }
+    const std::array<StateVector, kMaxStages + 1>& old_x = moved ? ws.x_previous : ws.x;
+    const std::array<InputVector, kMaxStages + 1>& old_u = moved ? ws.u_previous : ws.u;
     int j = 0;
     for (int k = 0; k <= T; ++k) {
       const int tau = ws.stage_knot[k] + shift;
-      while (j < T && ws.stage_knot[j + 1] <= tau) ++j;
-      if (j == T) {
-        ws.x[k] = ws.x[T];
+      while (j < T_old && old_knot[j + 1] <= tau) ++j;
+      if (j == T_old) {
+        ws.x[k] = old_x[T_old];
         ws.u[k] = ws.u_ref[k];
-      } else if (ws.stage_knot[j] == tau) {
-        ws.x[k] = ws.x[j];
-        ws.u[k] = ws.u[j];
+      } else if (old_knot[j] == tau) {
+        ws.x[k] = old_x[j];
+        ws.u[k] = old_u[j];
       } else {
-        const double a = static_cast<double>(tau - ws.stage_knot[j]) / (ws.stage_knot[j + 1] - ws.stage_knot[j]);
-        const StateVector xk = ws.x[j] + a * (ws.x[j + 1] - ws.x[j]);
+        const double a = static_cast<double>(tau - old_knot[j]) / (old_knot[j + 1] - old_knot[j]);
+        const StateVector xk = old_x[j] + a * (old_x[j + 1] - old_x[j]);
         ws.x[k] = xk;
-        ws.u[k] = ws.u[j];
+        ws.u[k] = old_u[j];
       }
     }
     // Keep the warm yaw on the reference's branch (the reference's yaw may have wrapped).
@@ -781,6 +825,10 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
     terminal.D.topRows(terminal.num_eq).setZero();
     terminal.e.head(terminal.num_eq).setZero();
     terminal.num_eq = 0;
+    if (T != ws.previous_horizon) {  // a stage of the last build may end the horizon now: no input cost
+      terminal.R.setZero();
+      terminal.r.setZero();
+    }
   }
   ws.qp.horizon = T;
   ws.qp.x_initial.setZero();

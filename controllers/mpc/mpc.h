@@ -80,8 +80,8 @@ inline constexpr int kMpcPlanKnots = 10;     // knots handed to the WBC (0.2 s a
 struct MpcConfig {
   double horizon_s = 1.2;  // 0.6 … 1.4 s (the issue); Leju: 1.0 s
   double dt_s = 0.02;      // the reference window's knot spacing and the fine stages' length
-  // Horizon grid: stages of dt_s up to fine_horizon_s, then stages of tail_stride · dt_s (each
-  // ends on a knot of the dt_s reference window: the tail reads every tail_stride-th knot; the
+  // Horizon grid: stages of dt_s up to fine_horizon_s, then stages of up to tail_stride · dt_s
+  // (each ends on a knot of the dt_s reference window: the tail reads every tail_stride-th knot; the
   // last stage ends at horizon_s and may be shorter). 1 = uniform. The plan handed to the WBC
   // (kMpcPlanKnots) lies in the fine part. The offline trajectory optimization reads its
   // trajectory stage by stage at dt_s and keeps 1.
@@ -92,8 +92,9 @@ struct MpcConfig {
   // (4 × 100 seeds, carpet, the show set, 10 N·s pushes) fell 16/400 against 11/400: the 11
   // but cmu_05_07 seed 71, and dance 20, perfume 10, cmu_05_07 27, 44, 68, cmu_05_20 27.
   // 0.4 s × 2 (40 stages, p50 2.42–2.78 ms) fell on 13 of those 17 runs (of the 6 new, on
-  // cmu_05_07 27, 68 and cmu_05_20 27). A coarse stage takes its contacts from its first knot,
-  // so the tail sees lift-offs and touchdowns up to 60 ms off: a candidate for what costs.
+  // cmu_05_07 27, 68 and cmu_05_20 27). Those coarse stages took their contacts from their
+  // first knot (lift-offs and touchdowns up to 60 ms off); the tail's stages now end at the
+  // window's contact switches (each stage's contacts hold over all of it).
   // 80 ms keeps the swing row's discrete loop stable: 1 − k·dt_k = −0.6 at k = 20/s
   // (mpc_validate_config).
   double fine_horizon_s = 0.4;
@@ -207,7 +208,8 @@ const char* mpc_validate_config(const MpcConfig& config);
 // Knots of the reference window a valid config reads: round(horizon_s / dt_s) + 1.
 int mpc_window_knots(const MpcConfig& config);
 // Stages of the horizon for a valid config: round(horizon_s / dt_s) with a uniform grid, fewer
-// with a coarse tail (tail_stride > 1).
+// with a coarse tail (tail_stride > 1): then the count without contact switches in the tail;
+// each knot of the tail where a contact flag changes may add one (MpcWorkspace::horizon).
 int mpc_num_stages(const MpcConfig& config);
 
 // Stable numbers (logs, fault records): never renumber or reuse.
@@ -248,9 +250,13 @@ struct MpcWorkspace {
   bool initialized = false;
   int horizon = 0;  // T (stages)
   // The grid: stage k starts at reference window knot stage_knot[k] (stage_knot[T] = the
-  // window's last) and lasts stage_dt_s[k].
+  // window's last) and lasts stage_dt_s[k]. With a coarse tail it follows the window's
+  // contact switches, so each build sets it (and T); the previous build's grid is kept for
+  // the warm start, with a copy of its trajectory when the grid moved (x_previous, u_previous).
   std::array<int, kMaxStages + 1> stage_knot{};
   std::array<double, kMaxStages> stage_dt_s{};
+  int previous_horizon = 0;
+  std::array<int, kMaxStages + 1> previous_stage_knot{};
   StateVector weight_state = StateVector::Zero();   // diag Q (not yet × dt)
   InputVector weight_input = InputVector::Zero();   // diag R
   Eigen::Matrix<double, kNumMpcJoints, 1> joint_min_rad, joint_max_rad;
@@ -261,6 +267,8 @@ struct MpcWorkspace {
   std::array<StateVector, kMaxStages + 1> x_ref{};
   std::array<InputVector, kMaxStages + 1> u_ref{};
   std::array<HeadVector, kMaxStages + 1> head_rad{};
+  std::array<StateVector, kMaxStages + 1> x_previous{};
+  std::array<InputVector, kMaxStages + 1> u_previous{};
   // The reference in MPC coordinates is a function of its knot alone: the previous call's
   // window knots and their (pre-unwrap) states and inputs are kept, indexed by window knot
   // (a coarse tail reads other knots of the same window after a shift), and a knot met again

@@ -141,6 +141,95 @@ TEST(MpcGrid, WarmStartShiftInterpolatesAlongCoarseStages) {
   EXPECT_EQ(interpolated, 20);  // each of the 20 coarse stages now starts inside an old one
 }
 
+// The tail's grid follows the window's contact switches: every knot of a stage has its first
+// knot's contacts, each switch past the fine part is a stage boundary, no stage is longer
+// than the stride, and the count is the closed form Σ ⌈segment / stride⌉ over the tail's
+// segments between switches. Stepping in place (0.3 s stance, 0.4 s swing) at 0.4 s × 4.
+TEST(MpcGrid, TailStagesEndAtContactSwitches) {
+  constexpr int kStride = 4, kFine = 20, kLast = 60;
+  MpcFixture& f = mpc_fixture(tail_config(kStride));
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  int checked_switches = 0;
+  for (int call = 0; call < 12; ++call) {
+    stepping_window(f, static_cast<hal::TimeNs>(call) * 20'000'000, SteppingPlan{});
+    ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk) << call;
+    const int T = f.ws.horizon;
+    const auto& knots = f.window.knots;
+    // The closed form, from the window's own flags.
+    int expected_T = kFine;
+    for (int j = kFine; j < kLast;) {
+      int next = j + 1;
+      while (next < kLast && knots[next].in_contact == knots[j].in_contact) ++next;
+      expected_T += (next - j + kStride - 1) / kStride;
+      j = next;
+    }
+    ASSERT_EQ(T, expected_T) << call;
+    ASSERT_EQ(f.ws.stage_knot[T], kLast);
+    for (int k = 0; k < T; ++k) {
+      const int a = f.ws.stage_knot[k], b = f.ws.stage_knot[k + 1];
+      ASSERT_GT(b, a) << k;
+      ASSERT_LE(b - a, k < kFine ? 1 : kStride) << k;
+      EXPECT_NEAR(f.ws.stage_dt_s[k], 0.02 * (b - a), 1e-15) << k;
+      for (int i = a + 1; i < b; ++i) EXPECT_EQ(knots[i].in_contact, knots[a].in_contact) << call << " " << k << " " << i;
+    }
+    for (int i = kFine + 1; i < kLast; ++i) {
+      if (knots[i].in_contact == knots[i - 1].in_contact) continue;
+      EXPECT_EQ(f.ws.stage_knot[first_stage_from(f, i)], i) << call << " switch at knot " << i;
+      ++checked_switches;
+    }
+  }
+  std::printf("contact switches in the tail, over 12 windows: %d\n", checked_switches);
+  EXPECT_GE(checked_switches, 24);  // two per window (a touchdown and a lift-off 0.3 s apart)
+}
+
+// A grid that moved between builds (the switches came one knot closer) still warm-starts from
+// the previous grid: a trajectory linear in time lands on the same line at the new stage
+// times, inputs come from the old stage each new stage starts in, past the old horizon the
+// last state repeats.
+TEST(MpcGrid, WarmStartFollowsTheGridAcrossContactSwitches) {
+  MpcFixture& f = mpc_fixture(tail_config(4));
+  const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
+  stepping_window(f, 0, SteppingPlan{});
+  ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk);
+  const int T_old = f.ws.horizon;
+  const std::array<int, mpc::kMaxStages + 1> old_knot = f.ws.stage_knot;
+  const double dt = f.config.dt_s;
+  const mpc::StateVector base = f.ws.x[0];
+  mpc::StateVector slope = mpc::StateVector::Constant(1e-3);
+  slope[mpc::kXEuler] = 2e-3;
+  std::array<mpc::InputVector, mpc::kMaxStages + 1> old_u{};
+  std::array<mpc::StateVector, mpc::kMaxStages + 1> old_x{};
+  for (int k = 0; k <= T_old; ++k) {
+    f.ws.x[k] = base + (old_knot[k] * dt) * slope;
+    f.ws.u[k] = f.ws.u_ref[k] + mpc::InputVector::Constant(0.01 * k);
+    old_x[k] = f.ws.x[k];
+    old_u[k] = f.ws.u[k];
+  }
+  stepping_window(f, 20'000'000, SteppingPlan{});
+  ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
+  const int T = f.ws.horizon;
+  bool moved = T != T_old;
+  for (int k = 0; k <= T; ++k) moved = moved || f.ws.stage_knot[k] != old_knot[k];
+  ASSERT_TRUE(moved);  // else this tests nothing beyond WarmStartShiftInterpolatesAlongCoarseStages
+  int interpolated = 0;
+  for (int k = 1; k <= T; ++k) {
+    const int tau = f.ws.stage_knot[k] + 1;
+    if (tau >= old_knot[T_old]) {
+      EXPECT_EQ(f.ws.x[k], old_x[T_old]) << k;
+      continue;
+    }
+    int j = 0;
+    while (old_knot[j + 1] <= tau) ++j;
+    interpolated += old_knot[j] != tau ? 1 : 0;
+    EXPECT_LT((f.ws.x[k] - (base + (tau * dt) * slope)).cwiseAbs().maxCoeff(), 1e-14) << k;
+    if (k < T) {
+      EXPECT_EQ(f.ws.u[k], old_u[j]) << k;
+    }
+  }
+  std::printf("grid %d -> %d stages, %d new stages inside an old one\n", T_old, T, interpolated);
+  EXPECT_GT(interpolated, 0);
+}
+
 // The coarse tail changes what lies beyond the plan, not the plan: pushed sideways at 0.2 m/s
 // and converged, the first 0.2 s the WBC receives is within 2 % of the push's own
 // response of the uniform grid's.
