@@ -4,10 +4,11 @@
 // forces (world), 26 joint velocities]).
 //
 // Discretization: explicit Euler, x_{k+1} = x_k + dt_k·f(x_k, u_k), dt_k = cfg.dt_s (0.02 s),
-// or a multiple of it in a coarse tail (MpcConfig::tail_stride). At 20 ms the centroidal
-// dynamics are slow (the fastest mode, the ~0.3 s pendulum, is 15 steps); Leju's RK2 at 15 ms
-// buys little here and would double the linearization cost. Every stage term of the cost and
-// the barriers is multiplied by its stage's dt_k (the integral, whatever the grid).
+// or up to tail_stride times it in the coarse tail (MpcConfig::tail_stride: by default 0.4 s
+// of 20 ms stages, then 80 ms stages that end early at contact switches). At 20 ms the
+// centroidal dynamics are slow (the fastest mode, the ~0.3 s pendulum, is 15 steps); Leju's
+// RK2 at 15 ms buys little here and would double the linearization cost. Every stage term of
+// the cost and the barriers is multiplied by its stage's dt_k (the integral, whatever the grid).
 //
 // One SQP iteration per call (real-time iteration, as Leju: 1 SQP iteration per MPC call):
 // linearize about the previous solution shifted by the elapsed stages (or about the reference
@@ -45,11 +46,12 @@
 //   velocities, and the least-norm stance forces carrying m·g with no moment about the CoM
 //   (the weight split over the stance corners, moment-balanced).
 //
-// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) knots (in a
-// coarse tail a stage now starts inside an old one: its state is interpolated along that stage,
-// its input is that stage's); the new tail repeats the last state and takes the reference
-// inputs. x̄₀ is set to the measurement, so δx₀ = 0. A cold start (first call, mpc_reset, a
-// QP failure, a stamp jump backwards or beyond the horizon) linearizes about the reference.
+// Warm start: the previous solution shifted by round((stamp − previous stamp)/dt) knots, on the
+// previous build's grid (in a coarse tail a stage may now start inside an old one: its state is
+// interpolated along that stage, its input is that stage's); the new tail repeats the last
+// state and takes the reference inputs. x̄₀ is set to the measurement, so δx₀ = 0. A cold start
+// (first call, mpc_reset, a QP failure, a stamp jump backwards or beyond the horizon)
+// linearizes about the reference.
 //
 // Using the plan (for the closed loop): plan.knots[i] describes stamp_ns + i·dt; interpolate
 // with wbc::wbc_interpolate_reference between the two knots around "now". Base twist, point
@@ -81,24 +83,20 @@ struct MpcConfig {
   double horizon_s = 1.2;  // 0.6 … 1.4 s (the issue); Leju: 1.0 s
   double dt_s = 0.02;      // the reference window's knot spacing and the fine stages' length
   // Horizon grid: stages of dt_s up to fine_horizon_s, then stages of up to tail_stride · dt_s
-  // (each ends on a knot of the dt_s reference window: the tail reads every tail_stride-th knot; the
-  // last stage ends at horizon_s and may be shorter). 1 = uniform. The plan handed to the WBC
-  // (kMpcPlanKnots) lies in the fine part. The offline trajectory optimization reads its
-  // trajectory stage by stage at dt_s and keeps 1.
-  // Default uniform (1). A coarse tail is opt-in: 0.4 s × 4 (30 stages: 20 of 20 ms, 10 of
-  // 80 ms) halves the iteration (`kuavo_fw --timing` MPC p50 1.57–1.59 ms against 2.89–4.24 ms
-  // uniform; BENCHMARKS.md) and converged on a 0.2 m/s sideways push plans the same 0.2 s
-  // (CoM velocity within 0.5 % of the push's response), but as the default the show campaign
-  // (4 × 100 seeds, carpet, the show set, 10 N·s pushes) fell 16/400 against 11/400: the 11
-  // but cmu_05_07 seed 71, and dance 20, perfume 10, cmu_05_07 27, 44, 68, cmu_05_20 27.
-  // 0.4 s × 2 (40 stages, p50 2.42–2.78 ms) fell on 13 of those 17 runs (of the 6 new, on
-  // cmu_05_07 27, 68 and cmu_05_20 27). Those coarse stages took their contacts from their
-  // first knot (lift-offs and touchdowns up to 60 ms off); the tail's stages now end at the
-  // window's contact switches (each stage's contacts hold over all of it).
+  // that end early at a knot where a contact flag changes, so each stage's contacts hold over
+  // all of it (every boundary is a knot of the dt_s reference window; the last stage ends at
+  // horizon_s). 1 = uniform. The plan handed to the WBC (kMpcPlanKnots) lies in the fine part.
+  // The offline trajectory optimization reads its trajectory stage by stage at dt_s and keeps 1.
+  // Default 0.4 s × 4: 30 stages without switches in the tail (20 of 20 ms, 10 of 80 ms), one
+  // more per switch. Against uniform it halves the iteration (BENCHMARKS.md) and plans the
+  // same 0.2 s for the WBC (converged on a 0.2 m/s sideways push, CoM velocity within 0.5 % of
+  // the push's response). The show campaign (4 × 100 seeds, carpet, the show set, 10 N·s
+  // pushes) fell 11/400, the same 11 runs as uniform. A tail whose coarse stages took their
+  // contacts from their first knot (lift-offs and touchdowns up to 60 ms off) fell 16/400.
   // 80 ms keeps the swing row's discrete loop stable: 1 − k·dt_k = −0.6 at k = 20/s
   // (mpc_validate_config).
   double fine_horizon_s = 0.4;
-  int tail_stride = 1;
+  int tail_stride = 4;
   double friction_coefficient = 0.5;  // Leju frictionConeSoftConstraint μ
 
   // State weights Q (diagonal). Leju's task.info Q, with its normalized momentum (v_com, L/m)
