@@ -1,8 +1,9 @@
 // The MPC's horizon grid with a coarse tail (MpcConfig::fine_horizon_s, tail_stride): stage
 // count and lengths against their closed forms, the coarse stages' dynamics against Newton's
 // law over their own length, the warm start's shift through coarse stages against a trajectory
-// linear in time (which interpolation reproduces exactly), and the plan handed to the WBC
-// against the uniform grid's.
+// linear in time (which interpolation reproduces exactly), the tail's stages ending at the
+// window's contact switches (against the closed-form count) and the warm start across a grid
+// that moved, and the plan handed to the WBC against the uniform grid's.
 #include <gtest/gtest.h>
 
 #include <array>
