@@ -492,6 +492,11 @@ int contact_aligned_grid(const MpcConfig& c, const planner::PlanWindow& referenc
   return k - 1;
 }
 
+// stage_dt_s from stage_knot over the workspace's horizon.
+void set_stage_lengths(const MpcConfig& c, MpcWorkspace& ws) {
+  for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * c.dt_s;
+}
+
 }  // namespace
 
 int mpc_window_knots(const MpcConfig& c) { return window_intervals(c) + 1; }
@@ -583,7 +588,7 @@ void mpc_init(const model::Model& model, const MpcConfig& config, MpcWorkspace& 
   if (mpc_validate_config(config) != nullptr) return;
   ws.horizon = mpc_num_stages(config);
   for (int k = 0; k <= ws.horizon; ++k) ws.stage_knot[k] = stage_knot_of(config, k);
-  for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * config.dt_s;
+  set_stage_lengths(config, ws);
   ws.previous_horizon = ws.horizon;
   ws.previous_stage_knot = ws.stage_knot;
   fill_weights(model, config, ws);
@@ -657,7 +662,7 @@ MpcStatus mpc_build_qp_from_state_rt(const model::Model& model, const MpcConfig&
   ws.previous_stage_knot = ws.stage_knot;
   if (cfg.tail_stride > 1) {
     ws.horizon = contact_aligned_grid(cfg, reference, ws.stage_knot);
-    for (int k = 0; k < ws.horizon; ++k) ws.stage_dt_s[k] = (ws.stage_knot[k + 1] - ws.stage_knot[k]) * cfg.dt_s;
+    set_stage_lengths(cfg, ws);
   }
   const int T = ws.horizon;
 

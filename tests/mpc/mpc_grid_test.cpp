@@ -25,6 +25,50 @@ mpc::MpcConfig tail_config(int stride, double fine_s = 0.4, double horizon_s = 1
   return c;
 }
 
+// A trajectory linear in time on the workspace's current grid, written as the previous
+// solution; check() then compares the warm start of the next build (one knot later) against
+// it: on the same line at the new stage times (exact for linear interpolation), inputs of the
+// old stage each new stage starts in, past the old horizon the last state repeated. Returns
+// how many new stages start inside an old one.
+struct LinearWarmStart {
+  int T_old = 0;
+  std::array<int, mpc::kMaxStages + 1> old_knot{};
+  mpc::StateVector base, slope;
+  std::array<mpc::StateVector, mpc::kMaxStages + 1> old_x{};
+  std::array<mpc::InputVector, mpc::kMaxStages + 1> old_u{};
+
+  explicit LinearWarmStart(MpcFixture& f) : T_old(f.ws.horizon), old_knot(f.ws.stage_knot), base(f.ws.x[0]) {
+    slope = mpc::StateVector::Constant(1e-3);
+    slope[mpc::kXEuler] = 2e-3;
+    for (int k = 0; k <= T_old; ++k) {
+      f.ws.x[k] = base + (old_knot[k] * f.config.dt_s) * slope;
+      f.ws.u[k] = f.ws.u_ref[k] + mpc::InputVector::Constant(0.01 * k);
+      old_x[k] = f.ws.x[k];
+      old_u[k] = f.ws.u[k];
+    }
+  }
+
+  int check(const MpcFixture& f) const {
+    const int T = f.ws.horizon;
+    int interpolated = 0;
+    for (int k = 1; k <= T; ++k) {
+      const int tau = f.ws.stage_knot[k] + 1;
+      if (tau >= old_knot[T_old]) {
+        EXPECT_EQ(f.ws.x[k], old_x[T_old]) << k;
+        continue;
+      }
+      int j = 0;
+      while (old_knot[j + 1] <= tau) ++j;
+      interpolated += old_knot[j] != tau ? 1 : 0;
+      EXPECT_LT((f.ws.x[k] - (base + (tau * f.config.dt_s) * slope)).cwiseAbs().maxCoeff(), 1e-14) << k;
+      if (k < T) {
+        EXPECT_EQ(f.ws.u[k], old_u[j]) << k;
+      }
+    }
+    return interpolated;
+  }
+};
+
 TEST(MpcGrid, StageCountsAndLengthsAreTheClosedForms) {
   struct Case {
     int stride;
@@ -108,37 +152,10 @@ TEST(MpcGrid, WarmStartShiftInterpolatesAlongCoarseStages) {
   standing_window(f, 0);
   const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk);
-  const int T = f.ws.horizon;
-  const double dt = f.config.dt_s;
-  const mpc::StateVector base = f.ws.x[0];
-  mpc::StateVector slope = mpc::StateVector::Constant(1e-3);
-  slope[mpc::kXEuler] = 2e-3;
-  std::array<mpc::InputVector, mpc::kMaxStages + 1> old_u{};
-  std::array<mpc::StateVector, mpc::kMaxStages + 1> old_x{};
-  for (int k = 0; k <= T; ++k) {
-    f.ws.x[k] = base + (f.ws.stage_knot[k] * dt) * slope;
-    f.ws.u[k] = f.ws.u_ref[k] + mpc::InputVector::Constant(0.01 * k);
-    old_x[k] = f.ws.x[k];
-    old_u[k] = f.ws.u[k];
-  }
+  const LinearWarmStart previous(f);
   standing_window(f, 20'000'000);
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
-  int interpolated = 0;
-  for (int k = 1; k <= T; ++k) {
-    const int tau = f.ws.stage_knot[k] + 1;
-    if (tau >= f.ws.stage_knot[T]) {
-      EXPECT_EQ(f.ws.x[k], old_x[T]) << k;
-      continue;
-    }
-    int j = 0;
-    while (f.ws.stage_knot[j + 1] <= tau) ++j;
-    interpolated += f.ws.stage_knot[j] != tau ? 1 : 0;
-    const mpc::StateVector expected = base + (tau * dt) * slope;
-    EXPECT_LT((f.ws.x[k] - expected).cwiseAbs().maxCoeff(), 1e-14) << k;
-    if (k < T) {
-      EXPECT_EQ(f.ws.u[k], old_u[j]) << k;
-    }
-  }
+  const int interpolated = previous.check(f);
   EXPECT_EQ(interpolated, 20);  // each of the 20 coarse stages now starts inside an old one
 }
 
@@ -192,42 +209,15 @@ TEST(MpcGrid, WarmStartFollowsTheGridAcrossContactSwitches) {
   const dynamics::VelocityVector v = dynamics::VelocityVector::Zero();
   stepping_window(f, 0, SteppingPlan{});
   ASSERT_EQ(mpc::mpc_step_rt(f.model, f.config, f.ws, f.q0, v, f.window, f.plan), MpcStatus::kOk);
-  const int T_old = f.ws.horizon;
-  const std::array<int, mpc::kMaxStages + 1> old_knot = f.ws.stage_knot;
-  const double dt = f.config.dt_s;
-  const mpc::StateVector base = f.ws.x[0];
-  mpc::StateVector slope = mpc::StateVector::Constant(1e-3);
-  slope[mpc::kXEuler] = 2e-3;
-  std::array<mpc::InputVector, mpc::kMaxStages + 1> old_u{};
-  std::array<mpc::StateVector, mpc::kMaxStages + 1> old_x{};
-  for (int k = 0; k <= T_old; ++k) {
-    f.ws.x[k] = base + (old_knot[k] * dt) * slope;
-    f.ws.u[k] = f.ws.u_ref[k] + mpc::InputVector::Constant(0.01 * k);
-    old_x[k] = f.ws.x[k];
-    old_u[k] = f.ws.u[k];
-  }
+  const LinearWarmStart previous(f);
   stepping_window(f, 20'000'000, SteppingPlan{});
   ASSERT_EQ(mpc::mpc_build_qp_rt(f.model, f.config, f.ws, f.q0, v, f.window), MpcStatus::kOk);
   const int T = f.ws.horizon;
-  bool moved = T != T_old;
-  for (int k = 0; k <= T; ++k) moved = moved || f.ws.stage_knot[k] != old_knot[k];
+  bool moved = T != previous.T_old;
+  for (int k = 0; k <= T; ++k) moved = moved || f.ws.stage_knot[k] != previous.old_knot[k];
   ASSERT_TRUE(moved);  // else this tests nothing beyond WarmStartShiftInterpolatesAlongCoarseStages
-  int interpolated = 0;
-  for (int k = 1; k <= T; ++k) {
-    const int tau = f.ws.stage_knot[k] + 1;
-    if (tau >= old_knot[T_old]) {
-      EXPECT_EQ(f.ws.x[k], old_x[T_old]) << k;
-      continue;
-    }
-    int j = 0;
-    while (old_knot[j + 1] <= tau) ++j;
-    interpolated += old_knot[j] != tau ? 1 : 0;
-    EXPECT_LT((f.ws.x[k] - (base + (tau * dt) * slope)).cwiseAbs().maxCoeff(), 1e-14) << k;
-    if (k < T) {
-      EXPECT_EQ(f.ws.u[k], old_u[j]) << k;
-    }
-  }
-  std::printf("grid %d -> %d stages, %d new stages inside an old one\n", T_old, T, interpolated);
+  const int interpolated = previous.check(f);
+  std::printf("grid %d -> %d stages, %d new stages inside an old one\n", previous.T_old, T, interpolated);
   EXPECT_GT(interpolated, 0);
 }
 

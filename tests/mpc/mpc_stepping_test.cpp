@@ -2,6 +2,7 @@
 // the shifted warm start.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -66,7 +67,7 @@ TEST(MpcStepping, ConvergedPlanLiftsTheSwingFootAndLeansOverTheStanceFoot) {
   // Beyond the first 0.4 s, over the tail's stages (dt_k = 0.08 s by default), Euler's local
   // error on the sine swing is dt_k²/2 · h (π / swing)², and the row carries an error over by
   // (1 − k dt_k): at most that local error / (1 − |1 − k dt_k|).
-  const double dt_tail = f.ws.stage_dt_s[f.ws.horizon - 2];
+  const double dt_tail = *std::max_element(f.ws.stage_dt_s.begin(), f.ws.stage_dt_s.begin() + f.ws.horizon);
   const double loop = std::abs(1.0 - f.config.swing_position_gain_1_s * dt_tail);
   const double local = 0.5 * dt_tail * dt_tail * plan.height_m * std::pow(M_PI / plan.swing_s, 2);
   EXPECT_LT(max_z_err_coarse, std::max(0.01, local / (1.0 - loop)));
@@ -299,7 +300,7 @@ double barrier(double h, double mu, double delta) {  // OCS2's relaxed log barri
 double stage_cost(MpcFixture& f, int k, const mpc::StateVector& x, const mpc::InputVector& u, dynamics::Data& data) {
   const mpc::MpcConfig& c = f.config;
   const planner::PlanKnot& knot = f.window.knots[f.ws.stage_knot[k]];
-  const double dt = f.ws.stage_dt_s[k];  // a coarse tail's stages integrate over 2 dt
+  const double dt = f.ws.stage_dt_s[k];  // a coarse tail's stages integrate over several dt
   mpc::StateVector e = x - f.ws.x_ref[k];
   e[mpc::kXEuler] = std::remainder(e[mpc::kXEuler], 2 * M_PI);
   const mpc::InputVector du = u - f.ws.u_ref[k];

@@ -305,7 +305,7 @@ TEST(MpcStep, StructuredDynamicsBlocksEqualTheWholeProducts) {
     for (int k = 0; k < f.ws.horizon; k += 7) {
       fresh = mpc::CentroidalPoint{};
       mpc::centroidal_evaluate(f.model, f.ws.x[k], f.ws.u[k], f.ws.head_rad[k], fresh);
-      a = f.ws.stage_dt_s[k] * fresh.fx;  // the stage's own length (a coarse tail's is 2 dt)
+      a = f.ws.stage_dt_s[k] * fresh.fx;  // the stage's own length (a coarse tail's, several dt)
       a.diagonal().array() += 1.0;
       b = f.ws.stage_dt_s[k] * fresh.fu;
       for (int c = 0; c < mpc::kNumPoints; ++c) {  // a swing corner's force is a fixed input (mpc.h)
