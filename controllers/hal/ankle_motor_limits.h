@@ -18,10 +18,12 @@ struct AnkleMotorLimits {
   // Per leg (left, right): rows motor A, B; columns ankle pitch, roll.
   std::array<Eigen::Matrix2d, 2> joint_to_motor{Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()};
   std::array<Eigen::Vector2d, 2> limit_Nm{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};  // |motor k| ≤
-  // What the binding adds to each motor's commanded torque per unit of the commanded motor
-  // velocity, J·v_ref with J = joint_to_motorᵀ⁻¹ (virtual work): the CSP drives' kd, since
-  // their torque offset carries kd·J·v_ref for the drive's −kd·q̇ to cancel. The command on
-  // the wire, not only τ_ff, must stay within the limit. 0: a binding that sends τ alone.
+  // What each motor's drive adds to the commanded torque per unit of motor velocity error,
+  // J·(v_ref − v) with J = joint_to_motorᵀ⁻¹ (virtual work): the CSP drives' kd. Their torque
+  // offset carries kd·J·v_ref and the drive's loop takes kd·J·v off at the sample it closes
+  // on, so the motor's torque there is the mapped τ plus kd·J·(v_ref − v), and that is what
+  // the drive clips at its limit (drivers/canopen/cia402_drive.cpp). 0: a binding that sends
+  // τ alone.
   std::array<Eigen::Vector2d, 2> velocity_gain_Nm_s_per_rad{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
 };
 

@@ -1,10 +1,11 @@
-// The legs' serial joints (hip roll, hip yaw, hip pitch, knee) on drives whose command
-// carries a velocity feed-forward: in CSP (firmware/README.md, leg binding) the torque offset
-// on the wire is, in joint terms, τ_ff + kd·v_ref (the drive's gains equal the command's; the
-// drive's own −kd·q̇ cancels the feed-forward as the joint tracks), and the drivers clamp it
-// at the drive's limit. The binding fills this at start-up; the WBC then keeps each command
-// within the limit (controllers/wbc/wbc.h). Inactive (the simulator's joint drives, CST): no
-// rows. The ankle pair is hal::AnkleMotorLimits.
+// The legs' serial joints (hip roll, hip yaw, hip pitch, knee) on drives that close their own
+// loop: in CSP (firmware/README.md, leg binding) the torque offset on the wire is, in joint
+// terms, τ_ff + kd·v_ref (the drive's gains equal the command's), and the drive's own −kd·q̇
+// takes kd·v off at the sample, so the drive's torque there is τ_ff + kd·(v_ref − v) (with
+// the target on the sample): the drivers clamp that at the drive's limit, not the offset
+// (drivers/canopen/cia402_drive.cpp). The binding fills this at start-up; the WBC then keeps
+// each joint's torque at the sample within the limit (controllers/wbc/wbc.h). Inactive (the
+// simulator's joint drives, CST): no rows. The ankle pair is hal::AnkleMotorLimits.
 #pragma once
 
 #include <array>

@@ -200,14 +200,16 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
   }
 
   // Ankle motors: the two ankle torque rows of each leg (swing forces already cut out) mapped
-  // through the linkage; bounds on the motor torque, less the mapped bias. The binding's
-  // velocity feed-forward gain·J·v_ref (v_ref = reference + q̈·dt, as the command is written
-  // below) is part of the motor's command: its q̈ part joins the row, the rest the bounds.
+  // through the linkage; bounds on the motor torque, less the mapped bias. A drive whose
+  // loop damps (gain > 0, CSP) applies gain·J·(v_ref − v) on top of the command's torque
+  // at the sample it closes on (v_ref = reference + q̈·dt, as the command is written below;
+  // v the measured joint velocity): its q̈ part joins the row, the rest the bounds.
   const AnkleMotorLimits& motors = ws.ankle_motor_limits;
   for (int leg = 0; leg < 2; ++leg) {
     const int jp = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
     const Eigen::Matrix2d velocity_map = motors.joint_to_motor[leg].transpose().inverse();
     const Eigen::Vector2d v_ref(ref.joint_velocity_rad_s[jp], ref.joint_velocity_rad_s[jp + 1]);
+    const Eigen::Vector2d v_joint(v[6 + jp], v[6 + jp + 1]);
     for (int k = 0; k < 2; ++k) {
       const int r = kMotorRow0 + 2 * leg + k;
       if (!motors.active) {
@@ -221,15 +223,16 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
       const double kv = motors.velocity_gain_Nm_s_per_rad[leg](k);
       qp.C(r, 6 + jp) += kv * cfg.dt_s * velocity_map(k, 0);
       qp.C(r, 6 + jp + 1) += kv * cfg.dt_s * velocity_map(k, 1);
-      const double offset = gp * bias(6 + jp) + gr * bias(6 + jp + 1) + kv * velocity_map.row(k).dot(v_ref);
+      const double offset = gp * bias(6 + jp) + gr * bias(6 + jp + 1) + kv * velocity_map.row(k).dot(v_ref - v_joint);
       const double limit = cfg.ankle_motor_torque_share * motors.limit_Nm[leg](k) - kTorqueBoundRoundoff_Nm;
       qp.c_lower(r) = -limit - offset;
       qp.c_upper(r) = limit - offset;
     }
   }
 
-  // Serial leg drives: the command τ + kv·v_ref (v_ref = reference + q̈·dt) within the drive's
-  // clamp, as the ankle motors' (the torque row plus kv·dt on the joint's q̈).
+  // Serial leg drives: the drive's torque at its sample, τ + kv·(v_ref − v) (v_ref = reference
+  // + q̈·dt), within the drive's clamp, as the ankle motors' (the torque row plus kv·dt on the
+  // joint's q̈).
   const SerialLegDriveLimits& serial = ws.serial_drive_limits;
   for (int leg = 0; leg < 2; ++leg) {
     const int first = leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
@@ -244,7 +247,7 @@ void build_constraints(const model::Model& model, const WbcConfig& cfg, WbcWorks
       const double kv = serial.velocity_gain_Nm_s_per_rad[leg][k];
       qp.C.row(r) = qp.C.row(kTorqueRow0 + j);
       qp.C(r, 6 + j) += kv * cfg.dt_s;
-      const double offset = bias(6 + j) + kv * ref.joint_velocity_rad_s[j];
+      const double offset = bias(6 + j) + kv * (ref.joint_velocity_rad_s[j] - v[6 + j]);
       const double limit = serial.limit_Nm[leg][k] - kTorqueBoundRoundoff_Nm;
       qp.c_lower(r) = -limit - offset;
       qp.c_upper(r) = limit - offset;

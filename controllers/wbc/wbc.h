@@ -6,11 +6,12 @@
 //   equalities:   the 6 floating-base rows  M_b q̈ + b_b = J_bᵀ f
 //   inequalities: friction pyramid, 4 rows per stance point (|f_x|, |f_y| ≤ μ f_z);
 //                 ankle motor limits: each ankle pair's two motor commands, J⁻ᵀ (τ_pitch, τ_roll)
-//                 through the linkage plus the binding's velocity feed-forward, within
+//                 through the linkage plus the drives' damping on the velocity error, within
 //                 ankle_motor_torque_share of the motors' limits, 4 rows (off: ±∞) -- a joint-space
 //                 box does not bound what the linkage asks of each motor (roll = 0.46 (τ_A − τ_B));
-//                 serial leg drives: hip roll/yaw/pitch and knee commands τ + kv·v_ref within
-//                 the drives' clamps, 8 rows (off: ±∞; hal/serial_drive_limits.h)
+//                 serial leg drives: hip roll/yaw/pitch and knee torques at the drive's sample,
+//                 τ + kv·(v_ref − v), within the drives' clamps, 8 rows (off: ±∞;
+//                 hal/serial_drive_limits.h)
 //                 torque limits |τ| ≤ min(model.limits.torque_Nm, the binding's cap), 28 rows (last)
 //   bounds:       0 ≤ f_z ≤ max_normal_force_N on stance points, f = 0 on swing points;
 //                 joint q̈ within the joint-limit-aware window

@@ -52,6 +52,32 @@ std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& 
   return static_cast<std::int16_t>(pm);
 }
 
+namespace {
+
+// CSP: the torque offset (0x60B2) is not the motor's torque. The drive applies
+// kp (target - position) - kd velocity + offset and clips that sum at its own limit; the
+// firmware writes the offset so that the sum at the last sample is the torque it wants,
+// so with the joint moving the offset exceeds the limit by kd velocity while the torque
+// does not. What is clamped is therefore the drive's torque at that sample, at the limit,
+// and the offset follows it. Without a sample yet, the offset itself is.
+std::int16_t csp_offset_to_permille(const DriveConfig& cfg, const DriveState& st, const DriveCommand& cmd,
+                                    bool& clamped) {
+  if (!st.have_tpdo1 || !st.have_tpdo2) return torque_to_permille(cfg, cmd.torque_Nm, clamped);
+  const double position = counts_to_rad(cfg, st.tpdo1.actual_position_counts);
+  const double velocity = counts_to_rad(cfg, st.tpdo2.actual_velocity_counts_s);
+  const double loop = cfg.csp_kp_Nm_per_rad * (cmd.position_rad - position) - cfg.csp_kd_Nm_s_per_rad * velocity;
+  const double at_sample = cmd.torque_Nm + loop;
+  const double lim = cfg.torque_limit_Nm;
+  clamped = at_sample > lim || at_sample < -lim;
+  const double offset = clamped ? (at_sample > lim ? lim : -lim) - loop : cmd.torque_Nm;
+  double pm = std::round(offset / cfg.rated_torque_Nm * 1000.0);
+  if (pm > 32767.0) pm = 32767.0, clamped = true;
+  if (pm < -32767.0) pm = -32767.0, clamped = true;
+  return static_cast<std::int16_t>(pm);
+}
+
+}  // namespace
+
 DriverError position_to_counts_rt(const DriveConfig& cfg, double rad, std::int32_t& counts) {
   const double c = counts_of_rad(cfg, rad);
   if (!(std::abs(c) <= 2147483647.0)) return DriverError::kCommandRefused;  // NaN fails too
@@ -219,7 +245,7 @@ bool step_rt(const DriveConfig& cfg, DriveState& st, hal::TimeNs now_ns, const D
         st.error = DriverError::kCommandRefused;
       } else {
         pdo.target_position_counts = counts;
-        pdo.target_torque_permille = torque_to_permille(cfg, cmd.torque_Nm, clamped);
+        pdo.target_torque_permille = csp_offset_to_permille(cfg, st, cmd, clamped);
         if (clamped) ++st.torque_clamps;
       }
     }

@@ -35,7 +35,7 @@ struct DriveConfig {
   std::uint8_t node_id = 0;  // 1..127
   double counts_per_rev = 131072.0 * 10.0;  // encoder counts per output turn (FACTS.md §5.1)
   double rated_torque_Nm = 1.0;   // 0x6076: torque per 1000 per-mille
-  double torque_limit_Nm = 0.0;   // motor-side clamp before packing
+  double torque_limit_Nm = 0.0;   // motor side: CST's target torque, CSP's torque at the sample (cia402_drive.cpp)
   std::uint16_t heartbeat_period_ms = 20;  // producer time written to 0x1017
   // Consumer timeout: 3 periods, so one lost heartbeat is tolerated.
   hal::TimeNs heartbeat_timeout_ns = 60'000'000;

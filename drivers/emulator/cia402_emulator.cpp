@@ -14,12 +14,15 @@ EmulatedDrive* find(Cia402Emulator& emu, std::uint8_t node) {
   return nullptr;
 }
 
-void send(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d, const can_frame& f) {
+// True when the frame went out.
+bool send(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d, const can_frame& f) {
   if (d.silent || roll(emu.faults, emu.faults.drop_probability)) {
     ++emu.frames_dropped;
-    return;
+    return false;
   }
-  if (send_rt(port, f) == DriverError::kOk) ++emu.frames_out;
+  if (send_rt(port, f) != DriverError::kOk) return false;
+  ++emu.frames_out;
+  return true;
 }
 
 void send_heartbeat(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d) {
@@ -113,7 +116,7 @@ void handle_sdo(Cia402Emulator& emu, CanPort& port, EmulatedDrive& d, const can_
   send(emu, port, d, r);
 }
 
-void send_tpdos(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d) {
+void send_tpdos(Cia402Emulator& emu, CanPort& port, EmulatedDrive& d) {
   if (d.nmt != NmtState::kOperational) return;
   const DriveConfig& c = d.config;
   if (d.tpdo1_mapped) {
@@ -126,7 +129,9 @@ void send_tpdos(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d) {
     unlimited.torque_limit_Nm = 1e9;
     put_u16(&f.data[2], static_cast<std::uint16_t>(torque_to_permille(unlimited, drive_torque_Nm(d), clamped)));
     put_u32(&f.data[4], static_cast<std::uint32_t>(rad_to_counts(c, d.position_rad)));
-    send(emu, port, d, f);
+    if (send(emu, port, d, f)) {
+      d.reported_position_rad = {counts_to_rad(c, rad_to_counts(c, d.position_rad)), d.reported_position_rad[0]};
+    }
   }
   if (d.tpdo2_mapped) {
     can_frame f{};
@@ -135,7 +140,9 @@ void send_tpdos(Cia402Emulator& emu, CanPort& port, const EmulatedDrive& d) {
     put_u32(&f.data[0], static_cast<std::uint32_t>(rad_to_counts(c, d.velocity_rad_s)));
     put_u16(&f.data[4], d.error_code);
     f.data[6] = static_cast<std::uint8_t>(d.mode);
-    send(emu, port, d, f);
+    if (send(emu, port, d, f)) {
+      d.reported_velocity_rad_s = {counts_to_rad(c, rad_to_counts(c, d.velocity_rad_s)), d.reported_velocity_rad_s[0]};
+    }
   }
 }
 

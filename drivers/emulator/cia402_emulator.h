@@ -38,6 +38,9 @@ struct EmulatedDrive {
   hal::TimeNs next_heartbeat_ns = 0;
   double position_rad = 0.0;   // plant state, motor side
   double velocity_rad_s = 0.0;
+  // What the last two TPDOs reported (as quantized on the wire), newest first: the samples
+  // a CSP offset received now was written against (a wire inspector's reference).
+  std::array<double, 2> reported_position_rad{}, reported_velocity_rad_s{};
   std::uint32_t sdo_writes = 0;
 };
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numbers>
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
@@ -317,11 +318,25 @@ void FirmwareLoop::inspect_drives(std::size_t b, std::uint32_t frames) {
   check_.frames_inspected += frames;
   const emu::Cia402Emulator& e = *buses_.drives(b);
   for (int i = 0; i < e.count; ++i) {
-    const d::canopen::DriveConfig& c = e.drives[i].config;
-    const double tau = e.drives[i].target_torque_permille * c.rated_torque_Nm / 1000.0;
-    if (std::abs(tau) > c.torque_limit_Nm + c.rated_torque_Nm / 1000.0) {
-      bad("drive torque above limit, node " + std::to_string(c.node_id));
+    const emu::EmulatedDrive& dr = e.drives[i];
+    const d::canopen::DriveConfig& c = dr.config;
+    const double tau = dr.target_torque_permille * c.rated_torque_Nm / 1000.0;
+    if (dr.mode == d::canopen::kModeCyclicSyncPosition) {
+      // CSP: the field is the offset, and the drive clips kp (target − q) − kd q̇ + offset.
+      // The firmware wrote it against one of the drive's last two reports: the drive's torque
+      // at that sample must be within the limit (plus the field's and the target's quanta).
+      const double kp = d::canopen::register_to_gain(dr.kp_register), kd = d::canopen::register_to_gain(dr.kd_register);
+      const double target = d::canopen::counts_to_rad(c, dr.target_position_counts);
+      const double quanta = c.rated_torque_Nm / 1000.0 + kp * 2.0 * std::numbers::pi / c.counts_per_rev;
+      double at_sample = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 2; ++k) {
+        at_sample = std::min(at_sample, std::abs(tau + kp * (target - dr.reported_position_rad[k]) -
+                                                 kd * dr.reported_velocity_rad_s[k]));
+      }
+      if (at_sample > c.torque_limit_Nm + quanta) bad("CSP drive torque at the sample above limit, node " + std::to_string(c.node_id));
+      continue;
     }
+    if (std::abs(tau) > c.torque_limit_Nm + c.rated_torque_Nm / 1000.0) bad("drive torque above limit, node " + std::to_string(c.node_id));
   }
 }
 

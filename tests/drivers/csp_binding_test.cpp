@@ -215,6 +215,47 @@ TEST_F(CspLoop, TheDriveDecodesModeGainsAndTargetsFromTheWire) {
   EXPECT_EQ(st[0].refused_commands, 0u);
 }
 
+// The clamp is on the drive's torque at the sample it closes on, not on the offset field: a
+// moving joint needs an offset beyond the limit (the drive's −kd·q̇ takes kd·q̇ off), and an
+// offset is cut back only as far as makes that torque the limit. Oracle: the emulated drive's
+// own law evaluated at the reported state.
+TEST_F(CspLoop, TheTorqueAtTheSampleIsClampedNotTheOffset) {
+  ASSERT_TRUE(enable(0.3));
+  emulator::EmulatedDrive& d = emu.drives[0];
+  d.velocity_rad_s = 20.0;  // kd·q̇ = 40 N·m, the limit 60 N·m
+  cycle();
+  cycle();  // the sample (0.3 rad, 20 rad/s) has reached the supervisor
+  const double q = canopen::counts_to_rad(cfg, st[0].tpdo1.actual_position_counts);
+  const double v = canopen::counts_to_rad(cfg, st[0].tpdo2.actual_velocity_counts_s);
+  ASSERT_NEAR(v, 20.0, 1e-3);
+  const std::uint32_t clamps = st[0].torque_clamps;
+  auto torque_at_sample = [&] { return emulator::drive_torque_at_Nm(d, q, v); };
+  // 95 N·m of offset on the sample's position: 55 N·m at the sample, within the limit.
+  cmd[0].position_rad = q;
+  cmd[0].torque_Nm = 95.0;
+  cycle();
+  cycle();
+  EXPECT_EQ(d.target_torque_permille, 9500);
+  EXPECT_NEAR(torque_at_sample(), 55.0, 0.05);
+  EXPECT_EQ(st[0].torque_clamps, clamps);
+  // 130 N·m would be 90 at the sample: cut to the limit there, and counted.
+  cmd[0].torque_Nm = 130.0;
+  cycle();
+  EXPECT_EQ(st[0].torque_clamps, clamps + 1);
+  cycle();
+  EXPECT_NEAR(torque_at_sample(), 60.0, 0.05);
+  EXPECT_NEAR(d.target_torque_permille * cfg.rated_torque_Nm / 1000.0, 100.0, 0.05);
+  // A position error's kp share counts too: 0.2 rad short of the target adds 10 N·m, so −60 at
+  // the sample is an offset of −60 + 40 − 10 = −30 N·m, and −100 (−130 there) is cut back to it.
+  cmd[0].position_rad = q + 0.2;
+  cmd[0].torque_Nm = -100.0;
+  cycle();
+  cycle();
+  EXPECT_NEAR(torque_at_sample(), -60.0, 0.05);
+  EXPECT_NEAR(d.target_torque_permille * cfg.rated_torque_Nm / 1000.0, -60.0 + 40.0 - 10.0, 0.05);
+  EXPECT_EQ(st[0].refused_commands, 0u);
+}
+
 TEST_F(CspLoop, ABadTargetIsRefusedAndTheDriveHeldWhereItIs) {
   ASSERT_TRUE(enable(0.3));
   emu.drives[0].position_rad = 0.2;  // the drive's own position, reported by the TPDO next cycle

@@ -1,9 +1,9 @@
 // The ankle motor rows (wbc.h): with the ankle pairs' joint -> motor torque maps set, every
-// solved tick's motor commands -- the ankle torques through the map plus the binding's
-// velocity feed-forward on the command's v_ref, as the CSP drives' torque offset carries it --
-// stay within the planned share of the motors' limits, checked on the returned command apart
-// from the QP's rows. The same states without the rows ask the motors for more (the scenario
-// binds).
+// solved tick's motor torques at the drives' sample -- the ankle torques through the map plus
+// the CSP drives' damping on the velocity error, kd·J·(v_ref − v), v_ref the command's and v
+// the measured joint velocity -- stay within the planned share of the motors' limits, checked
+// on the returned command apart from the QP's rows. The same states without the rows ask the
+// motors for more (the scenario binds).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -25,13 +25,15 @@ Eigen::Matrix2d linkage_map() {
   return joint_from_motor.inverse();
 }
 
-// Motor commands of both ankle pairs beyond `limit`: G τ_ff + kv J v_ref, J = Gᵀ⁻¹.
-double worst_motor_excess_Nm(const hal::CommandFrame& cmd, const Eigen::Matrix2d& g, double kv, double limit) {
+// Motor torques at the sample of both ankle pairs beyond `limit`: G τ_ff + kv J (v_ref − v), J = Gᵀ⁻¹.
+double worst_motor_excess_Nm(const hal::CommandFrame& cmd, const dynamics::VelocityVector& v, const Eigen::Matrix2d& g,
+                             double kv, double limit) {
   double worst = -1e9;
   for (int leg : {model::kLeftLegFirst, model::kRightLegFirst}) {
     const Eigen::Vector2d tau(cmd.joints[leg + 4].torque_ff_Nm, cmd.joints[leg + 5].torque_ff_Nm);
     const Eigen::Vector2d v_ref(cmd.joints[leg + 4].velocity_ref_rad_s, cmd.joints[leg + 5].velocity_ref_rad_s);
-    const Eigen::Vector2d motor = g * tau + kv * g.transpose().inverse() * v_ref;
+    const Eigen::Vector2d v_joint(v[6 + leg + 4], v[6 + leg + 5]);
+    const Eigen::Vector2d motor = g * tau + kv * g.transpose().inverse() * (v_ref - v_joint);
     worst = std::max(worst, motor.cwiseAbs().maxCoeff() - limit);
   }
   return worst;
@@ -66,7 +68,7 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
     ASSERT_FALSE(ws.ankle_motor_limits.active);
     wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
     const bool free_solved = ws.diagnostics.qp_status == qp::QpStatus::kSolved;
-    if (free_solved && worst_motor_excess_Nm(command, g, kVelocityGain_Nm_s_per_rad, limit) > 0.0) ++binding;
+    if (free_solved && worst_motor_excess_Nm(command, v, g, kVelocityGain_Nm_s_per_rad, limit) > 0.0) ++binding;
     // With the rows.
     wbc::wbc_init(m, cfg, ws);
     ws.ankle_motor_limits.active = true;
@@ -79,7 +81,7 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
     ws.ankle_motor_limits.active = false;
     if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
     ++solved_with_rows;
-    worst_with_rows = std::max(worst_with_rows, worst_motor_excess_Nm(command, g, kVelocityGain_Nm_s_per_rad, limit));
+    worst_with_rows = std::max(worst_with_rows, worst_motor_excess_Nm(command, v, g, kVelocityGain_Nm_s_per_rad, limit));
     // The command carries the QP's torque.
     for (int j = 0; j < kNj; ++j) EXPECT_EQ(command.joints[j].torque_ff_Nm, ws.diagnostics.torque_Nm[j]);
   }
@@ -91,9 +93,10 @@ TEST(WbcAnkleMotors, SolvedTicksKeepEveryAnkleMotorWithinItsLimit) {
   EXPECT_LE(worst_with_rows, 0.0);  // inside by the rows' roundoff margin
 }
 
-// The serial leg drives' rows: with the CSP hips' and knees' clamps and velocity feed-forward
-// set, every solved tick's command τ_ff + kv·v_ref stays within the clamp (checked on the
-// returned command); without the rows the same states exceed it.
+// The serial leg drives' rows: with the CSP hips' and knees' clamps and damping set, every
+// solved tick's torque at the drive's sample, τ_ff + kv·(v_ref − v), stays within the clamp
+// (checked on the returned command and the measured v); without the rows the same states
+// exceed it.
 TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
   const model::Model& m = wbc_robot();
   wbc::WbcWorkspace& ws = wbc_workspace();
@@ -103,12 +106,14 @@ TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
   // Clamps that bind in single support with the hips and knees moving (the knee carries ~40 N·m).
   constexpr std::array<double, hal::kSerialLegJoints> kClamp_Nm{20.0, 6.0, 20.0, 40.0};
   constexpr double kGain_Nm_s_per_rad = 3.0;  // the WBC's leg kd, as the CSP drives hold it
-  auto worst_excess = [&](const hal::CommandFrame& c) {
+  auto worst_excess = [&](const hal::CommandFrame& c, const dynamics::VelocityVector& v) {
     double worst = -1e9;
     for (int leg = 0; leg < 2; ++leg) {
       for (int k = 0; k < hal::kSerialLegJoints; ++k) {
-        const hal::JointCommand& j = c.joints[(leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + k];
-        worst = std::max(worst, std::abs(j.torque_ff_Nm + kGain_Nm_s_per_rad * j.velocity_ref_rad_s) - kClamp_Nm[k]);
+        const int jj = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + k;
+        const hal::JointCommand& j = c.joints[jj];
+        worst = std::max(worst, std::abs(j.torque_ff_Nm + kGain_Nm_s_per_rad * (j.velocity_ref_rad_s - v[6 + jj])) -
+                                    kClamp_Nm[k]);
       }
     }
     return worst;
@@ -129,7 +134,7 @@ TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
     for (int k = 0; k < model::kNv; ++k) v[k] = 0.2 * u(rng);
     ASSERT_FALSE(ws.serial_drive_limits.active);
     wbc::wbc_step_rt(m, cfg, ws, q, v, ref, 0, command);
-    if (ws.diagnostics.qp_status == qp::QpStatus::kSolved && worst_excess(command) > 0.0) ++binding;
+    if (ws.diagnostics.qp_status == qp::QpStatus::kSolved && worst_excess(command, v) > 0.0) ++binding;
     wbc::wbc_init(m, cfg, ws);
     ws.serial_drive_limits.active = true;
     for (int leg = 0; leg < 2; ++leg) {
@@ -142,7 +147,7 @@ TEST(WbcSerialLegDrives, SolvedTicksKeepEveryHipAndKneeCommandWithinItsClamp) {
     ws.serial_drive_limits.active = false;
     if (ws.diagnostics.qp_status != qp::QpStatus::kSolved) continue;
     ++solved_with_rows;
-    worst_with_rows = std::max(worst_with_rows, worst_excess(command));
+    worst_with_rows = std::max(worst_with_rows, worst_excess(command, v));
   }
   std::printf("[ figures  ] hip and knee commands: %d of 60 free answers exceed the clamps; %d solved with the rows, "
               "worst excess %.2e N m\n",
