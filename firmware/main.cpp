@@ -43,10 +43,11 @@ constexpr const char* kUsage =
     "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
-    "  --legs csp|cst       the leg drives' CiA 402 mode (firmware/README.md, leg binding). csp\n"
-    "                       (default): the drives close the leg PD in their own loop (gains written\n"
-    "                       at start-up), the only binding that steps; cst: torque from the 500 Hz\n"
-    "                       sample (stands and dances in place, unstable at a foot's lift-off)\n"
+    "  --legs csp|cst       the CiA 402 drives' mode, legs and shoulder pitches (firmware/README.md,\n"
+    "                       leg binding). csp (default): the drives close the PD in their own loop\n"
+    "                       (gains written at start-up), the only binding that steps; cst: torque\n"
+    "                       from the 500 Hz sample (stands and dances in place, unstable at a foot's\n"
+    "                       lift-off)\n"
     "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
     "                       and loads, exit\n"
     "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
@@ -217,7 +218,10 @@ int run(int argc, char** argv) {
     return 2;
   }
   // The leg drives hold the WBC's output gains (the law the dance commands).
-  if (csp_legs && (!d::use_csp_leg_drives(drivers, kuavo::wbc::WbcConfig{}.leg_kp, kuavo::wbc::WbcConfig{}.leg_kd, msg) ||
+  // The shoulder pitch drives, the other CiA 402 drives, go with them (drivers_config.h).
+  const kuavo::wbc::WbcConfig wbc_gains{};
+  if (csp_legs && (!d::use_csp_leg_drives(drivers, wbc_gains.leg_kp, wbc_gains.leg_kd, msg) ||
+                   !d::use_csp_shoulder_drives(drivers, wbc_gains.arm_pd_kp, wbc_gains.arm_pd_kd, msg) ||
                    d::validate_drivers_config(drivers, loads, msg) != d::DriverError::kOk)) {
     std::fprintf(stderr, "kuavo_fw: --legs csp: %s\n", msg.c_str());
     return 2;

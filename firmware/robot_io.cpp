@@ -194,7 +194,22 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
       dc.enable = command.joints[slot].mode != hal::JointMode::kDisabled;
       if (is_shoulder(slot)) {
         const hal::JointSample& js = io.sensors.joints[slot];
-        dc.torque_Nm = js.valid ? d::joint_torque_command_Nm(command.joints[slot], js) : 0.0;
+        const d::canopen::DriveConfig& cfg = c.cfg[i];
+        if (cfg.mode != d::canopen::kModeCyclicSyncPosition) {
+          dc.torque_Nm = js.valid ? d::joint_torque_command_Nm(command.joints[slot], js) : 0.0;
+          continue;
+        }
+        // CSP (1:1): as the hips and knees, the offset makes the drive's law equal the
+        // command's law at the sample; a damping or disabled joint targets the sample.
+        const d::canopen::MotorSample m = d::canopen::motor_sample(cfg, c.st[i]);
+        dc.position_rad = m.position_rad;  // hold: the last reported position
+        if (!js.valid || !m.valid) {
+          if (dc.enable) ++c.csp_holds;
+          continue;
+        }
+        if (command.joints[slot].mode == hal::JointMode::kPdTorque) dc.position_rad = command.joints[slot].position_ref_rad;
+        dc.torque_Nm = d::joint_torque_command_Nm(command.joints[slot], js) -
+                       cfg.csp_kp_Nm_per_rad * (dc.position_rad - m.position_rad) + cfg.csp_kd_Nm_s_per_rad * m.velocity_rad_s;
         continue;
       }
       for (int side = 0; side < 2; ++side) {

@@ -144,10 +144,6 @@ DriverError validate_drivers_config(const DriversConfig& c, BusLoadReport& repor
         message = where + ": mode must be CST (10) or CSP (8), CSP gains finite, >= 0 and <= 4000";
         return DriverError::kBadConfig;
       }
-      if (k.mode == canopen::kModeCyclicSyncPosition && !(d.slot >= 0 && d.slot < 2 * model::kLegJoints)) {
-        message = where + ": CSP is bound for the leg drives only (the shoulder pitch runs CST)";
-        return DriverError::kBadConfig;
-      }
     }
   }
   if (c.ruiwo_motors.size() != static_cast<std::size_t>(std::count_if(
@@ -205,6 +201,21 @@ bool use_csp_leg_drives(DriversConfig& config, const std::array<double, kLegActu
         message = "CSP gains of slot " + std::to_string(e.slot) + " not representable";
         return false;
       }
+    }
+  }
+  return true;
+}
+
+bool use_csp_shoulder_drives(DriversConfig& config, double joint_kp, double joint_kd, std::string& message) {
+  for (DriveEntry& e : config.drives) {
+    if (e.slot != model::kLeftArmFirst && e.slot != model::kRightArmFirst) continue;
+    e.config.mode = canopen::kModeCyclicSyncPosition;
+    e.config.csp_kp_Nm_per_rad = joint_kp;  // 1:1: the drive reports the joint
+    e.config.csp_kd_Nm_s_per_rad = joint_kd;
+    canopen::DriveLoop loop;
+    if (!canopen::drive_loop(e.config, loop)) {
+      message = "CSP gains of slot " + std::to_string(e.slot) + " not representable";
+      return false;
     }
   }
   return true;

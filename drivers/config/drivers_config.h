@@ -54,9 +54,15 @@ DriverError validate_drivers_config(const DriversConfig& config, BusLoadReport& 
 // at the zero pose (the linkage couples them; the firmware's torque offset makes
 // up the difference at each sample, robot_io.h). false + message if the ankle
 // has no zero-pose solution or a gain is not representable. The shoulder pitch
-// drives stay CST.
+// drives: use_csp_shoulder_drives.
 bool use_csp_leg_drives(DriversConfig& config, const std::array<double, kLegActuators>& joint_kp,
                         const std::array<double, kLegActuators>& joint_kd, std::string& message);
+
+// Start-up: switches the two shoulder pitch drives (1:1, no transmission) to CSP with the
+// fixed position-loop gains kp, kd (the arms' output gains): their CST law, evaluated by the
+// firmware at the control rate on a sample a tick old and held for the tick, chatters at the
+// drive's limit in a hard move (firmware/README.md). false + message if not representable.
+bool use_csp_shoulder_drives(DriversConfig& config, double joint_kp, double joint_kd, std::string& message);
 
 // The Ruiwo motors of one bus, for ruiwo::build_bus.
 std::vector<ruiwo::MotorConfig> ruiwo_motors_on_bus(const DriversConfig& config, int bus);

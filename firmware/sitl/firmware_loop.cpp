@@ -36,6 +36,19 @@ void LegDriveLoop::add_joint_torques(const std::array<double, model::kNumJoints>
       if (emu::add_leg_torques(leg, pj, *e, tau, &saturations) != d::DriverError::kOk) ++failures;
     }
   }
+  // The shoulder pitch drives in CSP (1:1): their loop at this state too.
+  for (int s = 0; s < shoulder_count_; ++s) {
+    const ShoulderDrive& sd = shoulders_[s];
+    const emu::Cia402Emulator* e = drives_[sd.bus].get();
+    if (e == nullptr) continue;
+    for (int i = 0; i < e->count; ++i) {
+      const emu::EmulatedDrive& drive = e->drives[i];
+      if (drive.config.node_id != sd.node_id) continue;
+      bool sat = false;
+      tau[sd.slot] += emu::drive_torque_at_Nm(drive, q[sd.slot], v[sd.slot], &sat);
+      if (sat) ++saturations;
+    }
+  }
 }
 
 Firmware& FirmwareLoop::fw() {
@@ -63,7 +76,8 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
   if (lc.legs == LegBinding::kCsp) {
     // The drives hold the WBC's output gains, the law the dance commands.
     const wbc::WbcConfig w;
-    csp_legs_ = d::use_csp_leg_drives(config_, w.leg_kp, w.leg_kd, msg);
+    csp_legs_ = d::use_csp_leg_drives(config_, w.leg_kp, w.leg_kd, msg) &&
+                d::use_csp_shoulder_drives(config_, w.arm_pd_kp, w.arm_pd_kd, msg);
     if (!csp_legs_) ok_ = false, error_ = "CSP legs: " + msg;
   }
   if (lc.ankle_motor_limit_Nm > 0.0) {
@@ -75,6 +89,12 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
   io_ = std::make_unique<RobotIo>();
   if (ok_ && !build_robot_io(config_, lc.firmware.ruiwo_divider, *io_, msg)) ok_ = false, error_ = msg;
   if (ok_ && !buses_.init(config_, *io_, lc.seed, msg)) ok_ = false, error_ = msg;
+  for (std::size_t b = 0; ok_ && csp_legs_ && b < io_->canopen.size(); ++b) {
+    for (std::size_t i = 0; i < io_->canopen[b].cfg.size(); ++i) {
+      const int slot = io_->canopen[b].slot[i];
+      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) leg_loop_.add_shoulder(b, io_->canopen[b].cfg[i].node_id, slot);
+    }
+  }
   log_ = std::make_unique<LogSink>();
   firmware_init(fw(), m, lc.firmware, log_.get());
   control_ = ControlTask{};
@@ -256,7 +276,10 @@ void FirmwareLoop::advance_plant(const emu::PlantJoints& pj) {
     }
     for (int i = 0; i < buses_.drives(b)->count; ++i) {
       const int slot = io_->canopen[b].slot[i];
-      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) tau[slot] += emu::drive_torque_Nm(buses_.drives(b)->drives[i]);
+      // CSP shoulders: the plant runs their loop (leg_loop_); CST: the torque held for the tick.
+      if (!csp_legs_ && (slot == model::kLeftArmFirst || slot == model::kRightArmFirst)) {
+        tau[slot] += emu::drive_torque_Nm(buses_.drives(b)->drives[i]);
+      }
     }
   }
   // CiA 402 drives in CST: the torque the firmware computed, held for the tick.
@@ -265,8 +288,8 @@ void FirmwareLoop::advance_plant(const emu::PlantJoints& pj) {
     for (int i = 0; i < buses_.drives(b)->count; ++i) {
       // The ankle pair's slots are the two ankle joints, which the linkage couples.
       const int j = io_->canopen[b].slot[i];
-      applied.joints[j] = hal::JointCommand{};  // kDisabled: CSP leg torques come from leg_loop_
-      if (csp_legs_ && j < 2 * model::kLegJoints) continue;
+      applied.joints[j] = hal::JointCommand{};  // kDisabled: CSP drives' torques come from leg_loop_
+      if (csp_legs_) continue;
       applied.joints[j].mode = hal::JointMode::kPdTorque;
       applied.joints[j].torque_ff_Nm = tau[j];
     }

@@ -87,10 +87,21 @@ class LegDriveLoop : public sim::JointTorqueSource {
       : legs_(legs), drives_(drives) {}
   void add_joint_torques(const std::array<double, model::kNumJoints>& q, const std::array<double, model::kNumJoints>& v,
                          std::array<double, model::kNumJoints>& tau) const noexcept override;
+  // A shoulder pitch drive in CSP (1:1): the emulator on bus `bus`, its node, its joint.
+  void add_shoulder(std::size_t bus, std::uint8_t node_id, int slot) noexcept {
+    if (shoulder_count_ < 2) shoulders_[shoulder_count_++] = ShoulderDrive{bus, node_id, slot};
+  }
   mutable std::uint64_t failures = 0;     // force evaluations at an unsolvable ankle
   mutable std::uint32_t saturations = 0;  // drive-evaluations at the drive's torque limit
 
  private:
+  struct ShoulderDrive {
+    std::size_t bus = 0;
+    std::uint8_t node_id = 0;
+    int slot = 0;
+  };
+  std::array<ShoulderDrive, 2> shoulders_{};
+  int shoulder_count_ = 0;
   const std::array<drivers::emulator::LegWiring, 2>& legs_;
   const std::vector<std::unique_ptr<drivers::emulator::Cia402Emulator>>& drives_;
 };

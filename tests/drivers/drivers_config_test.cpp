@@ -2,6 +2,7 @@
 // with strict keys, and validation that refuses inconsistent robots.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -229,11 +230,11 @@ TEST_F(DriversConfigTest, LoadFromFile) {
 namespace kuavo::drivers {
 namespace {
 
-// The CSP leg binding's start-up mapping: every leg drive in CSP with its joint gain on the
+// The CSP binding's start-up mapping: every leg drive in CSP with its joint gain on the
 // motor side (serial joints kp / r^2: the knee's r = -1 keeps it), the ankle motors sharing
-// k = (kp_pitch + kp_roll) / trace(J^T J) at the zero pose; the shoulders stay CST; the
-// validation refuses CSP on a shoulder and gains the registers cannot hold.
-TEST_F(DriversConfigTest, CspLegDrivesGetMotorSideGainsAndOnlyLegsMayRunCsp) {
+// k = (kp_pitch + kp_roll) / trace(J^T J) at the zero pose; the shoulders (1:1) with their
+// own gains, by their own call; the validation refuses gains the registers cannot hold.
+TEST_F(DriversConfigTest, CspDrivesGetMotorSideGains) {
   const std::array<double, kLegActuators> kp{60, 61, 62, 63, 30, 30}, kd{3, 3.1, 3.2, 3.3, 1.5, 1.5};
   ASSERT_TRUE(use_csp_leg_drives(config, kp, kd, msg)) << msg;
   ASSERT_EQ(validate_drivers_config(config, report, msg), DriverError::kOk) << msg;
@@ -262,13 +263,19 @@ TEST_F(DriversConfigTest, CspLegDrivesGetMotorSideGainsAndOnlyLegsMayRunCsp) {
     }
   }
   EXPECT_EQ(csp, 12);
-  for (DriveEntry& e : config.drives) {
-    if (e.slot == model::kLeftArmFirst) e.config.mode = canopen::kModeCyclicSyncPosition;
+  ASSERT_TRUE(use_csp_shoulder_drives(config, 30.0, 2.0, msg)) << msg;
+  ASSERT_EQ(validate_drivers_config(config, report, msg), DriverError::kOk) << msg;
+  int shoulders = 0;
+  for (const DriveEntry& e : config.drives) {
+    if (e.slot != model::kLeftArmFirst && e.slot != model::kRightArmFirst) continue;
+    ++shoulders;
+    EXPECT_EQ(e.config.mode, canopen::kModeCyclicSyncPosition);
+    EXPECT_DOUBLE_EQ(e.config.csp_kp_Nm_per_rad, 30.0);
+    EXPECT_DOUBLE_EQ(e.config.csp_kd_Nm_s_per_rad, 2.0);
   }
-  EXPECT_EQ(validate_drivers_config(config, report, msg), DriverError::kBadConfig);
-  EXPECT_NE(msg.find("CSP is bound for the leg drives only"), std::string::npos) << msg;
+  EXPECT_EQ(shoulders, 2);
+  EXPECT_FALSE(use_csp_shoulder_drives(config, 30.0, std::nan(""), msg));
   for (DriveEntry& e : config.drives) {
-    if (e.slot == model::kLeftArmFirst) e.config.mode = canopen::kModeCyclicSyncTorque;
     if (e.slot == 3) e.config.csp_kd_Nm_s_per_rad = -1.0;
   }
   EXPECT_EQ(validate_drivers_config(config, report, msg), DriverError::kBadConfig);

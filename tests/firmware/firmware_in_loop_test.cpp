@@ -268,6 +268,48 @@ TEST(FirmwareInLoop, CspLegDrivesStandAndFaultToDampingOnTheWire) {
   std::printf("[ figures  ] CSP legs standing: tilt %.2f deg, base z %.3f m, worst leg joint off its reference %.4f rad\n",
               loop.tilt_deg(), loop.plant().truth().q[2], worst_rad);
   EXPECT_LT(worst_rad, 0.01);
+  // The shoulder pitch drives run CSP too: decoded from the wire, each drive's own law at the
+  // sample its frame was written against (one of its last two reports) is the joint law of
+  // the command the firmware sent, evaluated here at that sample. The left one is moving: its
+  // reference 0.15 rad off for 20 ticks (a legitimate command), so the law has a position
+  // error and a velocity to carry.
+  loop.controller().joint = model::kLeftArmFirst;
+  loop.controller().field = &hal::JointCommand::position_ref_rad;
+  loop.controller().value = loop.plant().truth().q[7 + model::kLeftArmFirst] + 0.15;
+  for (int k = 0; k < 20; ++k) loop.tick();
+  const hal::CommandFrame sent = loop.command();
+  loop.tick();  // this tick's start decodes the frames sent with `sent`
+  loop.controller().joint = -1;
+  int shoulders = 0;
+  for (std::size_t b = 0; b < loop.buses(); ++b) {
+    const emu::Cia402Emulator* e = loop.drives(b);
+    if (e == nullptr) continue;
+    for (int i = 0; i < e->count; ++i) {
+      const int slot = loop.io().canopen[b].slot[static_cast<std::size_t>(i)];
+      if (slot != model::kLeftArmFirst && slot != model::kRightArmFirst) continue;
+      const emu::EmulatedDrive& d = e->drives[i];
+      ASSERT_EQ(d.config.mode, drivers::canopen::kModeCyclicSyncPosition);
+      ASSERT_EQ(sent.joints[slot].mode, hal::JointMode::kPdTorque);
+      ++shoulders;
+      const hal::JointCommand& c = sent.joints[slot];
+      double off = 1e9;
+      for (int r = 0; r < 2; ++r) {
+        const double q = d.reported_position_rad[r], v = d.reported_velocity_rad_s[r];
+        const double law = c.torque_ff_Nm + c.kp_Nm_per_rad * (c.position_ref_rad - q) + c.kd_Nm_s_per_rad * (c.velocity_ref_rad_s - v);
+        off = std::min(off, std::abs(emu::drive_torque_at_Nm(d, q, v) - law));
+      }
+      // The offset's per-mille and the target's count.
+      EXPECT_LE(off, d.config.rated_torque_Nm / 1000.0 + c.kp_Nm_per_rad * 1e-5) << "slot " << slot;
+      if (slot == model::kLeftArmFirst) {
+        std::printf("[ figures  ] CSP left shoulder: %.3f rad off its reference at %.3f rad/s; the drive's law within "
+                    "%.1e N m of the command's\n",
+                    c.position_ref_rad - d.reported_position_rad[0], d.reported_velocity_rad_s[0], off);
+        EXPECT_GT(std::abs(c.position_ref_rad - d.reported_position_rad[0]), 0.02);
+      }
+    }
+  }
+  EXPECT_EQ(shoulders, 2);
+  for (int k = 0; k < 500; ++k) loop.tick();  // standing again, the arm at rest
   const hal::TimeNs t = inject_and_time(loop, [](FirmwareLoop& l) {
     l.controller().joint = 3;
     l.controller().field = &hal::JointCommand::torque_ff_Nm;
@@ -277,21 +319,31 @@ TEST(FirmwareInLoop, CspLegDrivesStandAndFaultToDampingOnTheWire) {
   EXPECT_EQ(t, 0);
   EXPECT_EQ(FirmwareLoop::fw().mode.latched, Fault::kCommandNonFinite);
   loop.tick();  // the damping frames sent at the fault are decoded at this tick's start
-  int leg_drives = 0;
+  int csp_drives = 0;
   for (std::size_t b = 0; b < loop.buses(); ++b) {
     const emu::Cia402Emulator* e = loop.drives(b);
     if (e == nullptr) continue;
     for (int i = 0; i < e->count; ++i) {
       const emu::EmulatedDrive& d = e->drives[i];
       if (d.config.mode != drivers::canopen::kModeCyclicSyncPosition) continue;
-      ++leg_drives;
-      EXPECT_EQ(d.target_torque_permille, 0) << "node " << int(d.config.node_id);
+      ++csp_drives;
+      const int slot = loop.io().canopen[b].slot[static_cast<std::size_t>(i)];
+      if (slot < 2 * model::kLegJoints) {
+        EXPECT_EQ(d.target_torque_permille, 0) << "node " << int(d.config.node_id);
+      } else {
+        // A shoulder: damping's −kd_c·v made up from the sample, −(kd_c − kd_d)·v_s (1:1).
+        const double kd_gap = std::abs(loop.command().joints[slot].kd_Nm_s_per_rad - d.config.csp_kd_Nm_s_per_rad);
+        const double v_s = std::max(std::abs(d.reported_velocity_rad_s[0]), std::abs(d.reported_velocity_rad_s[1]));
+        EXPECT_LE(std::abs(d.target_torque_permille * d.config.rated_torque_Nm / 1000.0),
+                  kd_gap * v_s + d.config.rated_torque_Nm / 1000.0)
+            << "node " << int(d.config.node_id);
+      }
       // The target is where the drive was one tick ago: within a tick's motion (+ a count).
       const double target = drivers::canopen::counts_to_rad(d.config, d.target_position_counts);
       EXPECT_LE(std::abs(target - d.position_rad), std::abs(d.velocity_rad_s) * 4e-3 + 1e-4) << "node " << int(d.config.node_id);
     }
   }
-  EXPECT_EQ(leg_drives, 12);
+  EXPECT_EQ(csp_drives, 14);  // 12 leg drives and the two shoulder pitches
   for (const auto& c : loop.io().canopen) {
     for (const auto& st : c.st) EXPECT_EQ(st.refused_commands, 0u);
   }

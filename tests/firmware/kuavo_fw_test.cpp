@@ -64,7 +64,7 @@ TEST(KuavoFw, CheckReportsTheLegBindingCspByDefault) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   r = run_fw("--check");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("CiA 402 drives: 12 in CSP, 2 in CST"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("CiA 402 drives: 14 in CSP, 0 in CST"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("54.0 %"), std::string::npos) << r.output;  // bus loads unchanged
 }
 
