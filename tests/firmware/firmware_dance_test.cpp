@@ -222,9 +222,9 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
               static_cast<unsigned long long>(loop.drive_loop_saturations()), static_cast<unsigned long long>(refused),
               static_cast<unsigned long long>(loop.csp_holds()), static_cast<unsigned long long>(loop.binding_failures()));
   EXPECT_EQ(refused, 0u);
-  // The WBC plans the ankle motors' commands (τ through the linkage plus the CSP offset's
-  // velocity feed-forward) inside their limits, and on CSP the hips' and knees' too: the
-  // drivers never clamp them.
+  // The WBC plans the ankle motors' torques at the drives' sample (τ through the linkage plus
+  // the CSP drives' damping on the velocity error) inside their limits, and on CSP the hips'
+  // and knees' too: the drivers never clamp them.
   EXPECT_EQ(clamps[4] + clamps[5], 0u);
   if (legs == test_support::LegBinding::kCsp) {
     for (int k = 0; k < 4; ++k) EXPECT_EQ(clamps[static_cast<std::size_t>(k)], 0u) << "leg slot " << k;
@@ -232,22 +232,21 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
   EXPECT_EQ(loop.csp_holds(), 0u);
   EXPECT_EQ(loop.binding_failures(), 0u);
   if (legs == test_support::LegBinding::kCsp) {
-    // Every leg drive really runs CSP with the gains from the wire (the emulator's decoded
-    // object dictionary, not the firmware's configuration).
+    // Every leg and shoulder pitch drive really runs CSP with the gains from the wire (the
+    // emulator's decoded object dictionary, not the firmware's configuration).
     int csp_drives = 0;
     for (std::size_t b = 0; b < loop.buses(); ++b) {
       const auto* e = loop.drives(b);
       if (e == nullptr) continue;
       for (int i = 0; i < e->count; ++i) {
         const auto& dr = e->drives[i];
-        if (dr.config.node_id > 12) continue;  // shoulder pitch: CST
         EXPECT_EQ(dr.mode, drivers::canopen::kModeCyclicSyncPosition);
         EXPECT_EQ(dr.rpdo1_torque_object, drivers::canopen::kObjTorqueOffset);
         EXPECT_GT(dr.kp_register, 0u);
         ++csp_drives;
       }
     }
-    EXPECT_EQ(csp_drives, 12);
+    EXPECT_EQ(csp_drives, 14);
   }
 }
 
