@@ -14,6 +14,13 @@ constexpr int kLegFirst[2] = {model::kLeftLegFirst, model::kRightLegFirst};
 
 bool is_shoulder(int slot) { return slot == model::kLeftArmFirst || slot == model::kRightArmFirst; }
 
+// The torque offset that makes a CSP drive's law, kp (target − q_s) − kd v_s + offset, equal
+// `law_Nm` at the sample m it closes on.
+double csp_offset_Nm(const d::canopen::DriveConfig& cfg, double target_rad, const d::canopen::MotorSample& m,
+                     double law_Nm) {
+  return law_Nm - cfg.csp_kp_Nm_per_rad * (target_rad - m.position_rad) + cfg.csp_kd_Nm_s_per_rad * m.velocity_rad_s;
+}
+
 bool ruiwo_cycle(const RobotIo& io, std::uint64_t cycle) {
   return cycle % static_cast<std::uint64_t>(io.ruiwo_divider) == 0;
 }
@@ -208,8 +215,7 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
           continue;
         }
         if (command.joints[slot].mode == hal::JointMode::kPdTorque) dc.position_rad = command.joints[slot].position_ref_rad;
-        dc.torque_Nm = d::joint_torque_command_Nm(command.joints[slot], js) -
-                       cfg.csp_kp_Nm_per_rad * (dc.position_rad - m.position_rad) + cfg.csp_kd_Nm_s_per_rad * m.velocity_rad_s;
+        dc.torque_Nm = csp_offset_Nm(cfg, dc.position_rad, m, d::joint_torque_command_Nm(command.joints[slot], js));
         continue;
       }
       for (int side = 0; side < 2; ++side) {
@@ -231,8 +237,7 @@ void robot_send_rt(RobotIo& io, std::uint64_t cycle, const hal::CommandFrame& co
           dc.torque_Nm = ankle_ff_Nm[side][k - 4] + cfg.csp_kd_Nm_s_per_rad * ankle_vref_rad_s[side][k - 4];
           continue;
         }
-        dc.torque_Nm = motor_tau[side][k] - cfg.csp_kp_Nm_per_rad * (dc.position_rad - m.position_rad) +
-                       cfg.csp_kd_Nm_s_per_rad * m.velocity_rad_s;
+        dc.torque_Nm = csp_offset_Nm(cfg, dc.position_rad, m, motor_tau[side][k]);
       }
     }
     const d::CanopenSendReport r = d::canopen_send_rt(port, c.cfg, c.st, c.cmd, now_ns);
