@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/wbc/wbc_config.h"
 
 namespace kuavo::firmware {
 
@@ -98,6 +99,12 @@ void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversCo
       control.torque_cap_Nm[m.joint] = std::min(control.torque_cap_Nm[m.joint], m.torque_max_Nm);
     }
   }
+}
+
+bool dance_use_csp_drives(drivers::DriversConfig& drivers, std::string& message) {
+  const wbc::WbcConfig w;
+  return drivers::use_csp_leg_drives(drivers, w.leg_kp, w.leg_kd, message) &&
+         drivers::use_csp_shoulder_drives(drivers, w.arm_pd_kp, w.arm_pd_kd, message);
 }
 
 void limit_references_rt(const model::Model& m, double slack_rad, hal::CommandFrame& out,

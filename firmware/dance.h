@@ -34,6 +34,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "controllers/planner/motion_plan.h"
 #include "controllers/planner/reference_plan.h"
@@ -169,6 +170,12 @@ void dance_set_ankle_motors(DanceControl& control, const drivers::DriversConfig&
 // Start-up; inactive unless all eight are CSP drives. Also caps each Ruiwo joint's planned
 // torque at what its MIT frame carries (MotorConfig::torque_max_Nm, joint side).
 void dance_set_serial_leg_drives(DanceControl& control, const drivers::DriversConfig& drivers);
+
+// Start-up, before the drivers' validation: the CSP binding (firmware/README.md, leg binding).
+// Every CiA 402 drive -- the legs' and the shoulder pitches' -- in CSP, holding the WBC's output
+// gains, the law the dance commands (drivers::use_csp_leg_drives, use_csp_shoulder_drives).
+// false + message if a gain is not representable.
+bool dance_use_csp_drives(drivers::DriversConfig& drivers, std::string& message);
 
 // Makes the standing controller stand at the motion's first frame: its joint pose, and
 // its CoM target where that pose puts the CoM over the feet. Start-up; after firmware_init.

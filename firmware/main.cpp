@@ -20,7 +20,6 @@
 
 #include "controllers/model/model.h"
 #include "controllers/motion/load_motion.h"
-#include "controllers/wbc/wbc_config.h"
 #include "drivers/bus/open_buses.h"
 #include "drivers/config/drivers_config_json.h"
 #include "drivers/imu/serial_port.h"
@@ -217,11 +216,7 @@ int run(int argc, char** argv) {
                  msg.c_str(), d::to_string(derr));
     return 2;
   }
-  // The leg drives hold the WBC's output gains (the law the dance commands).
-  // The shoulder pitch drives, the other CiA 402 drives, go with them (drivers_config.h).
-  const kuavo::wbc::WbcConfig wbc_gains{};
-  if (csp_legs && (!d::use_csp_leg_drives(drivers, wbc_gains.leg_kp, wbc_gains.leg_kd, msg) ||
-                   !d::use_csp_shoulder_drives(drivers, wbc_gains.arm_pd_kp, wbc_gains.arm_pd_kd, msg) ||
+  if (csp_legs && (!fw::dance_use_csp_drives(drivers, msg) ||
                    d::validate_drivers_config(drivers, loads, msg) != d::DriverError::kOk)) {
     std::fprintf(stderr, "kuavo_fw: --legs csp: %s\n", msg.c_str());
     return 2;

@@ -8,7 +8,6 @@
 
 #include "controllers/dynamics/rigid_body.h"
 #include "controllers/standing/standing_controller.h"
-#include "controllers/wbc/wbc_config.h"
 #include "drivers/emulator/fault_injection.h"
 #include "rtos_shim/clock.h"
 
@@ -39,15 +38,9 @@ void LegDriveLoop::add_joint_torques(const std::array<double, model::kNumJoints>
   // The shoulder pitch drives in CSP (1:1): their loop at this state too.
   for (int s = 0; s < shoulder_count_; ++s) {
     const ShoulderDrive& sd = shoulders_[s];
-    const emu::Cia402Emulator* e = drives_[sd.bus].get();
-    if (e == nullptr) continue;
-    for (int i = 0; i < e->count; ++i) {
-      const emu::EmulatedDrive& drive = e->drives[i];
-      if (drive.config.node_id != sd.node_id) continue;
-      bool sat = false;
-      tau[sd.slot] += emu::drive_torque_at_Nm(drive, q[sd.slot], v[sd.slot], &sat);
-      if (sat) ++saturations;
-    }
+    bool sat = false;
+    tau[sd.slot] += emu::drive_torque_at_Nm(drives_[sd.bus]->drives[sd.index], q[sd.slot], v[sd.slot], &sat);
+    if (sat) ++saturations;
   }
 }
 
@@ -75,9 +68,7 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
   ok_ = true;
   if (lc.legs == LegBinding::kCsp) {
     // The drives hold the WBC's output gains, the law the dance commands.
-    const wbc::WbcConfig w;
-    csp_legs_ = d::use_csp_leg_drives(config_, w.leg_kp, w.leg_kd, msg) &&
-                d::use_csp_shoulder_drives(config_, w.arm_pd_kp, w.arm_pd_kd, msg);
+    csp_legs_ = dance_use_csp_drives(config_, msg);
     if (!csp_legs_) ok_ = false, error_ = "CSP legs: " + msg;
   }
   if (lc.ankle_motor_limit_Nm > 0.0) {
@@ -89,10 +80,11 @@ FirmwareLoop::FirmwareLoop(const model::Model& m, const LoopConfig& lc) : model_
   io_ = std::make_unique<RobotIo>();
   if (ok_ && !build_robot_io(config_, lc.firmware.ruiwo_divider, *io_, msg)) ok_ = false, error_ = msg;
   if (ok_ && !buses_.init(config_, *io_, lc.seed, msg)) ok_ = false, error_ = msg;
-  for (std::size_t b = 0; ok_ && csp_legs_ && b < io_->canopen.size(); ++b) {
-    for (std::size_t i = 0; i < io_->canopen[b].cfg.size(); ++i) {
-      const int slot = io_->canopen[b].slot[i];
-      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) leg_loop_.add_shoulder(b, io_->canopen[b].cfg[i].node_id, slot);
+  // The emulators' drives in the robot I/O's order (as advance_plant reads them).
+  for (std::size_t b = 0; ok_ && csp_legs_ && b < buses(); ++b) {
+    for (int i = 0; buses_.drives(b) != nullptr && i < buses_.drives(b)->count; ++i) {
+      const int slot = io_->canopen[b].slot[static_cast<std::size_t>(i)];
+      if (slot == model::kLeftArmFirst || slot == model::kRightArmFirst) leg_loop_.add_shoulder(b, i, slot);
     }
   }
   log_ = std::make_unique<LogSink>();

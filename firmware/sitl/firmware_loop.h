@@ -77,9 +77,10 @@ struct WireCheck {
   std::string first_bad;
 };
 
-// The leg drives' CSP loop, closed by the emulated drives on the plant's state at every
-// force evaluation (continuous, as a drive's fast loop): the targets, offsets and gains are
-// those the emulator decoded from the wire (RPDO1, SDO 0x2010).
+// The CSP drives' loop (the legs', and the shoulder pitches' given by add_shoulder), closed
+// by the emulated drives on the plant's state at every force evaluation (continuous, as a
+// drive's fast loop): the targets, offsets and gains are those the emulator decoded from the
+// wire (RPDO1, SDO 0x2010).
 class LegDriveLoop : public sim::JointTorqueSource {
  public:
   LegDriveLoop(const std::array<drivers::emulator::LegWiring, 2>& legs,
@@ -87,9 +88,9 @@ class LegDriveLoop : public sim::JointTorqueSource {
       : legs_(legs), drives_(drives) {}
   void add_joint_torques(const std::array<double, model::kNumJoints>& q, const std::array<double, model::kNumJoints>& v,
                          std::array<double, model::kNumJoints>& tau) const noexcept override;
-  // A shoulder pitch drive in CSP (1:1): the emulator on bus `bus`, its node, its joint.
-  void add_shoulder(std::size_t bus, std::uint8_t node_id, int slot) noexcept {
-    if (shoulder_count_ < 2) shoulders_[shoulder_count_++] = ShoulderDrive{bus, node_id, slot};
+  // A shoulder pitch drive in CSP (1:1): drive `index` of the emulator on bus `bus`, its joint.
+  void add_shoulder(std::size_t bus, int index, int slot) noexcept {
+    if (shoulder_count_ < 2) shoulders_[shoulder_count_++] = ShoulderDrive{bus, index, slot};
   }
   mutable std::uint64_t failures = 0;     // force evaluations at an unsolvable ankle
   mutable std::uint32_t saturations = 0;  // drive-evaluations at the drive's torque limit
@@ -97,7 +98,7 @@ class LegDriveLoop : public sim::JointTorqueSource {
  private:
   struct ShoulderDrive {
     std::size_t bus = 0;
-    std::uint8_t node_id = 0;
+    int index = 0;
     int slot = 0;
   };
   std::array<ShoulderDrive, 2> shoulders_{};
