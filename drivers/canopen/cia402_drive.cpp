@@ -33,6 +33,18 @@ std::int32_t rad_to_counts(const DriveConfig& cfg, double rad) {
   return static_cast<std::int32_t>(std::lround(c > lim ? lim : (c < -lim ? -lim : c)));
 }
 
+namespace {
+
+// The i16 per-mille of the rated torque, saturated at its range (counted in `clamped`).
+std::int16_t permille_field(const DriveConfig& cfg, double torque_Nm, bool& clamped) {
+  double pm = std::round(torque_Nm / cfg.rated_torque_Nm * 1000.0);
+  if (pm > 32767.0) pm = 32767.0, clamped = true;
+  if (pm < -32767.0) pm = -32767.0, clamped = true;
+  return static_cast<std::int16_t>(pm);
+}
+
+}  // namespace
+
 std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& clamped) {
   clamped = false;
   double t = torque_Nm;
@@ -46,10 +58,7 @@ std::int16_t torque_to_permille(const DriveConfig& cfg, double torque_Nm, bool& 
     t = -cfg.torque_limit_Nm;
     clamped = true;
   }
-  double pm = std::round(t / cfg.rated_torque_Nm * 1000.0);
-  if (pm > 32767.0) { pm = 32767.0; clamped = true; }
-  if (pm < -32767.0) { pm = -32767.0; clamped = true; }
-  return static_cast<std::int16_t>(pm);
+  return permille_field(cfg, t, clamped);
 }
 
 namespace {
@@ -70,10 +79,7 @@ std::int16_t csp_offset_to_permille(const DriveConfig& cfg, const DriveState& st
   const double lim = cfg.torque_limit_Nm;
   clamped = at_sample > lim || at_sample < -lim;
   const double offset = clamped ? (at_sample > lim ? lim : -lim) - loop : cmd.torque_Nm;
-  double pm = std::round(offset / cfg.rated_torque_Nm * 1000.0);
-  if (pm > 32767.0) pm = 32767.0, clamped = true;
-  if (pm < -32767.0) pm = -32767.0, clamped = true;
-  return static_cast<std::int16_t>(pm);
+  return permille_field(cfg, offset, clamped);
 }
 
 }  // namespace
