@@ -86,6 +86,35 @@ Vec2 foot_forward(const PlanKnot& knot, int foot) {
   return d.norm() > 1e-6 ? Vec2(d / d.norm()) : Vec2(1.0, 0.0);
 }
 
+// The soles cut to where each ankle holds the centre of pressure (issue 20; see
+// RecoveryStepConfig::ankle_pitch_capacity_Nm): along the foot's axis, from the ankle, at most
+// P / F ahead and behind, never beyond the toes and heels. F, the foot's share of the robot's
+// weight, by the lever rule: the CoM's place on the line between the two ankles (all of it on
+// the nearer foot beyond either). corners: both soles, world x-y, cut in place.
+void cut_to_holdable(const model::Model& model, double capacity_Nm, const Vec2& com, std::array<Vec2, kNumPoints>& corners) {
+  std::array<Vec2, 2> ankle, axis;
+  for (int f = 0; f < 2; ++f) {
+    const int c0 = f * kCornersPerFoot;
+    const Vec2 toe = 0.5 * (corners[c0] + corners[c0 + 1]), heel = 0.5 * (corners[c0 + 2] + corners[c0 + 3]);
+    const Vec2 d = toe - heel;
+    axis[f] = d.norm() > 1e-6 ? Vec2(d / d.norm()) : Vec2(1.0, 0.0);
+    ankle[f] = heel - model.frames[c0 + 2].position_m.x() * axis[f];  // the heels sit behind the ankle axis
+  }
+  const Vec2 lr = ankle[0] - ankle[1];
+  const double w_left = lr.squaredNorm() > 1e-9 ? std::clamp((com - ankle[1]).dot(lr) / lr.squaredNorm(), 0.0, 1.0) : 0.5;
+  const double weight_N = model.total_mass_kg * model::kGravity_m_s2;
+  for (int f = 0; f < 2; ++f) {
+    const int c0 = f * kCornersPerFoot;
+    const double reach = capacity_Nm / std::max((f == 0 ? w_left : 1.0 - w_left) * weight_N, 1.0);
+    const double ahead = std::min(model.frames[c0].position_m.x(), reach);
+    const double behind = std::min(-model.frames[c0 + 2].position_m.x(), reach);
+    for (int i = 0; i < kCornersPerFoot; ++i) {
+      const double along = (corners[c0 + i] - ankle[f]).dot(axis[f]);
+      corners[c0 + i] += (std::clamp(along, -behind, ahead) - along) * axis[f];
+    }
+  }
+}
+
 bool foot_down(const PlanKnot& knot, int foot) {
   for (int i = 0; i < kCornersPerFoot; ++i) {
     if (!knot.in_contact[foot * kCornersPerFoot + i]) return false;
@@ -289,7 +318,7 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
 }
 
 // Decides and starts a recovery step if the measured state calls for one.
-void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const MotionPlan& motion,
+void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, RecoveryStepState& st, const MotionPlan& motion,
                    hal::TimeNs motion_lag_ns, const PlanKnot& m, const PlanWindow& window, const Vec2& plan_offset) {
   const PlanKnot& k0 = window.knots[0];
   const hal::TimeNs now = k0.stamp_ns;
@@ -300,8 +329,12 @@ void maybe_trigger(const RecoveryStepConfig& cfg, RecoveryStepState& st, const M
     corners[c] = m.point_position_m.segment<2>(3 * c);
     sole_z += m.point_position_m[3 * c + 2] / kNumPoints;
   }
-  const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(corners, kNumPoints);
   const CapturePoint cp = capture_point(m, sole_z, cfg.min_pendulum_height_m);
+  // The trigger's polygon: the soles, or the part of them the ankles hold. The step itself is
+  // planned on the soles (plan_step), as before.
+  std::array<Vec2, kNumPoints> held = corners;
+  if (cfg.ankle_pitch_capacity_Nm > 0.0) cut_to_holdable(model, cfg.ankle_pitch_capacity_Nm, m.com_position_m.head<2>(), held);
+  const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(held, kNumPoints);
   const double omega = cp.omega;
   const Vec2 xi = cp.xi;
   st.last_outside_m = -signed_margin(support, xi);
@@ -363,7 +396,8 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
                            c.lift_height_m,     c.quiet_s,         c.overshoot_m,    c.max_step_m,
                            c.reach_ahead_m,     c.reach_behind_m,  c.min_width_m,    c.max_width_m,
                            c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m,
-                           c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s};
+                           c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s,
+                           c.ankle_pitch_capacity_Nm};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
@@ -375,6 +409,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   if (c.min_width_m <= 0.0 || c.max_width_m < c.min_width_m) return "recovery step: need 0 < min_width_m <= max_width_m";
   if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
   if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
+  if (c.ankle_pitch_capacity_Nm < 0.0) return "recovery step: ankle_pitch_capacity_Nm must be >= 0 (0: off)";
   if (c.min_pendulum_height_m <= 0.0) return "recovery step: min_pendulum_height_m must be > 0";
   if (c.early_trigger_m < 0.0 || c.early_lead_s < 0.05 || c.early_min_gain_s < 0.0 || c.early_min_swing_s < 0.0) {
     return "recovery step: early_trigger_m >= 0, early_lead_s >= 0.05, early_min_gain_s >= 0, early_min_swing_s >= 0";
@@ -407,7 +442,7 @@ void recovery_step_rt(const model::Model& model, const RecoveryStepConfig& cfg, 
   for (FootDisplacement& d : st.foot) {
     if (d.active && d.return_known && now >= d.return_land_ns) d = FootDisplacement{};
   }
-  maybe_trigger(cfg, st, motion, motion_lag_ns, measured, window, plan_offset);
+  maybe_trigger(model, cfg, st, motion, motion_lag_ns, measured, window, plan_offset);
   for (int foot = 0; foot < 2; ++foot) {
     FootDisplacement& d = st.foot[foot];
     if (d.active && end > d.land_ns && !d.return_known) {

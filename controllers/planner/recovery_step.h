@@ -45,6 +45,24 @@
 // (cmu_05_07 seed 44: 0.9 cm out once, a sideways step on 0.40 friction, fell; it stands
 // without the step); 4 calls (0.08 s) in a row tell the two apart.
 //
+// Holdable soles (stop 65, ankle_pitch_capacity_Nm): the trigger's polygon is the part of
+// each sole whose centre of pressure the ankle holds under that foot's share of the weight,
+// not the sole. A lateral push in a double support loads one foot; that foot's ankle alone
+// holds the centre of pressure P / F ahead of it (44 N·m / 540 N = 8 cm, the toe is at 17),
+// so a CoM that stood 11 cm ahead of the ankles on two feet starts to fall forward while ξ
+// is still 6 cm inside the soles. Perfume's show seed 29 (pushed to the left at 16.65 s):
+// the right foot unloads (187 → 62 N by 17.2 s), the left ankle saturates at 38–42 N·m of
+// pitch, and ξ crossed the toe line only at 17.08 s, too late for any step; with the holdable
+// soles it triggers at 16.84 s. The step is still planned on the soles (plan_step): planning
+// it from the centre of pressure the stance ankle holds under the whole weight (8 cm ahead of
+// it) declined every step in two runs that step and dance without it (perfume 23 and 36) and
+// saved none of the falls it was meant for. Loads by the lever rule (the CoM between the two
+// ankles); P the ankle's pitch at the WBC's motor share: 0.9 × 49 N·m. Show campaign (the
+// four motions of 2e6abcb × 100 seeds): 11/400 → 7/400; it saves perfume 27, 58, 64, 98 and
+// cmu_05_07 71, and loses perfume 96 (pushed at 20.08 s, a step at once, fell at 20.74 s; it
+// danced without a step before); 384 of the 400 logs are bit for bit the same, recovery steps
+// are taken in 16 runs (5 before).
+//
 // Early touchdown (step timing, in a swing the motion plans): the MPC adapts where a swing
 // foot lands but not when. Pushed towards the swing side in a long single support (cmu_05_20's
 // first step, 0.7 s: three show-campaign falls in 60, each 1.0–1.4 s after a push at
@@ -128,6 +146,12 @@ struct RecoveryStepConfig {
   // those runs danced to the end with the motion's clock; the ones in cmu_05_20's 0.67 s first
   // swing (seeds 4, 56) stood, and fell without it. Leju's gait steps in 0.4–0.45 s.
   double early_min_swing_s = 0.5;
+
+  // Holdable soles (0: off, the soles' corners): the trigger takes each foot's sole only as far
+  // from its ankle, ahead and behind, as this much pitch holds the foot's share of the weight
+  // (see above). The loaded ankle's two motors give ~49 N·m of pitch through the linkage; 0.9
+  // of it, the WBC's ankle_motor_torque_share (wbc_config.h).
+  double ankle_pitch_capacity_Nm = 44.0;
 };
 
 // nullptr if usable, else what is wrong. Load time.

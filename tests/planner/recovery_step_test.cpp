@@ -296,6 +296,112 @@ TEST(RecoveryStep, TheCreepThresholdIsCreepOutsideM) {
   EXPECT_EQ(near.state->steps + near.state->declined, 1u);
 }
 
+// Holdable soles (ankle_pitch_capacity_Nm = P > 0). Oracle: the ankle's place from Leju's
+// contact-point table (FACTS.md §2.2: toe corners 0.17084 m ahead of the ankle axis, heels
+// 0.073164 behind) and the standing soles by forward kinematics; each foot's load by the lever
+// rule on the CoM's place between the feet, worked here from the corners.
+struct HoldableFront {
+  double ankle_x = 0.0;                 // both ankles (standing: feet parallel to x)
+  double y_left = 0.0, y_right = 0.0;  // the soles' outer edges
+  double reach_left = 0.0, reach_right = 0.0;
+  // The front edge of the two holdable soles' hull at lateral position y.
+  double at(double y) const {
+    return ankle_x + reach_right + (reach_left - reach_right) * (y - y_right) / (y_left - y_right);
+  }
+};
+constexpr double kToeAheadOfAnkle = 0.17084;
+constexpr double kHeelBehindAnkle = 0.073164;
+
+HoldableFront holdable_front(const Standing& s, double capacity_Nm) {
+  HoldableFront h;
+  h.ankle_x = s.corner[0].x() - kToeAheadOfAnkle;
+  EXPECT_NEAR(s.corner[2].x(), h.ankle_x - kHeelBehindAnkle, 1e-6) << "the premise: level feet along x";
+  double yl = 0.0, yr = 0.0;
+  h.y_left = -1e9, h.y_right = 1e9;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    yl += s.corner[i].y() / kCornersPerFoot, yr += s.corner[kCornersPerFoot + i].y() / kCornersPerFoot;
+    h.y_left = std::max(h.y_left, s.corner[i].y()), h.y_right = std::min(h.y_right, s.corner[kCornersPerFoot + i].y());
+  }
+  const double w_left = (s.com.y() - yr) / (yl - yr);
+  const double weight_N = s45_robot().total_mass_kg * model::kGravity_m_s2;
+  h.reach_left = std::min(kToeAheadOfAnkle, capacity_Nm / (w_left * weight_N));
+  h.reach_right = std::min(kToeAheadOfAnkle, capacity_Nm / ((1.0 - w_left) * weight_N));
+  return h;
+}
+
+// Standing (about half the weight on each foot), the trigger's polygon ends where the ankles'
+// pitch holds each foot's load, P / F ahead of the ankle, not at the toes: ξ 5 mm past that
+// front is 5 mm out and creeps into a trigger; with the soles' corners it is 6 cm inside.
+TEST(RecoveryStep, HoldableSolesEndWhereTheAnklesHoldTheLoad) {
+  constexpr double kCapacity = 30.0;
+  const Standing s = standing_geometry();
+  const HoldableFront front = holdable_front(s, kCapacity);
+  ASSERT_LT(front.reach_left, kToeAheadOfAnkle - 0.03) << "the premise: the capacity binds well short of the toes";
+  const double xi_x = front.at(s.com.y()) + 0.005;
+  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+
+  Fixture held;
+  held.config.ankle_pitch_capacity_Nm = kCapacity;
+  Fixture corners;
+  corners.config.ankle_pitch_capacity_Nm = 0.0;
+  for (int i = 0; i + 1 < held.config.creep_calls; ++i) {
+    held.call(1.0 + kDt * i, velocity);
+    corners.call(1.0 + kDt * i, velocity);
+    EXPECT_NEAR(held.state->last_outside_m, 0.005, 1.5e-3) << i;
+    EXPECT_NEAR(corners.state->last_outside_m, xi_x - (front.ankle_x + kToeAheadOfAnkle), 1.5e-3) << i;
+  }
+  EXPECT_EQ(held.state->steps + held.state->declined, 0u) << "5 mm out is a creep: creep_calls calls";
+  held.call(1.0 + kDt * (held.config.creep_calls - 1), velocity);
+  corners.call(1.0 + kDt * (corners.config.creep_calls - 1), velocity);
+  EXPECT_EQ(held.state->steps + held.state->declined, 1u);
+  EXPECT_EQ(corners.state->steps + corners.state->declined, 0u);
+  EXPECT_TRUE(corners.window_unchanged());
+}
+
+// A forward exit the ankles cannot hold (ξ 2 cm past the holdable front, 4 cm inside the
+// toes) is a fast trigger, and the step is planned on the soles as before: ξ propagated from
+// the stance sole's point nearest it (closed form) is inside, by capture_margin_m, the support
+// of the stance sole and the swing sole where forward kinematics puts it. With the soles'
+// corners (capacity 0) ξ is inside them and nothing happens.
+TEST(RecoveryStep, AForwardExitTheAnklesCannotHoldSteps) {
+  constexpr double kCapacity = 30.0;
+  const Standing s = standing_geometry();
+  const HoldableFront front = holdable_front(s, kCapacity);
+  const double xi_x = front.at(s.com.y()) + 0.02;
+  ASSERT_LT(xi_x, front.ankle_x + kToeAheadOfAnkle - 0.03) << "the premise: ξ is inside the soles";
+  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+  Fixture corners;
+  corners.config.ankle_pitch_capacity_Nm = 0.0;
+  Fixture f;
+  f.config.ankle_pitch_capacity_Nm = kCapacity;
+  for (int i = 0; i < 3 * f.config.creep_calls; ++i) {
+    corners.call(1.0 + kDt * i, velocity);
+    EXPECT_TRUE(corners.window_unchanged()) << i;
+  }
+  EXPECT_EQ(corners.state->steps + corners.state->declined, 0u);
+  for (int i = 0; i < f.config.trigger_calls; ++i) f.call(1.0 + kDt * i, velocity);
+  ASSERT_EQ(f.state->steps, 1u);
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  const int stance = 1 - swing;
+  const auto landed = corners_of(f.window->knots[kKnots - 1]);
+  std::array<Vec2, kNumPoints> after;
+  std::array<Vec2, kCornersPerFoot> stance_sole;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    after[stance * kCornersPerFoot + i] = stance_sole[i] = s.corner[stance * kCornersPerFoot + i].head<2>();
+    after[swing * kCornersPerFoot + i] = landed[swing * kCornersPerFoot + i].head<2>();
+  }
+  const Vec2 xi(xi_x, s.com.y());
+  const Vec2 p = project_into(convex_hull<kCornersPerFoot>(stance_sole, kCornersPerFoot), xi, 0.0);
+  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + f.config.swing_s));
+  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 2e-3);
+  double dx = 0.0;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    const int c = swing * kCornersPerFoot + i;
+    dx += (landed[c].x() - s.corner[c].x()) / kCornersPerFoot;
+  }
+  EXPECT_GT(dx, 0.02) << "the foot steps ahead";
+}
+
 // The creep count is of calls in a row: one call well inside starts it again.
 TEST(RecoveryStep, ACreepInterruptedCountsAgain) {
   Fixture f;
@@ -737,6 +843,11 @@ TEST(RecoveryStep, ConfigValidation) {
   c.early_min_swing_s = -0.1;
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c.early_min_swing_s = std::nan("");
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.ankle_pitch_capacity_Nm = -1.0;
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c.ankle_pitch_capacity_Nm = std::nan("");
   EXPECT_NE(recovery_step_validate(c), nullptr);
 }
 
