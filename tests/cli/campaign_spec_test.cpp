@@ -115,6 +115,21 @@ TEST(CampaignSpec, LeanTrimIsOptIn) {
   }
 }
 
+// The holdable-soles trigger is opt-in, as the lean trim.
+TEST(CampaignSpec, HoldableSolesIsOptIn) {
+  cli::CampaignSpec s;
+  std::string error;
+  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_FALSE(s.holdable_soles);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"holdable_soles":true})", s, error)) << error;
+  EXPECT_TRUE(s.holdable_soles);
+  for (const char* bad : {R"(,"holdable_soles":1})", R"(,"holdable_soles":"on"})"}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
+    EXPECT_NE(error.find("holdable_soles"), std::string::npos) << error;
+  }
+}
+
 // A push is the impulse over its duration, starts inside the window, and depends only on
 // the seed; its directions cover the circle.
 // A spec's push and run length within what `kuavo simulate` takes (sim/push_option.h): refused

@@ -78,7 +78,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
                                       "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home",
-                                      "estimator_unloaded_foot_N", "lean_trim", "duration_s", "push"};
+                                      "estimator_unloaded_foot_N", "lean_trim", "holdable_soles", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -118,7 +118,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   if (!boolean(j, "liftoff_hold", s.liftoff_hold, error) || !boolean(j, "plan_anchor", s.plan_anchor, error) ||
-      !boolean(j, "lean_trim", s.lean_trim, error)) {
+      !boolean(j, "lean_trim", s.lean_trim, error) || !boolean(j, "holdable_soles", s.holdable_soles, error)) {
     return false;
   }
   if (!optional_number(j, "plan_anchor_home", 0.0, 0.5, "0..0.5", s.plan_anchor_home, error)) return false;

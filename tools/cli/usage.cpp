@@ -54,7 +54,7 @@ constexpr CommandHelp kHelp[] = {
      "               [--lean-trim on|off]   (opt-in: the base tilt trimmed until the WBC's forces move the CoM as planned)\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
-     "               [--holdable-soles on|off]   (the recovery step's trigger on the part of the soles the ankles hold)\n"
+     "               [--holdable-soles on|off]   (opt-in: the recovery step's trigger on the part of the soles the ankles hold)\n"
      "               [--plan-anchor-home SHARE]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
      "               --log run.csv --summary run.json [--quiet]\n"},
