@@ -90,14 +90,14 @@ Vec2 foot_forward(const PlanKnot& knot, int foot) {
 // RecoveryStepConfig::ankle_pitch_capacity_Nm): along the foot's axis, from the ankle, at most
 // P / F ahead and behind, never beyond the toes and heels. F, the foot's share of the robot's
 // weight, by the lever rule: the CoM's place on the line between the two ankles (all of it on
-// the nearer foot beyond either). corners: both soles, world x-y, cut in place.
-void cut_to_holdable(const model::Model& model, double capacity_Nm, const Vec2& com, std::array<Vec2, kNumPoints>& corners) {
+// the nearer foot beyond either). corners: knot m's soles, world x-y, cut in place.
+void cut_to_holdable(const model::Model& model, double capacity_Nm, const PlanKnot& m, std::array<Vec2, kNumPoints>& corners) {
+  const Vec2 com = m.com_position_m.head<2>();
   std::array<Vec2, 2> ankle, axis;
   for (int f = 0; f < 2; ++f) {
     const int c0 = f * kCornersPerFoot;
-    const Vec2 toe = 0.5 * (corners[c0] + corners[c0 + 1]), heel = 0.5 * (corners[c0 + 2] + corners[c0 + 3]);
-    const Vec2 d = toe - heel;
-    axis[f] = d.norm() > 1e-6 ? Vec2(d / d.norm()) : Vec2(1.0, 0.0);
+    axis[f] = foot_forward(m, f);
+    const Vec2 heel = 0.5 * (corners[c0 + 2] + corners[c0 + 3]);
     ankle[f] = heel - model.frames[c0 + 2].position_m.x() * axis[f];  // the heels sit behind the ankle axis
   }
   const Vec2 lr = ankle[0] - ankle[1];
@@ -333,7 +333,7 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   // The trigger's polygon: the soles, or the part of them the ankles hold. The step itself is
   // planned on the soles (plan_step), as before.
   std::array<Vec2, kNumPoints> held = corners;
-  if (cfg.ankle_pitch_capacity_Nm > 0.0) cut_to_holdable(model, cfg.ankle_pitch_capacity_Nm, m.com_position_m.head<2>(), held);
+  if (cfg.ankle_pitch_capacity_Nm > 0.0) cut_to_holdable(model, cfg.ankle_pitch_capacity_Nm, m, held);
   const Polygon2<kNumPoints> support = convex_hull<kNumPoints>(held, kNumPoints);
   const double omega = cp.omega;
   const Vec2 xi = cp.xi;

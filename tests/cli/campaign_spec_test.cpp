@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "tools/cli/campaign_spec.h"
 
@@ -100,33 +102,23 @@ TEST(CampaignSpec, EstimatorUnloadedFootIsOptIn) {
   }
 }
 
-// The lean trim is opt-in: absent or false, off; true, on; anything but a boolean, refused by name.
-TEST(CampaignSpec, LeanTrimIsOptIn) {
-  cli::CampaignSpec s;
-  std::string error;
+// The lean trim and the holdable-soles trigger are opt-in: absent or false, off; true, on;
+// anything but a boolean, refused by name.
+TEST(CampaignSpec, LeanTrimAndHoldableSolesAreOptIn) {
   const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
-  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
-  EXPECT_FALSE(s.lean_trim);
-  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"lean_trim":true})", s, error)) << error;
-  EXPECT_TRUE(s.lean_trim);
-  for (const char* bad : {R"(,"lean_trim":1})", R"(,"lean_trim":"on"})"}) {
-    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
-    EXPECT_NE(error.find("lean_trim"), std::string::npos) << error;
-  }
-}
-
-// The holdable-soles trigger is opt-in, as the lean trim.
-TEST(CampaignSpec, HoldableSolesIsOptIn) {
-  cli::CampaignSpec s;
-  std::string error;
-  const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
-  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
-  EXPECT_FALSE(s.holdable_soles);
-  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"holdable_soles":true})", s, error)) << error;
-  EXPECT_TRUE(s.holdable_soles);
-  for (const char* bad : {R"(,"holdable_soles":1})", R"(,"holdable_soles":"on"})"}) {
-    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
-    EXPECT_NE(error.find("holdable_soles"), std::string::npos) << error;
+  const std::pair<const char*, bool cli::CampaignSpec::*> keys[] = {{"lean_trim", &cli::CampaignSpec::lean_trim},
+                                                                     {"holdable_soles", &cli::CampaignSpec::holdable_soles}};
+  for (const auto& [key, flag] : keys) {
+    cli::CampaignSpec s;
+    std::string error;
+    ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+    EXPECT_FALSE(s.*flag) << key;
+    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + key + "\":true}", s, error)) << error;
+    EXPECT_TRUE(s.*flag) << key;
+    for (const char* bad : {"1", "\"on\""}) {
+      EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"" + key + "\":" + bad + "}", s, error)) << key << " " << bad;
+      EXPECT_NE(error.find(key), std::string::npos) << error;
+    }
   }
 }
 
