@@ -40,7 +40,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
-    "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off]\n"
+    "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off] [--holdable-soles on|off]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the CiA 402 drives' mode, legs and shoulder pitches (firmware/README.md,\n"
     "                       leg binding). csp (default): the drives close the PD in their own loop\n"
@@ -61,6 +61,8 @@ constexpr const char* kUsage =
     "  --evict-cache        with --timing: write 64 MB before each control tick (cold caches)\n"
     "  --balance-filter on|off  cart-table ZMP filter of the dance at load (default off: `kuavo\n"
     "                       retarget`'s dynamic stage makes feasible motions; on for --stage geometric)\n"
+    "  --holdable-soles on|off  the recovery step's trigger on the part of the soles the ankles hold\n"
+    "                       (default on; off: on the soles)\n"
     "  --require-rt applies to a run and --timing, --stand to a run, --dance to a run and --check,\n"
     "  --evict-cache to --timing; an option outside its mode is refused\n"
     "exit codes: 0 ok, 1 runtime failure (buses, real time, out of memory), 2 bad usage, configuration\n"
@@ -159,7 +161,7 @@ struct DanceMemory {
 };
 
 int run(int argc, char** argv) {
-  std::string config_path, dance_path, timing_path, legs = "csp", balance = "off";
+  std::string config_path, dance_path, timing_path, legs = "csp", balance = "off", holdable = "on";
   bool check = false, require_rt = false, stand = false, evict_cache = false;
   kuavo::args::Parser args("kuavo_fw");
   args.text("--config", "FILE", &config_path);
@@ -171,6 +173,7 @@ int run(int argc, char** argv) {
   args.text("--timing", "MOTION_FILE", &timing_path).modes = kTimingMode;
   args.flag("--evict-cache", &evict_cache).modes = kTimingMode;
   args.choice("--balance-filter", {"on", "off"}, &balance);
+  args.choice("--holdable-soles", {"on", "off"}, &holdable);
   switch (args.parse(argc, argv)) {
     case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
@@ -192,9 +195,11 @@ int run(int argc, char** argv) {
     return 2;
   }
   if (timing) dance_path = timing_path;
-  if (args.given("--balance-filter") && dance_path.empty()) {
-    std::fprintf(stderr, "kuavo_fw: --balance-filter applies to a motion (--dance or --timing)\n%s", kUsage);
-    return 2;
+  for (const char* option : {"--balance-filter", "--holdable-soles"}) {
+    if (args.given(option) && dance_path.empty()) {
+      std::fprintf(stderr, "kuavo_fw: %s applies to a motion (--dance or --timing)\n%s", option, kUsage);
+      return 2;
+    }
   }
   const bool balance_filter = balance == "on", csp_legs = legs == "csp";
 
@@ -227,7 +232,8 @@ int run(int argc, char** argv) {
     return 2;
   }
   // The dance: loaded, validated and balance-filtered before anything is sent.
-  const kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
+  kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
+  if (holdable == "off") stack_config.recovery.ankle_pitch_capacity_Nm = 0.0;
   std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
     memory.reset(new (std::nothrow) DanceMemory);

@@ -61,13 +61,14 @@
 // four motions of 2e6abcb × 100 seeds): 11/400 → 7/400; it saves perfume 27, 58, 64, 98 and
 // cmu_05_07 71, and loses perfume 96 (pushed at 20.08 s, a step at once, fell at 20.74 s; it
 // danced without a step before); 384 of the 400 logs are bit for bit the same, recovery steps
-// are taken in 16 runs (5 before). But it is opt-in: `kuavo retarget`'s closed-loop check runs
-// this stack, and with it on the check passed 3 of the 4 motions at other rounds (built-in
-// unchanged). Perfume's then passed at round 1, not 6 (steps 15/15, CoM path kept 54 % against
-// 41 %, torque violations 620 against 449), and that less attenuated motion fell in the show
-// campaign (trigger on) 24/100, against 3/100 for the old motion: the check's 12 pushed seeds
-// did not catch it. The re-retargeted CMU clips: cmu_05_07 5/100 (round 7 against 8), cmu_05_20
-// 1/100 (round 8 against 9, steps 7/7 against 5/7). End to end, 31/400 against 11/400 off.
+// are taken in 16 runs (5 before). Stop 65 kept it opt-in because the clips `kuavo retarget`
+// wrote with it (its closed-loop check runs this stack) fell 31/400 against those 11. But those
+// 11 were motions written before the MPC's coarse tail became the default (87bd2fa): the check
+// of the pipeline as it stood (tail, trigger off) writes other motions too (perfume f9d2e95a,
+// the same as with the trigger), and they fall 47/400 with it off (perfume 32, cmu_05_07 12,
+// cmu_05_20 2, built-in 1). End to end, checked and danced with the trigger: 31/400 (perfume 24,
+// cmu_05_07 5, cmu_05_20 1, built-in 1). On by default since stop 66; retarget_dynamic.h
+// (verify_holdable_soles) has the check's side.
 //
 // Early touchdown (step timing, in a swing the motion plans): the MPC adapts where a swing
 // foot lands but not when. Pushed towards the swing side in a long single support (cmu_05_20's
@@ -101,6 +102,10 @@
 #include "controllers/planner/motion_plan.h"
 
 namespace kuavo::planner {
+
+// The holdable soles' pitch: the loaded ankle's two motors give ~49 N·m through the linkage;
+// 0.9 of it, the WBC's ankle_motor_torque_share (wbc_config.h).
+inline constexpr double kHoldableAnklePitch_Nm = 44.0;
 
 struct RecoveryStepConfig {
   bool enabled = true;
@@ -155,13 +160,9 @@ struct RecoveryStepConfig {
 
   // Holdable soles (0: off, the soles' corners): the trigger takes each foot's sole only as far
   // from its ankle, ahead and behind, as this much pitch holds the foot's share of the weight
-  // (see above; opt-in, kHoldableAnklePitch_Nm, `kuavo simulate --holdable-soles on`).
-  double ankle_pitch_capacity_Nm = 0.0;
+  // (see above; on by default, `kuavo simulate --holdable-soles off` for the soles).
+  double ankle_pitch_capacity_Nm = kHoldableAnklePitch_Nm;
 };
-
-// The holdable soles' pitch: the loaded ankle's two motors give ~49 N·m through the linkage;
-// 0.9 of it, the WBC's ankle_motor_torque_share (wbc_config.h).
-inline constexpr double kHoldableAnklePitch_Nm = 44.0;
 
 // nullptr if usable, else what is wrong. Load time.
 const char* recovery_step_validate(const RecoveryStepConfig& config);

@@ -34,7 +34,7 @@ constexpr const char* kUsage =
     "usage: kuavo_fw_sim [--dance MOTION_FILE | --stand SECONDS] [--config FILE] [--legs csp|cst]\n"
     "                    [--ground floor|carpet] [--seed N] [--push T:FX,FY,FZ:DURATION]\n"
     "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
-    "                    [--inject KIND@SECONDS]\n"
+    "                    [--holdable-soles on|off] [--inject KIND@SECONDS]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
     "                       back on the gantry, finish, damping\n"
@@ -43,6 +43,7 @@ constexpr const char* kUsage =
     "  --legs csp|cst       the CiA 402 drives' mode, legs and shoulder pitches (default csp;\n"
     "                       firmware/README.md)\n"
     "  --balance-filter on|off  as kuavo_fw (default off)\n"
+    "  --holdable-soles on|off  as kuavo_fw (default on)\n"
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
     "  --plan-latency-ms MS the planning task's plan applied this long after its state, 0..18 ms (default 4)\n"
@@ -51,7 +52,8 @@ constexpr const char* kUsage =
     "                       elbow), bus-off (the left knee's bus), frame-loss-1pct (every bus), imu-dropout,\n"
     "                       starved-planner (no planning task from then on). The summary's \"injection\"\n"
     "                       says when it was armed, the fault latched and the time to damping\n"
-    "  --stand applies without --dance, --balance-filter with it; in the other mode they are refused\n"
+    "  --stand applies without --dance, --balance-filter and --holdable-soles with it; in the other\n"
+    "  mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
 constexpr kuavo::args::ModeMask kDanceMode = 1, kStandMode = 2;
@@ -60,7 +62,7 @@ int run(int argc, char** argv) {
   sitl::SitlConfig cfg;
   cfg.loop.legs = sitl::kImageLegBinding;
   cfg.loop.seed = 1;
-  std::string dance_path, config_path, summary_path, legs = "csp", balance = "off", ground = "floor";
+  std::string dance_path, config_path, summary_path, legs = "csp", balance = "off", holdable = "on", ground = "floor";
   double plan_latency_ms = static_cast<double>(cfg.plan_latency_ns) * 1e-6;
   kuavo::args::Parser args("kuavo_fw_sim");
   args.text("--dance", "MOTION_FILE", &dance_path).modes = kDanceMode;
@@ -68,6 +70,7 @@ int run(int argc, char** argv) {
   args.text("--config", "FILE", &config_path);
   args.choice("--legs", {"csp", "cst"}, &legs);
   args.choice("--balance-filter", {"on", "off"}, &balance).modes = kDanceMode;
+  args.choice("--holdable-soles", {"on", "off"}, &holdable).modes = kDanceMode;
   args.choice("--ground", {"floor", "carpet"}, &ground);
   args.uint64("--seed", "N", &cfg.loop.seed);
   args.custom("--push", kuavo::sim::kPushValueName, [&](const char* v) { return kuavo::sim::parse_push(v, cfg.loop.push); });
@@ -97,6 +100,7 @@ int run(int argc, char** argv) {
   }
   cfg.plan_latency_ns = static_cast<kuavo::hal::TimeNs>(std::llround(plan_latency_ms * 1e6));
   cfg.inject_fault = args.given("--inject");
+  if (holdable == "off") cfg.recovery_ankle_pitch_capacity_Nm = 0.0;
 
   static kuavo::model::Model model;
   if (kuavo::model::build_model(kuavo::model::Variant::kS45, kuavo::model::kDefaultTotalMass_kg, model) !=

@@ -102,19 +102,27 @@ TEST(CampaignSpec, EstimatorUnloadedFootIsOptIn) {
   }
 }
 
-// The lean trim and the holdable-soles trigger are opt-in: absent or false, off; true, on;
-// anything but a boolean, refused by name.
-TEST(CampaignSpec, LeanTrimAndHoldableSolesAreOptIn) {
+// The lean trim is opt-in (absent: off), the holdable-soles trigger on by default (absent:
+// on), as in `kuavo simulate`; false and true set them; anything but a boolean is refused by
+// name.
+TEST(CampaignSpec, LeanTrimOptInHoldableSolesOnByDefault) {
   const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
-  const std::pair<const char*, bool cli::CampaignSpec::*> keys[] = {{"lean_trim", &cli::CampaignSpec::lean_trim},
-                                                                     {"holdable_soles", &cli::CampaignSpec::holdable_soles}};
-  for (const auto& [key, flag] : keys) {
+  struct Key {
+    const char* name;
+    bool cli::CampaignSpec::*flag;
+    bool absent;
+  };
+  const Key keys[] = {{"lean_trim", &cli::CampaignSpec::lean_trim, false},
+                      {"holdable_soles", &cli::CampaignSpec::holdable_soles, true}};
+  for (const auto& [key, flag, absent] : keys) {
     cli::CampaignSpec s;
     std::string error;
     ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
-    EXPECT_FALSE(s.*flag) << key;
+    EXPECT_EQ(s.*flag, absent) << key;
     ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + key + "\":true}", s, error)) << error;
     EXPECT_TRUE(s.*flag) << key;
+    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + key + "\":false}", s, error)) << error;
+    EXPECT_FALSE(s.*flag) << key;
     for (const char* bad : {"1", "\"on\""}) {
       EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"" + key + "\":" + bad + "}", s, error)) << key << " " << bad;
       EXPECT_NE(error.find(key), std::string::npos) << error;

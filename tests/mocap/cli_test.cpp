@@ -293,7 +293,10 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   EXPECT_EQ(listed, kept) << report["dynamic"]["repairs"].dump();
   // The kept round's last run is replayed on the written file in its own process: by
   // `kuavo simulate`, or by kuavo_fw_sim for a firmware-loop run (whose clock starts on the
-  // gantry: the check reports the fall or fault on the motion's clock).
+  // gantry: the check reports the fall or fault on the motion's clock), with the check's
+  // recovery-step trigger (the report's "holdable_soles": true by default, as online).
+  ASSERT_TRUE(v.contains("holdable_soles")) << v.dump();
+  EXPECT_TRUE(v["holdable_soles"].get<bool>()) << "the check dances with the online default's trigger";
   const auto& last = runs[kept].back();
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
   const bool fw = last["engine"] == "firmware";
@@ -308,7 +311,9 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   }
   const std::string where = " --ground " + last["ground"].get<std::string>() + " --seed " +
                             std::to_string(last["seed"].get<std::uint64_t>()) +
-                            (last.contains("perturbation") ? " --perturb show" : "") + push + " --summary " + kOut +
+                            (last.contains("perturbation") ? " --perturb show" : "") + push +
+                            // the check's trigger when it ran on the soles (--verify-holdable-soles off)
+                            (v["holdable_soles"].get<bool>() ? "" : " --holdable-soles off") + " --summary " + kOut +
                             "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
                              : kBin + " simulate " + kOut + "_ver.motion --quiet --engine " + last["engine"].get<std::string>() + where;

@@ -358,6 +358,29 @@ TEST(RecoveryStep, HoldableSolesEndWhereTheAnklesHoldTheLoad) {
   EXPECT_TRUE(corners.window_unchanged());
 }
 
+// The default trigger is the holdable soles at kHoldableAnklePitch_Nm (stop 66): standing, ξ
+// 5 mm past their front (3 mm inside the toes) is 5 mm out with the default config and creeps
+// into a trigger; with the soles' corners (capacity 0, `kuavo simulate --holdable-soles off`)
+// it is inside (it creeps there too: within 1 cm of the edge).
+TEST(RecoveryStep, TheDefaultTriggerIsTheHoldableSoles) {
+  const Standing s = standing_geometry();
+  const HoldableFront front = holdable_front(s, kHoldableAnklePitch_Nm);
+  const double xi_x = front.at(s.com.y()) + 0.005;
+  ASSERT_LT(xi_x, front.ankle_x + kToeAheadOfAnkle - 0.002) << "the premise: inside the soles";
+  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+  Fixture by_default;
+  Fixture corners;
+  corners.config.ankle_pitch_capacity_Nm = 0.0;
+  for (int i = 0; i < by_default.config.creep_calls; ++i) {
+    by_default.call(1.0 + kDt * i, velocity);
+    corners.call(1.0 + kDt * i, velocity);
+  }
+  EXPECT_NEAR(by_default.state->last_outside_m, 0.005, 1.5e-3);
+  EXPECT_EQ(by_default.state->steps + by_default.state->declined, 1u);
+  EXPECT_NEAR(corners.state->last_outside_m, xi_x - (front.ankle_x + kToeAheadOfAnkle), 1.5e-3);
+  EXPECT_LT(corners.state->last_outside_m, 0.0);
+}
+
 // A forward exit the ankles cannot hold (ξ 2 cm past the holdable front, 4 cm inside the
 // toes) is a fast trigger, and the step is planned on the soles as before: ξ propagated from
 // the stance sole's point nearest it (closed form) is inside, by capture_margin_m, the support

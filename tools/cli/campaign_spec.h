@@ -14,7 +14,7 @@
 //   "plan_anchor_home"  SHARE: --plan-anchor-home SHARE (absent: simulate's default)
 //   "estimator_unloaded_foot_N"  N: --estimator-unloaded-foot N (absent: simulate's default, off)
 //   "lean_trim"      true: kuavo simulate --lean-trim on (default false)
-//   "holdable_soles" true: kuavo simulate --holdable-soles on (default false)
+//   "holdable_soles" false: kuavo simulate --holdable-soles off (default true)
 //   "duration_s"     0 or absent: each motion's length plus the settling second
 //   "push"           {"impulse_Ns", "duration_s", "start_after_s", "end_before_s"}: one
 //                    horizontal push a run, direction uniform in [0, 2π) and start uniform
@@ -60,7 +60,7 @@ struct CampaignSpec {
   std::optional<double> plan_anchor_home;
   std::optional<double> estimator_unloaded_foot_N;
   bool lean_trim = false;
-  bool holdable_soles = false;
+  bool holdable_soles = true;
   double duration_s = 0.0;
   PushSpec push;
 };

@@ -229,7 +229,7 @@ int run_campaign(int argc, char** argv) {
     if (errors) cmd += " --perturb-seed " + std::to_string(r.seed);
     if (spec.liftoff_hold) cmd += " --liftoff-hold on";
     if (spec.lean_trim) cmd += " --lean-trim on";
-    if (spec.holdable_soles) cmd += " --holdable-soles on";
+    if (!spec.holdable_soles) cmd += " --holdable-soles off";
     if (spec.plan_anchor) cmd += *spec.plan_anchor ? " --plan-anchor on" : " --plan-anchor off";
     const auto add_number = [&cmd](const char* flag, double value) {
       char text[64];

@@ -27,7 +27,9 @@
 // the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
 // the show set's model errors (--verify-show SEEDS, 0…48, default 12: seeds 1001…), each with one
-// push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); where it falls,
+// push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); every
+// run with the recovery step's trigger on the holdable soles as online (--verify-holdable-soles
+// on|off, default on; off: on the soles; retarget_dynamic.h); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there, side by side) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
@@ -127,7 +129,7 @@ int run(int argc, char** argv) {
   double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, ankle_motor_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, smoothing_passes = 0, verify_rounds = DynamicStageOptions{}.verify_rounds,
             verify_show = static_cast<long long>(DynamicStageOptions{}.verify_show_seeds.size());
-  std::string verify_mujoco = "on", verify_firmware = "on", force_reference = "static";
+  std::string verify_mujoco = "on", verify_firmware = "on", verify_holdable = "on", force_reference = "static";
   DynamicStageOptions dyn_options;
   model::Variant variant = model::Variant::kS45;
   args::Parser p("kuavo retarget");
@@ -154,6 +156,7 @@ int run(int argc, char** argv) {
   p.choice("--verify-firmware", {"on", "off"}, &verify_firmware).modes = kDynamic;
   p.integer("--verify-show", "SEEDS", 0, 48, "seeds", &verify_show).modes = kDynamic;
   p.number("--verify-show-push", "NS", 0.0, 40.0, "N·s", &verify_show_push_Ns).modes = kDynamic;
+  p.choice("--verify-holdable-soles", {"on", "off"}, &verify_holdable).modes = kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
   p.number("--duration", "SECONDS", mocap::kDefaultDanceDuration_s,
@@ -199,6 +202,7 @@ int run(int argc, char** argv) {
   dyn_options.verify_mujoco = verify_mujoco == "on";
   dyn_options.verify_firmware = verify_firmware == "on";
   dyn_options.verify_show_push_Ns = verify_show_push_Ns;
+  dyn_options.verify_holdable_soles = verify_holdable == "on";
   if (p.given("--verify-show")) {
     dyn_options.verify_show_seeds.clear();
     for (long long k = 0; k < verify_show; ++k) dyn_options.verify_show_seeds.push_back(1001 + static_cast<std::uint64_t>(k));

@@ -60,7 +60,7 @@ int run_simulate(int argc, char** argv) {
   long long steps = 0, latency_ticks = cfg.command_latency_ticks;
   model::Variant variant = model::Variant::kS45;
   double mass_kg = model::kDefaultTotalMass_kg;
-  std::string summary_path, balance = "off", recovery = "on", early_touchdown = "on", holdable = "off", liftoff_hold = "off", lean_trim = "off", anchor = "on", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
+  std::string summary_path, balance = "off", recovery = "on", early_touchdown = "on", holdable = "on", liftoff_hold = "off", lean_trim = "off", anchor = "on", planner = "mpc", state = "estimator", sensors = "mti", ground = "floor";
   std::string integrator = "cvode", variant_name = "s45", perturb, engine = "simbody";
   sim::PerturbationSet perturb_set;  // model mismatch of the plant: none unless --perturb
   std::uint64_t perturb_seed = 0;
@@ -153,7 +153,7 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.use_truth_state = state == "truth";
   motion_cfg.stack.recovery.enabled = recovery == "on";
   motion_cfg.stack.recovery.early_touchdown = early_touchdown == "on";
-  if (holdable == "on") motion_cfg.stack.recovery.ankle_pitch_capacity_Nm = planner::kHoldableAnklePitch_Nm;
+  if (holdable == "off") motion_cfg.stack.recovery.ankle_pitch_capacity_Nm = 0.0;
   motion_cfg.stack.liftoff_hold.enabled = liftoff_hold == "on";
   motion_cfg.stack.lean_trim.enabled = lean_trim == "on";
   motion_cfg.stack.anchor.enabled = anchor == "on";

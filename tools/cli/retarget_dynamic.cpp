@@ -115,6 +115,10 @@ bool write_csv(const std::string& path, const model::Model& robot, const std::ve
 
 }  // namespace
 
+double check_ankle_pitch_capacity_Nm(const DynamicStageOptions& options) {
+  return options.verify_holdable_soles ? planner::kHoldableAnklePitch_Nm : 0.0;
+}
+
 bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim::Push& out) {
   out = sim::Push{};
   PushDraw draw;
@@ -206,8 +210,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   take_output();
 
   // Closed-loop verification: the output danced by the online stack in the simulator, as
-  // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model), on each ground and then in
-  // MuJoCo. Where it falls, the seconds before the fall are repaired (verification_range's
+  // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model; with --holdable-soles off
+  // when verify_holdable_soles is), on each ground and then in MuJoCo. Where it falls, the seconds before the fall are repaired (verification_range's
   // ladder) and the motion optimized again, up to verify_rounds times.
   ordered_json verification_runs = ordered_json::array();
   bool danced = true;
@@ -287,6 +291,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         const Check& check = checks[i];
         sim::MotionRunConfig cfg;
         cfg.stack.planner = stack::PlannerKind::kMpc;
+        cfg.stack.recovery.ankle_pitch_capacity_Nm = check_ankle_pitch_capacity_Nm(options);
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
@@ -320,6 +325,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         fw.loop.legs = firmware::sitl::kImageLegBinding;
         fw.loop.ground = ground;
         fw.loop.seed = seed;
+        fw.recovery_ankle_pitch_capacity_Nm = check_ankle_pitch_capacity_Nm(options);
         const auto t0 = std::chrono::steady_clock::now();
         const firmware::sitl::SitlSummary s = firmware::sitl::run_firmware_sim(robot, plan.get(), fw);
         verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -548,6 +554,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["verification"] = {{"rounds", verify_round},
                        {"kept_round", best_round},
                        {"given_up_seeds", given_up_seeds},
+                       {"holdable_soles", options.verify_holdable_soles},
                        {"danced", verification_runs.empty() ? ordered_json() : ordered_json(danced)},
                        {"sim_s", verify_sim_s},
                        {"runs", verification_runs}};

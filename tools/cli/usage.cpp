@@ -38,6 +38,7 @@ constexpr CommandHelp kHelp[] = {
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
      "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 12)\n"
      "                      [--verify-show-push NS]   (each of those runs pushed once as in the show campaign; 0..40, default 10; 0: none)\n"
+     "                      [--verify-holdable-soles on|off]   (the check's recovery step on the holdable soles, as online; default on)\n"
      "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
@@ -54,7 +55,7 @@ constexpr CommandHelp kHelp[] = {
      "               [--lean-trim on|off]   (opt-in: the base tilt trimmed until the WBC's forces move the CoM as planned)\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
-     "               [--holdable-soles on|off]   (opt-in: the recovery step's trigger on the part of the soles the ankles hold)\n"
+     "               [--holdable-soles on|off]   (default on: the recovery step's trigger on the part of the soles the ankles hold)\n"
      "               [--plan-anchor-home SHARE]\n"
      "               [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]\n"
      "               --log run.csv --summary run.json [--quiet]\n"},
