@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
   }
   cfg.plan_latency_ns = static_cast<kuavo::hal::TimeNs>(std::llround(plan_latency_ms * 1e6));
   cfg.inject_fault = args.given("--inject");
-  if (holdable == "off") cfg.recovery_ankle_pitch_capacity_Nm = 0.0;
+  cfg.holdable_soles = holdable == "on";
 
   static kuavo::model::Model model;
   if (kuavo::model::build_model(kuavo::model::Variant::kS45, kuavo::model::kDefaultTotalMass_kg, model) !=

@@ -73,9 +73,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     return out;
   }
   stack::StackConfig stack_config = firmware_stack_config(config.loop.firmware);  // as kuavo_fw runs it
-  if (config.recovery_ankle_pitch_capacity_Nm >= 0.0) {
-    stack_config.recovery.ankle_pitch_capacity_Nm = config.recovery_ankle_pitch_capacity_Nm;
-  }
+  if (!config.holdable_soles) stack_config.recovery.ankle_pitch_capacity_Nm = 0.0;
   if (motion != nullptr && !loop->enable_dance(*motion, stack_config, config.plan_latency_ns)) {
     run.ok = false;
     run.error = "dance: " + loop->error();

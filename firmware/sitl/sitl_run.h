@@ -35,9 +35,9 @@ struct SitlConfig {
   // inject.at_s after the cycle that entered dance; off unless `inject_fault`.
   bool inject_fault = false;
   Injection inject{};
-  // The recovery step's holdable-soles pitch (RecoveryStepConfig::ankle_pitch_capacity_Nm)
-  // instead of the image's; < 0: the image's (`kuavo retarget --verify-holdable-soles off`: 0).
-  double recovery_ankle_pitch_capacity_Nm = -1.0;
+  // false: the recovery step's trigger on the soles, not the image's holdable soles
+  // (RecoveryStepConfig::ankle_pitch_capacity_Nm 0; kuavo_fw_sim --holdable-soles off).
+  bool holdable_soles = true;
 };
 
 // What the drill did: when it was armed, the first fault latched from then on, and the

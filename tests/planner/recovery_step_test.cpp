@@ -47,8 +47,10 @@ struct Standing {
   double omega;
   double heel_x = 1e9;    // the soles' rear edge
   double outer_y = -1e9;  // the left sole's outer edge
-  // The whole robot's velocity that puts ξ = c + ċ/ω `behind` metres behind the heels.
-  Vec2 backwards(double behind) const { return Vec2((heel_x - behind - com.x()) * omega, 0.0); }
+  // The whole robot's velocity that puts ξ = c + ċ/ω at x = xi_x (on the CoM's line along x).
+  Vec2 towards(double xi_x) const { return Vec2((xi_x - com.x()) * omega, 0.0); }
+  // ... `behind` metres behind the heels.
+  Vec2 backwards(double behind) const { return towards(heel_x - behind); }
 };
 
 Standing standing_geometry() {
@@ -84,6 +86,10 @@ struct Fixture {
   Fixture() {
     config.settle_s = 0.0;
     recovery_step_reset(*state);
+  }
+  // With the trigger's holdable soles at this pitch (0: the soles' corners).
+  explicit Fixture(double ankle_pitch_capacity_Nm) : Fixture() {
+    config.ankle_pitch_capacity_Nm = ankle_pitch_capacity_Nm;
   }
   // One planner call at t (s) with the robot standing and moving at `velocity`.
   void call(double t, const Vec2& velocity, const Vec2& plan_offset = Vec2::Zero()) {
@@ -338,12 +344,10 @@ TEST(RecoveryStep, HoldableSolesEndWhereTheAnklesHoldTheLoad) {
   const HoldableFront front = holdable_front(s, kCapacity);
   ASSERT_LT(front.reach_left, kToeAheadOfAnkle - 0.03) << "the premise: the capacity binds well short of the toes";
   const double xi_x = front.at(s.com.y()) + 0.005;
-  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.towards(xi_x);
 
-  Fixture held;
-  held.config.ankle_pitch_capacity_Nm = kCapacity;
-  Fixture corners;
-  corners.config.ankle_pitch_capacity_Nm = 0.0;
+  Fixture held(kCapacity);
+  Fixture corners(0.0);
   for (int i = 0; i + 1 < held.config.creep_calls; ++i) {
     held.call(1.0 + kDt * i, velocity);
     corners.call(1.0 + kDt * i, velocity);
@@ -367,10 +371,9 @@ TEST(RecoveryStep, TheDefaultTriggerIsTheHoldableSoles) {
   const HoldableFront front = holdable_front(s, kHoldableAnklePitch_Nm);
   const double xi_x = front.at(s.com.y()) + 0.005;
   ASSERT_LT(xi_x, front.ankle_x + kToeAheadOfAnkle - 0.002) << "the premise: inside the soles";
-  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
+  const Vec2 velocity = s.towards(xi_x);
   Fixture by_default;
-  Fixture corners;
-  corners.config.ankle_pitch_capacity_Nm = 0.0;
+  Fixture corners(0.0);
   for (int i = 0; i < by_default.config.creep_calls; ++i) {
     by_default.call(1.0 + kDt * i, velocity);
     corners.call(1.0 + kDt * i, velocity);
@@ -392,11 +395,9 @@ TEST(RecoveryStep, AForwardExitTheAnklesCannotHoldSteps) {
   const HoldableFront front = holdable_front(s, kCapacity);
   const double xi_x = front.at(s.com.y()) + 0.02;
   ASSERT_LT(xi_x, front.ankle_x + kToeAheadOfAnkle - 0.03) << "the premise: ξ is inside the soles";
-  const Vec2 velocity((xi_x - s.com.x()) * s.omega, 0.0);
-  Fixture corners;
-  corners.config.ankle_pitch_capacity_Nm = 0.0;
-  Fixture f;
-  f.config.ankle_pitch_capacity_Nm = kCapacity;
+  const Vec2 velocity = s.towards(xi_x);
+  Fixture corners(0.0);
+  Fixture f(kCapacity);
   for (int i = 0; i < 3 * f.config.creep_calls; ++i) {
     corners.call(1.0 + kDt * i, velocity);
     EXPECT_TRUE(corners.window_unchanged()) << i;

@@ -115,10 +115,6 @@ bool write_csv(const std::string& path, const model::Model& robot, const std::ve
 
 }  // namespace
 
-double check_ankle_pitch_capacity_Nm(const DynamicStageOptions& options) {
-  return options.verify_holdable_soles ? planner::kHoldableAnklePitch_Nm : 0.0;
-}
-
 bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim::Push& out) {
   out = sim::Push{};
   PushDraw draw;
@@ -291,7 +287,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         const Check& check = checks[i];
         sim::MotionRunConfig cfg;
         cfg.stack.planner = stack::PlannerKind::kMpc;
-        cfg.stack.recovery.ankle_pitch_capacity_Nm = check_ankle_pitch_capacity_Nm(options);
+        if (!options.verify_holdable_soles) cfg.stack.recovery.ankle_pitch_capacity_Nm = 0.0;  // the soles
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
@@ -325,7 +321,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         fw.loop.legs = firmware::sitl::kImageLegBinding;
         fw.loop.ground = ground;
         fw.loop.seed = seed;
-        fw.recovery_ankle_pitch_capacity_Nm = check_ankle_pitch_capacity_Nm(options);
+        fw.holdable_soles = options.verify_holdable_soles;
         const auto t0 = std::chrono::steady_clock::now();
         const firmware::sitl::SitlSummary s = firmware::sitl::run_firmware_sim(robot, plan.get(), fw);
         verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

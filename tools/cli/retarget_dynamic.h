@@ -132,10 +132,6 @@ struct DynamicStageResult {
 // positive or the run is too short for the push's window.
 bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim::Push& out);
 
-// The recovery step's ankle_pitch_capacity_Nm in every run of the check: the online default's
-// holdable soles (kHoldableAnklePitch_Nm) with verify_holdable_soles, else 0 (the soles).
-double check_ankle_pitch_capacity_Nm(const DynamicStageOptions& options);
-
 // 0 done, 1 the optimization failed, 2 the motion is bad input (the message says why).
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
