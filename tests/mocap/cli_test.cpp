@@ -82,10 +82,10 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
   const auto& d = report["dynamic"];
   // The built-in dance dances in the closed-loop check on both grounds with each of the three
   // noise seeds, in MuJoCo, in the firmware loop on both grounds, and on carpet with the show
-  // set's model errors of seeds 1001–1012: no round of repair.
+  // set's model errors of seeds 1001–1024: no round of repair.
   ASSERT_TRUE(d.contains("verification"));
   EXPECT_EQ(d["verification"]["rounds"], 0);
-  ASSERT_EQ(d["verification"]["runs"].size(), 21u);
+  ASSERT_EQ(d["verification"]["runs"].size(), 33u);
   EXPECT_EQ(d["verification"]["runs"][0]["engine"], "simbody");
   EXPECT_EQ(d["verification"]["runs"][1]["ground"], "carpet");
   EXPECT_EQ(d["verification"]["runs"][5]["seed"], 3);
@@ -96,7 +96,7 @@ TEST(mocap_cli, DynamicStageReportAndCsv) {
     EXPECT_EQ(d["verification"]["runs"][i]["seed"], 1);
     EXPECT_FALSE(d["verification"]["runs"][i]["fell"].get<bool>());
   }
-  for (int i = 9; i < 21; ++i) {
+  for (int i = 9; i < 33; ++i) {
     EXPECT_EQ(d["verification"]["runs"][i]["perturbation"], "show");
     EXPECT_EQ(d["verification"]["runs"][i]["ground"], "carpet");
     EXPECT_EQ(d["verification"]["runs"][i]["seed"], 1001 + (i - 9));

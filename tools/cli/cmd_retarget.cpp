@@ -26,7 +26,7 @@
 // 12): the result is danced in the closed-loop simulation on floor and carpet (Simbody) and on
 // the floor in MuJoCo (--verify-mujoco on|off, default on), then in the firmware loop on floor
 // and carpet (--verify-firmware on|off, default on: kuavo_fw_sim's run), then on carpet with
-// the show set's model errors (--verify-show SEEDS, 0…48, default 12: seeds 1001…), each with one
+// the show set's model errors (--verify-show SEEDS, 0…48, default 24: seeds 1001…), each with one
 // push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); every
 // run with the recovery step's trigger on the holdable soles as online (--verify-holdable-soles
 // on|off, default on; off: on the soles; retarget_dynamic.h); where it falls,

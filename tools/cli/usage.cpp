@@ -36,7 +36,7 @@ constexpr CommandHelp kHelp[] = {
      "                      [--ankle-motor-weight W]   (the TO's hinge on the stance ankles' motor torques; 0: off)\n"
      "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
-     "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 12)\n"
+     "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 24)\n"
      "                      [--verify-show-push NS]   (each of those runs pushed once as in the show campaign; 0..40, default 10; 0: none)\n"
      "                      [--verify-holdable-soles on|off]   (the check's recovery step on the holdable soles, as online; default on)\n"
      "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
