@@ -67,7 +67,8 @@
 // of the pipeline as it stood (tail, trigger off) writes other motions too (perfume f9d2e95a,
 // the same as with the trigger), and they fall 47/400 with it off (perfume 32, cmu_05_07 12,
 // cmu_05_20 2, built-in 1). End to end, checked and danced with the trigger: 31/400 (perfume 24,
-// cmu_05_07 5, cmu_05_20 1, built-in 1). On by default since stop 66; retarget_dynamic.h
+// cmu_05_07 5, cmu_05_20 1, built-in 1), with 12 show seeds in the check (24 since stop 67:
+// 13/400, perfume 6; retarget_dynamic.h). On by default since stop 66; retarget_dynamic.h
 // (verify_holdable_soles) has the check's side.
 //
 // Early touchdown (step timing, in a swing the motion plans): the MPC adapts where a swing
