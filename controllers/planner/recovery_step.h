@@ -87,12 +87,13 @@
 // early touchdown at 18.7 s (its own plan's ξ misses there; 4 cm of measured error grow 7×
 // over the 0.56 s left, and the foot went 0.29 m back). And only in a swing of the motion
 // that lasts early_min_swing_s: a long single support, which it was made for; in short ones
-// (0.3 s) it threw the robot. The relative trigger still fires there under the show set's model
-// errors (stop 67, motion f9d2e95a: in 10 of 100 runs, the four looked at at 18.7 s; 7 fell at
-// 19.2–21.0 s, six with no push in the 0.5 s before; `--early-touchdown off` danced 9, 53, 59, 65, 83, 96, 100 and fell in 44
-// and 70, late): the estimate's ξ 3–5 cm off the plan's, the landing 0.48 m from the foot just
-// lifted (3.2 m/s over 0.15 s), the swing hips saturated and the stance knee threw the robot
-// off the ground. Tried and not kept: a bound on the foot's mean speed, the landing moved later
+// (0.3 s) it threw the robot. The relative trigger still fires at perfume's 18.7 s under the
+// show set's model errors (stop 67, motion f9d2e95a: 10 of 100 runs landed early, the four
+// looked at all at 18.7 s; 7 fell at 19.2–21.0 s, six with no push in the 0.5 s before;
+// `--early-touchdown off` danced 9, 53, 59, 65, 83, 96, 100 and fell in 44 and 70, late):
+// the estimate's ξ 3–5 cm off the plan's, the landing 0.48 m from the foot just lifted
+// (3.2 m/s over 0.15 s), the swing hips saturated and the stance knee threw the robot off the
+// ground. Tried and not kept: a bound on the foot's mean speed, the landing moved later
 // until the foot gets there. At 1 m/s it declines perfume's and keeps cmu_05_20's rescues
 // (0.13–0.17 m in 0.15 s) but loses the step-in-place one below (16 N·s, 0.24 m in 0.15 s;
 // recovery_step_loop_test); at 2 m/s perfume lands at 0.25 s and falls all the same. What
