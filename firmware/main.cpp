@@ -233,7 +233,7 @@ int run(int argc, char** argv) {
   }
   // The dance: loaded, validated and balance-filtered before anything is sent.
   kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
-  if (holdable == "off") stack_config.recovery.ankle_pitch_capacity_Nm = 0.0;
+  kuavo::planner::set_holdable_soles(stack_config.recovery, holdable == "on");
   std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
     memory.reset(new (std::nothrow) DanceMemory);

@@ -178,6 +178,12 @@ struct RecoveryStepConfig {
   double ankle_pitch_capacity_Nm = kHoldableAnklePitch_Nm;
 };
 
+// The trigger on the holdable soles (the default) or on the soles' corners (`--holdable-soles
+// off` of kuavo simulate, kuavo_fw, kuavo_fw_sim; `kuavo retarget --verify-holdable-soles off`).
+inline void set_holdable_soles(RecoveryStepConfig& config, bool on) {
+  config.ankle_pitch_capacity_Nm = on ? kHoldableAnklePitch_Nm : 0.0;
+}
+
 // nullptr if usable, else what is wrong. Load time.
 const char* recovery_step_validate(const RecoveryStepConfig& config);
 

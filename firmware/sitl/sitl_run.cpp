@@ -73,7 +73,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
     return out;
   }
   stack::StackConfig stack_config = firmware_stack_config(config.loop.firmware);  // as kuavo_fw runs it
-  if (!config.holdable_soles) stack_config.recovery.ankle_pitch_capacity_Nm = 0.0;
+  planner::set_holdable_soles(stack_config.recovery, config.holdable_soles);
   if (motion != nullptr && !loop->enable_dance(*motion, stack_config, config.plan_latency_ns)) {
     run.ok = false;
     run.error = "dance: " + loop->error();

@@ -36,7 +36,7 @@ struct SitlConfig {
   bool inject_fault = false;
   Injection inject{};
   // false: the recovery step's trigger on the soles, not the image's holdable soles
-  // (RecoveryStepConfig::ankle_pitch_capacity_Nm 0; kuavo_fw_sim --holdable-soles off).
+  // (planner::set_holdable_soles; kuavo_fw_sim --holdable-soles off).
   bool holdable_soles = true;
 };
 

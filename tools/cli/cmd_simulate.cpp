@@ -153,7 +153,7 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.use_truth_state = state == "truth";
   motion_cfg.stack.recovery.enabled = recovery == "on";
   motion_cfg.stack.recovery.early_touchdown = early_touchdown == "on";
-  if (holdable == "off") motion_cfg.stack.recovery.ankle_pitch_capacity_Nm = 0.0;
+  planner::set_holdable_soles(motion_cfg.stack.recovery, holdable == "on");
   motion_cfg.stack.liftoff_hold.enabled = liftoff_hold == "on";
   motion_cfg.stack.lean_trim.enabled = lean_trim == "on";
   motion_cfg.stack.anchor.enabled = anchor == "on";

@@ -207,8 +207,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
 
   // Closed-loop verification: the output danced by the online stack in the simulator, as
   // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model; with --holdable-soles off
-  // when verify_holdable_soles is), on each ground and then in MuJoCo. Where it falls, the seconds before the fall are repaired (verification_range's
-  // ladder) and the motion optimized again, up to verify_rounds times.
+  // when verify_holdable_soles is), on each ground and then in MuJoCo. Where it falls, the
+  // seconds before the fall are repaired (verification_range's ladder) and the motion
+  // optimized again, up to verify_rounds times.
   ordered_json verification_runs = ordered_json::array();
   bool danced = true;
   int verify_round = 0;
@@ -287,7 +288,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         const Check& check = checks[i];
         sim::MotionRunConfig cfg;
         cfg.stack.planner = stack::PlannerKind::kMpc;
-        if (!options.verify_holdable_soles) cfg.stack.recovery.ankle_pitch_capacity_Nm = 0.0;  // the soles
+        planner::set_holdable_soles(cfg.stack.recovery, options.verify_holdable_soles);
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
