@@ -183,7 +183,8 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
 // if ξ at that touchdown, propagated from the measured state, misses the support it makes
 // by early_trigger_m more than the motion's own ξ does, and no landing within reach on the
 // motion's clock captures it, the swing lands early_lead_s from now beyond ξ then, if that
-// captures. In double support it does nothing (the step below is for that).
+// captures; only where the motion's own ξ at its touchdown lies inside the support it makes
+// (early_plan_margin_min_m). In double support it does nothing (the step below is for that).
 void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, const MotionPlan& motion,
                       hal::TimeNs motion_lag_ns, const PlanKnot& m, const PlanWindow& window, const Vec2& plan_offset,
                       bool blocked) {
@@ -262,6 +263,11 @@ void maybe_land_early(const RecoveryStepConfig& cfg, RecoveryStepState& st, cons
   const Vec2 plan_p = project_into(convex_hull<kCornersPerFoot>(planned_stance, kCornersPerFoot), plan_cp.xi, 0.0);
   const Vec2 plan_xi_motion = plan_p + (plan_cp.xi - plan_p) * std::exp(plan_cp.omega * t_motion);
   const double plan_margin = signed_margin(convex_hull<kNumPoints>(planned, kNumPoints), plan_xi_motion);
+  // Only where the motion's own touchdown holds its ξ (early_plan_margin_min_m).
+  if (!(plan_margin >= cfg.early_plan_margin_min_m)) {
+    st.early_calls = 0;
+    return;
+  }
   // Beyond the motion's own (a dance's swing may plan ξ outside: the next double support
   // brings it back). A non-finite state fails the comparison: no early touchdown from it.
   if (!(margin_motion < std::min(plan_margin, 0.0) - cfg.early_trigger_m)) {
@@ -397,7 +403,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
                            c.reach_ahead_m,     c.reach_behind_m,  c.min_width_m,    c.max_width_m,
                            c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m,
                            c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s,
-                           c.ankle_pitch_capacity_Nm};
+                           c.early_plan_margin_min_m, c.ankle_pitch_capacity_Nm};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }

@@ -99,8 +99,8 @@
 // recovery_step_loop_test); at 2 m/s perfume lands at 0.25 s and falls all the same. What
 // separates them: the motion's own ξ at its touchdown, inside the support it makes in every
 // rescue (margin +0.03…+0.08 m), 0.06–0.12 m outside in perfume's (a dynamic stride the next
-// steps catch, which one early landing does not model); a trigger gated on that needs this
-// file's test fixture rebuilt (its plan stands on one foot with the CoM between the feet).
+// steps catch, which one early landing does not model): since stop 68 the early touchdown
+// needs that margin to be at least early_plan_margin_min_m (0).
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
@@ -171,6 +171,14 @@ struct RecoveryStepConfig {
   // those runs danced to the end with the motion's clock; the ones in cmu_05_20's 0.67 s first
   // swing (seeds 4, 56) stood, and fell without it. Leju's gait steps in 0.4–0.45 s.
   double early_min_swing_s = 0.5;
+  // … and only where the motion's own ξ at its touchdown (as above) lies at least this far
+  // inside the support that touchdown makes. A motion that plans ξ outside there (a dynamic
+  // stride its next steps catch) is not one a single early landing models: with perfume's
+  // f9d2e95a (stop 67) the trigger fired at 18.7 s, where the motion's own margin is −0.06 to
+  // −0.12 m, landed the foot 0.48 m away and 7 of the 10 runs that did fell; every rescue
+  // measured (cmu_05_20's first swing, seeds 4, 56, 100; recovery_step_loop_test) has +0.03
+  // to +0.08 m.
+  double early_plan_margin_min_m = 0.0;
 
   // Holdable soles (0: off, the soles' corners): the trigger takes each foot's sole only as far
   // from its ankle, ahead and behind, as this much pitch holds the foot's share of the weight

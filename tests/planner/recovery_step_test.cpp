@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <memory>
 
 #include "controllers/planner/support_polygon.h"
@@ -91,10 +92,13 @@ struct Fixture {
   explicit Fixture(double ankle_pitch_capacity_Nm) : Fixture() {
     config.ankle_pitch_capacity_Nm = ankle_pitch_capacity_Nm;
   }
+  // Applied to each sampled window before the call (empty: the motion's window as sampled).
+  std::function<void(PlanWindow&)> shape_plan;
   // One planner call at t (s) with the robot standing and moving at `velocity`.
   void call(double t, const Vec2& velocity, const Vec2& plan_offset = Vec2::Zero()) {
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), data, *motion, t_ns, kDt, kKnots, *window);
+    if (shape_plan) shape_plan(*window);
     *untouched = *window;
     recovery_step_rt(s45_robot(), config, *state, *motion,
                      kuavo::test::measured_knot(standing_configuration(), translating(velocity), t_ns), *window, 0,
@@ -521,6 +525,7 @@ TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
     fresh->cache_count = 0;
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
+    if (f.shape_plan) f.shape_plan(*fresh_window);
     recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion,
                      kuavo::test::measured_knot(standing_configuration(), translating(v), t_ns), *fresh_window);
     {
@@ -550,8 +555,10 @@ TEST(RecoveryStep, ReusingThePreviousCallsKnotsChangesNoBit) {
 // on its right foot, moves left so that ξ lies at the left sole's outer edge. Propagated to
 // the motion's touchdown (0.7 s on, the centre of pressure at the right sole's inner edge) ξ
 // is far beyond the left foot's landing; 0.15 s on it is not yet: the left foot lands then,
-// beyond it. Oracle: the pendulum in closed form on the soles' axis-aligned edges, and the
-// rewritten knots' corners by forward kinematics.
+// beyond it. The motion's own ξ (its knots' CoM velocity; the frames stand still) sits on the
+// right sole's inner edge, so its touchdown holds it (the motion's margin there is positive,
+// as in the rescues measured: recovery_step.h). Oracle: the pendulum in closed form on the
+// soles' axis-aligned edges, and the rewritten knots' corners by forward kinematics.
 struct EarlyTouchdown {
   Fixture f;
   Standing s = standing_geometry();
@@ -563,6 +570,16 @@ struct EarlyTouchdown {
     for (int i = 0; i < kCornersPerFoot; ++i) inner_y = std::max(inner_y, s.corner[kRightFoot * kCornersPerFoot + i].y());
     for (const Vec3& c : s.corner) toe_x = std::max(toe_x, c.x());
     velocity = Vec2(0.0, (s.outer_y + xi_beyond_outer_m - s.com.y()) * s.omega);
+    plan_xi_at(Vec2(s.com.x(), inner_y));
+  }
+  // The whole robot's velocity that puts ξ at `xi` (horizontal).
+  Vec2 velocity_to(const Vec2& xi) const { return (xi - s.com.head<2>()) * s.omega; }
+  // Every knot's CoM velocity puts the motion's own ξ at `xi`.
+  void plan_xi_at(const Vec2& xi) {
+    const Vec2 v = velocity_to(xi);
+    f.shape_plan = [v](PlanWindow& w) {
+      for (int k = 0; k < w.count; ++k) w.knots[k].com_velocity_m_s.head<2>() = v;
+    };
   }
   // ξ after t seconds with the centre of pressure at the right sole's point nearest ξ.
   Vec2 xi_after(double t) const { return xi_after(t, velocity); }
@@ -658,6 +675,7 @@ TEST(RecoveryStep, NoEarlyTouchdownWhenTheMotionsTouchdownCatches) {
 // brings it back). Measured = planned: nothing changes.
 TEST(RecoveryStep, NoEarlyTouchdownWhereTheMotionItselfPlansCapturePointOutside) {
   EarlyTouchdown e(0.0);
+  e.f.shape_plan = nullptr;  // the frames' own CoM velocity: zero
   EXPECT_GT(e.xi_after(0.7, Vec2::Zero()).y() - e.s.outer_y, 0.2) << "the premise: the plan's ξ misses by far";
   for (int i = 0; i < 5; ++i) {
     e.f.call(1.1 + kDt * i, Vec2::Zero());
@@ -666,15 +684,42 @@ TEST(RecoveryStep, NoEarlyTouchdownWhereTheMotionItselfPlansCapturePointOutside)
   EXPECT_EQ(e.f.state->early_touchdowns, 0u);
 }
 
-// ξ 2 cm beside the plan's, the motion's touchdown 0.4 s away: ξ then misses the motion's
-// landing by several cm more than the plan's, but a landing within the reach box on the
+// perfume's case (stop 67): the motion's own ξ at its touchdown 6 cm outside the support that
+// touchdown makes (a stride its next steps catch), the measured ξ much farther out, a landing
+// 0.15 s from now would capture it: the relative trigger holds, but the motion's own
+// touchdown does not hold its ξ (early_plan_margin_min_m 0): it lands on the motion's clock.
+// The control: with the gate lowered past the motion's margin it lands early.
+TEST(RecoveryStep, NoEarlyTouchdownWhereTheMotionsOwnTouchdownMissesItsCapturePoint) {
+  const auto plan_6cm_out = [](EarlyTouchdown& e) {
+    // ξ now such that 0.69 s on (between the two calls' times to touchdown) it lies 6 cm
+    // beyond the left sole's outer edge, the support's edge on that side.
+    const double t = 0.7 - 0.5 * kDt;
+    const Vec2 p(e.s.com.x(), e.inner_y);
+    e.plan_xi_at(p + Vec2(0.0, e.s.outer_y + 0.06 - e.inner_y) * std::exp(-e.s.omega * t));
+  };
+  EarlyTouchdown e(0.0), control(0.0);
+  plan_6cm_out(e);
+  plan_6cm_out(control);
+  control.f.config.early_plan_margin_min_m = -0.2;
+  EXPECT_GT(e.xi_after(0.7).y() - e.s.outer_y, 0.3) << "the premise: the measured ξ misses by far more";
+  for (int i = 0; i < 3; ++i) {
+    e.f.call(1.1 + kDt * i, e.velocity);
+    EXPECT_TRUE(e.f.window_unchanged()) << i;
+    control.f.call(1.1 + kDt * i, control.velocity);
+  }
+  EXPECT_EQ(e.f.state->early_touchdowns, 0u);
+  EXPECT_EQ(control.f.state->early_touchdowns, 1u);
+}
+
+// ξ 2 cm left of the CoM (the plan's on the right sole's inner edge), the motion's touchdown
+// 0.4 s away: ξ then misses the motion's landing by several cm more than the plan's, but a landing within the reach box on the
 // motion's clock captures it: that is the MPC's (it adapts the spot), nothing changes. With
 // the reach box narrowed below that landing, the foot lands early instead.
 TEST(RecoveryStep, NoEarlyTouchdownWhenALandingOnTheMotionsClockCaptures) {
   EarlyTouchdown e(0.0, 1.5);
   const Vec2 velocity(0.0, 0.02 * e.s.omega);
   const double t_motion = 1.5 - 1.1 - kDt;
-  const Vec2 xi_meas = e.xi_after(t_motion, velocity), xi_plan = e.xi_after(t_motion, Vec2::Zero());
+  const Vec2 xi_meas = e.xi_after(t_motion, velocity), xi_plan = e.xi_after(t_motion, e.velocity_to(Vec2(e.s.com.x(), e.inner_y)));
   EXPECT_GT(xi_meas.y() - xi_plan.y(), 0.05) << "the premise: beyond the plan's by more than early_trigger_m";
   EXPECT_GT(xi_meas.y(), e.s.outer_y + e.f.config.early_trigger_m) << "the premise: the motion's landing misses it";
   Vec2 right_centre = Vec2::Zero();
@@ -816,6 +861,7 @@ TEST(RecoveryStep, ReusingKnotsThroughAnEarlyTouchdownChangesNoBit) {
     fresh->cache_count = 0;
     const hal::TimeNs t_ns = static_cast<hal::TimeNs>(std::llround(t * 1e9));
     motion_plan_window_rt(s45_robot(), f.data, *f.motion, t_ns, kDt, kKnots, *fresh_window);
+    if (f.shape_plan) f.shape_plan(*fresh_window);
     recovery_step_rt(s45_robot(), f.config, *fresh, *f.motion,
                      kuavo::test::measured_knot(standing_configuration(), translating(v), t_ns), *fresh_window);
     f.call(t, v);
@@ -867,6 +913,9 @@ TEST(RecoveryStep, ConfigValidation) {
   c.early_min_swing_s = -0.1;
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c.early_min_swing_s = std::nan("");
+  EXPECT_NE(recovery_step_validate(c), nullptr);
+  c = {};
+  c.early_plan_margin_min_m = std::nan("");
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c = {};
   c.ankle_pitch_capacity_Nm = -1.0;
