@@ -712,14 +712,16 @@ TEST(RecoveryStep, NoEarlyTouchdownWhereTheMotionsOwnTouchdownMissesItsCapturePo
 }
 
 // ξ 2 cm left of the CoM (the plan's on the right sole's inner edge), the motion's touchdown
-// 0.4 s away: ξ then misses the motion's landing by several cm more than the plan's, but a landing within the reach box on the
-// motion's clock captures it: that is the MPC's (it adapts the spot), nothing changes. With
-// the reach box narrowed below that landing, the foot lands early instead.
+// 0.4 s away: ξ then misses the motion's landing by several cm more than the plan's, but a
+// landing within the reach box on the motion's clock captures it: that is the MPC's (it adapts
+// the spot), nothing changes. With the reach box narrowed below that landing, the foot lands
+// early instead.
 TEST(RecoveryStep, NoEarlyTouchdownWhenALandingOnTheMotionsClockCaptures) {
   EarlyTouchdown e(0.0, 1.5);
   const Vec2 velocity(0.0, 0.02 * e.s.omega);
   const double t_motion = 1.5 - 1.1 - kDt;
-  const Vec2 xi_meas = e.xi_after(t_motion, velocity), xi_plan = e.xi_after(t_motion, e.velocity_to(Vec2(e.s.com.x(), e.inner_y)));
+  const Vec2 xi_meas = e.xi_after(t_motion, velocity);
+  const Vec2 xi_plan = e.xi_after(t_motion, e.velocity_to(Vec2(e.s.com.x(), e.inner_y)));
   EXPECT_GT(xi_meas.y() - xi_plan.y(), 0.05) << "the premise: beyond the plan's by more than early_trigger_m";
   EXPECT_GT(xi_meas.y(), e.s.outer_y + e.f.config.early_trigger_m) << "the premise: the motion's landing misses it";
   Vec2 right_centre = Vec2::Zero();
