@@ -69,5 +69,30 @@ TEST(VerifyLadder, PushedRunGivenUpOnlyAtTheHoldAfterItsPush) {
   EXPECT_FALSE(gives_up_pushed_run(4.0, 10.0, kLead, kDance, kRate, ladder, scaled));
 }
 
+// A run with the show set's model errors is given up where a range that held both feet down
+// lies under its fall's range: [250, 480), [300, 530), then [270, 500) held (two before it).
+TEST(VerifyLadder, ModelErrorRunGivenUpWhereTheFeetWereAlreadyHeld) {
+  const VerifyLadder ladder{0.5, 2.0, 0.3};
+  std::vector<std::pair<int, int>> scaled = {{250, 480}, {300, 530}};
+  // Two repairs there, neither a hold: the ladder still has its third rung.
+  EXPECT_FALSE(gives_up_held_run(5.0, kLead, kDance, kRate, ladder, scaled));
+  scaled.emplace_back(270, 500);
+  EXPECT_TRUE(gives_up_held_run(5.0, kLead, kDance, kRate, ladder, scaled));
+  // 7.0 s is dance frame 650: [450, 680) overlaps the held [270, 500) by 50 frames.
+  EXPECT_TRUE(gives_up_held_run(7.0, kLead, kDance, kRate, ladder, scaled));
+  // 7.5 s: [500, 730) starts where the held range ends (half-open): not over it, though it
+  // overlaps [300, 530), which scaled without holding.
+  EXPECT_FALSE(gives_up_held_run(7.5, kLead, kDance, kRate, ladder, scaled));
+  EXPECT_FALSE(gives_up_held_run(10.0, kLead, kDance, kRate, ladder, scaled));  // [750, 980)
+  EXPECT_FALSE(gives_up_held_run(0.1, kLead, kDance, kRate, ladder, scaled));   // in the lead-in
+  EXPECT_EQ(scaled.size(), 3u);  // left as it was
+  // Order matters: the same three ranges with the wide one first hold nowhere but the last.
+  const std::vector<std::pair<int, int>> other = {{100, 900}, {250, 480}, {600, 700}};
+  EXPECT_FALSE(gives_up_held_run(5.0, kLead, kDance, kRate, ladder, other));  // [250, 480): over 2nd, 1 before it
+  std::vector<std::pair<int, int>> third = other;
+  third.emplace_back(260, 490);  // two before it overlap: held
+  EXPECT_TRUE(gives_up_held_run(5.0, kLead, kDance, kRate, ladder, third));
+}
+
 }  // namespace
 }  // namespace kuavo::cli

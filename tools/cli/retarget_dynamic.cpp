@@ -382,15 +382,25 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
       }
       entry["fell"] = summary.run.fell;
       entry["fell_at_s"] = summary.run.fell ? summary.run.fell_at_s : -1.0;
-      if (summary.run.fell && pushed) {
+      if (summary.run.fell && show_errors) {
         // Tipped over by its push (within the range the fall would repair) where two earlier
         // rounds' repairs already lie (the gestures scaled, then taken out): the last rung,
         // both feet down, would buy this push with the dance's steps (cmu_05_20: 3 of its 7
         // for the same show campaign, 1 fall in 60 either way). A standing robot is not the
-        // dance; the check gives this run up and goes on.
-        if (gives_up_pushed_run(push.start_s, summary.run.fell_at_s, result.repaired.lead_frames,
-                                result.repaired.dance_frames, rate, ladder, verify_ranges)) {
+        // dance; the check gives this run up and goes on. Likewise, pushed or not, a fall
+        // over feet an earlier round already held down: the ladder has nothing more there
+        // (gives_up_held_run).
+        const char* why = nullptr;
+        if (pushed && gives_up_pushed_run(push.start_s, summary.run.fell_at_s, result.repaired.lead_frames,
+                                          result.repaired.dance_frames, rate, ladder, verify_ranges)) {
+          why = "pushed";
+        } else if (gives_up_held_run(summary.run.fell_at_s, result.repaired.lead_frames, result.repaired.dance_frames,
+                                     rate, ladder, verify_ranges)) {
+          why = "held";
+        }
+        if (why != nullptr) {
           entry["given_up"] = true;
+          entry["given_up_because"] = why;
           verification_runs.push_back(entry);
           given_up.emplace_back(seed, verify_round);
           continue;

@@ -35,4 +35,20 @@ bool gives_up_pushed_run(double push_start_s, double fell_at_s, int lead_frames,
   return verification_range(fell_at_s, lead_frames, dance_frames, rate_hz, ladder, trial, next) && next.hold;
 }
 
+bool gives_up_held_run(double fell_at_s, int lead_frames, int dance_frames, double rate_hz, const VerifyLadder& ladder,
+                       const std::vector<std::pair<int, int>>& scaled) {
+  std::vector<std::pair<int, int>> trial;
+  VerifyRange range;
+  if (!verification_range(fell_at_s, lead_frames, dance_frames, rate_hz, ladder, trial, range)) return false;
+  // Replay the ladder over the earlier ranges, in order: the i-th held the feet down if two
+  // before it overlapped it.
+  for (std::size_t i = 0; i < scaled.size(); ++i) {
+    const auto& [a, b] = scaled[i];
+    int before = 0;
+    for (std::size_t j = 0; j < i; ++j) before += a < scaled[j].second && scaled[j].first < b;
+    if (before >= 2 && range.a < b && a < range.b) return true;
+  }
+  return false;
+}
+
 }  // namespace kuavo::cli

@@ -37,4 +37,14 @@ bool verification_range(double fell_at_s, int lead_frames, int dance_frames, dou
 bool gives_up_pushed_run(double push_start_s, double fell_at_s, int lead_frames, int dance_frames, double rate_hz,
                          const VerifyLadder& ladder, const std::vector<std::pair<int, int>>& scaled);
 
+// Whether the check gives up a run with the show set's model errors (pushed or not) that fell
+// at fell_at_s where an earlier round already held both feet down: the range the fall would
+// repair overlaps one that verification_range made a hold (two earlier ranges over it when it
+// came). The ladder has no stronger rung; holding again only moves the held range, and the
+// round's remaining runs go unchecked (cmu_05_07 at 50d3af2: one show-set seed fell at
+// 8.8-10.8 s in rounds 6-8 and 10-16 over held feet, and the round written fell in another at
+// 4.0 s). The runs without model errors are never given up. `scaled` is left as it is.
+bool gives_up_held_run(double fell_at_s, int lead_frames, int dance_frames, double rate_hz, const VerifyLadder& ladder,
+                       const std::vector<std::pair<int, int>>& scaled);
+
 }  // namespace kuavo::cli
