@@ -4,6 +4,20 @@
 #include <cmath>
 
 namespace kuavo::cli {
+namespace {
+
+// A fall's range over which this many earlier ranges lie holds both feet down (the ladder's
+// third rung).
+constexpr int kHoldAfter = 2;
+
+// How many of the first `count` ranges overlap [a, b).
+int ranges_over(const std::vector<std::pair<int, int>>& ranges, std::size_t count, int a, int b) {
+  int n = 0;
+  for (std::size_t i = 0; i < count; ++i) n += a < ranges[i].second && ranges[i].first < b;
+  return n;
+}
+
+}  // namespace
 
 bool verification_range(double fell_at_s, int lead_frames, int dance_frames, double rate_hz, const VerifyLadder& ladder,
                         std::vector<std::pair<int, int>>& scaled, VerifyRange& out) {
@@ -18,11 +32,10 @@ bool verification_range(double fell_at_s, int lead_frames, int dance_frames, dou
   // stay down over the range (the upper body's 1 s average goes on); with that, cmu_05_07
   // and cmu_05_20 danced floor and carpet (seed 1), where without it carpet still fell at
   // 8.1 and 9.4 s after 12 rounds.
-  int before = 0;
-  for (const auto& [pa, pb] : scaled) before += a < pb && pa < b;
+  const int before = ranges_over(scaled, scaled.size(), a, b);
   scaled.emplace_back(a, b);
   const bool again = before > 0;
-  out = {a, b, again ? 0.0 : ladder.gain, again, before >= 2};
+  out = {a, b, again ? 0.0 : ladder.gain, again, before >= kHoldAfter};
   return true;
 }
 
@@ -40,13 +53,11 @@ bool gives_up_held_run(double fell_at_s, int lead_frames, int dance_frames, doub
   std::vector<std::pair<int, int>> trial;
   VerifyRange range;
   if (!verification_range(fell_at_s, lead_frames, dance_frames, rate_hz, ladder, trial, range)) return false;
-  // Replay the ladder over the earlier ranges, in order: the i-th held the feet down if two
-  // before it overlapped it.
+  // Replay the ladder over the earlier ranges, in order: the i-th held the feet down if
+  // kHoldAfter before it overlapped it, as verification_range decided then.
   for (std::size_t i = 0; i < scaled.size(); ++i) {
     const auto& [a, b] = scaled[i];
-    int before = 0;
-    for (std::size_t j = 0; j < i; ++j) before += a < scaled[j].second && scaled[j].first < b;
-    if (before >= 2 && range.a < b && a < range.b) return true;
+    if (ranges_over(scaled, i, a, b) >= kHoldAfter && range.a < b && a < range.b) return true;
   }
   return false;
 }

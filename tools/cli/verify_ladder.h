@@ -1,6 +1,6 @@
 // The closed-loop check's repair ladder (`kuavo retarget`'s verification, retarget_dynamic.cpp):
 // where the retargeted motion falls in the check, which frames are repaired and how, and when
-// the check gives up a pushed run instead.
+// the check gives up a run instead (pushed over, or fallen over feet already held).
 #pragma once
 
 #include <utility>
