@@ -42,12 +42,14 @@ void sense_motion_rt(const model::Model& m, dynamics::Data& data, const planner:
   imu.valid = true;
 }
 
-// Rank floor(n p / 100) of the sorted samples (tools/bench's rule), in us.
-StageFigures figures(std::vector<double>& us, double deadline_us) {
+// Rank floor(n p / 100) of the sorted samples (tools/bench's rule), in us; at_s: each
+// sample's motion time (empty: not kept).
+StageFigures figures(std::vector<double>& us, double deadline_us, const std::vector<double>& at_s = {}) {
   StageFigures f;
   f.samples = us.size();
   if (us.empty()) return f;
   for (double x : us) f.deadline_misses += x > deadline_us;
+  if (at_s.size() == us.size()) f.max_at_s = at_s[static_cast<std::size_t>(std::max_element(us.begin(), us.end()) - us.begin())];
   std::sort(us.begin(), us.end());
   const auto at = [&](double p) {
     return us[std::min(us.size() - 1, static_cast<std::size_t>(static_cast<double>(us.size()) * p / 100.0))];
@@ -74,7 +76,7 @@ struct TimedControl {
   dynamics::Data* data;
   planner::PlanKnot* knot;
   std::vector<unsigned char>* evict;
-  std::vector<double>*drivers_us, *estimator_us, *wbc_us, *output_us, *cycle_us;
+  std::vector<double>*drivers_us, *estimator_us, *wbc_us, *output_us, *cycle_us, *motion_s;
   std::uint64_t* dance_ticks;
   std::atomic<bool>* done;
   drivers::emulator::PlantJoints joints{};
@@ -102,6 +104,7 @@ struct TimedControl {
       wbc_us->push_back(1e-3 * static_cast<double>(st.wbc_done_ns - st.estimator_done_ns));
       output_us->push_back(1e-3 * static_cast<double>((s.cycled_ns - s.received_ns) - (st.wbc_done_ns - st.start_ns)));
       cycle_us->push_back(1e-3 * static_cast<double>(s.sent_ns - s.start_ns));
+      motion_s->push_back(1e-9 * static_cast<double>(t_motion));
     }
     if (task->done || task->firmware->mode.latched != Fault::kNone || cycle_us->size() == cycle_us->capacity()) {
       done->store(true, std::memory_order_release);
@@ -139,8 +142,8 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   const hal::TimeNs period_ns = fw_config.control_period_ns;
   const hal::TimeNs motion_ns = static_cast<hal::TimeNs>(std::llround(planner::motion_plan_duration_s(motion) * 1e9));
   const std::size_t max_ticks = static_cast<std::size_t>((kBringUp_ns + motion_ns + kAfterMotion_ns) / period_ns);
-  std::vector<double> drivers_us, estimator_us, wbc_us, output_us, cycle_us, mpc_us;
-  for (auto* v : {&drivers_us, &estimator_us, &wbc_us, &output_us, &cycle_us}) v->reserve(max_ticks);
+  std::vector<double> drivers_us, estimator_us, wbc_us, output_us, cycle_us, motion_s, mpc_us;
+  for (auto* v : {&drivers_us, &estimator_us, &wbc_us, &output_us, &cycle_us, &motion_s}) v->reserve(max_ticks);
   mpc_us.reserve(max_ticks / 5 + 1);
 
   ControlTask task;
@@ -155,7 +158,7 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
 
   std::atomic<bool> done{false};
   TimedControl control{&m, &motion, &task, &dance, buses.get(), data.get(), knot.get(), &evict, &drivers_us, &estimator_us,
-                       &wbc_us, &output_us, &cycle_us, &report.dance_ticks, &done};
+                       &wbc_us, &output_us, &cycle_us, &motion_s, &report.dance_ticks, &done};
   TimedPlanner plan{&planner, &channels, &mpc_us};
   // As kuavo_fw runs them: the planner first (lower priority), then the control task.
   rtos::PeriodicTask planner_task, control_task;
@@ -193,11 +196,11 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   report.fault = firmware.mode.latched;
   report.danced_to_end = task.danced_until_ns >= 0 && report.fault == Fault::kNone;
   const double control_deadline_us = 1e-3 * static_cast<double>(period_ns);
-  report.drivers = figures(drivers_us, control_deadline_us);
-  report.estimator = figures(estimator_us, control_deadline_us);
-  report.wbc = figures(wbc_us, control_deadline_us);
-  report.output = figures(output_us, control_deadline_us);
-  report.cycle = figures(cycle_us, control_deadline_us);
+  report.drivers = figures(drivers_us, control_deadline_us, motion_s);
+  report.estimator = figures(estimator_us, control_deadline_us, motion_s);
+  report.wbc = figures(wbc_us, control_deadline_us, motion_s);
+  report.output = figures(output_us, control_deadline_us, motion_s);
+  report.cycle = figures(cycle_us, control_deadline_us, motion_s);
   report.mpc = figures(mpc_us, 1e-3 * static_cast<double>(fw_config.planner_period_ns));
   return true;
 }
@@ -205,13 +208,15 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
 std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, hal::TimeNs planner_period_ns) {
   std::string out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-10s %8s %10s %10s %10s %10s %8s %8s\n", "stage", "samples", "p50 us", "p99 us",
-                "p99.99 us", "max us", "deadline", "misses");
+  std::snprintf(line, sizeof line, "%-10s %8s %10s %10s %10s %10s %8s %8s %9s\n", "stage", "samples", "p50 us", "p99 us",
+                "p99.99 us", "max us", "deadline", "misses", "max at s");
   out += line;
   const auto row = [&](const char* name, const StageFigures& f, hal::TimeNs deadline_ns) {
-    std::snprintf(line, sizeof line, "%-10s %8llu %10.1f %10.1f %10.1f %10.1f %6.0fms %8llu\n", name,
+    char at[32] = "        -";
+    if (f.max_at_s >= 0.0) std::snprintf(at, sizeof at, "%9.2f", f.max_at_s);
+    std::snprintf(line, sizeof line, "%-10s %8llu %10.1f %10.1f %10.1f %10.1f %6.0fms %8llu %s\n", name,
                   static_cast<unsigned long long>(f.samples), f.p50_us, f.p99_us, f.p9999_us, f.max_us,
-                  1e-6 * static_cast<double>(deadline_ns), static_cast<unsigned long long>(f.deadline_misses));
+                  1e-6 * static_cast<double>(deadline_ns), static_cast<unsigned long long>(f.deadline_misses), at);
     out += line;
   };
   row("drivers", r.drivers, control_period_ns);

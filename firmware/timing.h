@@ -38,6 +38,9 @@ inline constexpr std::size_t kEvictBytes = 64u << 20;
 struct StageFigures {
   double p50_us = 0.0, p99_us = 0.0, p9999_us = 0.0, max_us = 0.0;
   std::uint64_t samples = 0, deadline_misses = 0;
+  // Motion time of the slowest sample [s] (−1: none, or the MPC's): the same time run after
+  // run points at the work that tick does, a different one at the machine.
+  double max_at_s = -1.0;
 };
 
 struct TimingReport {

@@ -356,6 +356,22 @@ TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
   EXPECT_GE(ticks + skipped, 1748) << "ticks " << ticks << ", skipped " << skipped;
   for (const char* stage : {"drivers", "estimator", "wbc", "output"}) EXPECT_EQ(stage_samples(r.output, stage), ticks) << stage;
   EXPECT_NEAR(stage_samples(r.output, "mpc"), 175, 5);
+  // Each control stage's last column: the motion time of its slowest tick, within the 3.5 s
+  // the stack runs (2 s motion, 0.5 s settle, 1 s finish); the MPC's has none ("-").
+  for (const char* stage : {"drivers", "estimator", "wbc", "output", "cycle", "mpc"}) {
+    const std::size_t row = r.output.find(std::string("\n") + stage + " ");
+    ASSERT_NE(row, std::string::npos) << stage;
+    const std::size_t end = r.output.find('\n', row + 1);
+    const std::size_t last = r.output.rfind(' ', end) + 1;
+    const std::string at = r.output.substr(last, end - last);
+    if (std::string(stage) == "mpc") {
+      EXPECT_EQ(at, "-") << r.output;
+    } else {
+      char* parsed_end = nullptr;
+      const double at_s = std::strtod(at.c_str(), &parsed_end);
+      EXPECT_TRUE(parsed_end != at.c_str() && at_s >= 0.0 && at_s <= 3.5) << stage << " '" << at << "'\n" << r.output;
+    }
+  }
   EXPECT_EQ(r.exit_code == 3, r.output.find("deadline misses") != std::string::npos) << r.output;
   r = run_fw("--timing /nonexistent/dance.motion");
   EXPECT_EQ(r.exit_code, 2) << r.output;
