@@ -186,6 +186,8 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
   control.duration_ns = static_cast<hal::TimeNs>(std::llround(planner::motion_plan_duration_s(motion) * 1e9));
   control.running = false;
   control.counters = DanceCounters{};
+  kinematic_plan_rt(control, 0);
+  control.first_plan = control.scratch_plan;
   planner.model = &model;
   planner.config = &control.config;
   planner.motion = &motion;
@@ -256,8 +258,7 @@ void dance_before_cycle_rt(DanceControl& d, const Firmware& fw, hal::TimeNs now_
 bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal::SensorFrame& sensors,
                    hal::TimeNs now_ns, hal::CommandFrame& out) noexcept {
   if (!d.running) {
-    kinematic_plan_rt(d, 0);
-    if (!stack::stack_begin_rt(*d.model, d.config, d.stack, *d.motion, d.scratch_plan, sensors, 0)) {
+    if (!stack::stack_begin_rt(*d.model, d.config, d.stack, *d.motion, d.first_plan, sensors, 0)) {
       ++d.counters.begin_failures;
       return false;
     }

@@ -127,6 +127,9 @@ struct DanceControl {
   dynamics::Data data;
   planner::PlanWindow window;
   planner::ReferencePlan scratch_plan;
+  // The first plan (the motion's knots from time 0), made once by dance_init: made in the
+  // dance's first tick, the worst cycle of a whole dance, it cost that tick ~29 us.
+  planner::ReferencePlan first_plan;
   hal::CommandFrame standing_command{};  // the cross-fade's other law
   hal::TimeNs blend_ns = 0, settle_ns = 0, stale_ns = 0;  // from FirmwareConfig
   hal::TimeNs duration_ns = 0;                            // the motion's
