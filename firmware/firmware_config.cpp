@@ -44,6 +44,7 @@ bool validate_firmware_config(const FirmwareConfig& c, std::string& message) {
   if (c.planner_fifo_priority < 0 || c.planner_fifo_priority >= c.fifo_priority)
     return fail(message, "planner_fifo_priority must be in [0, fifo_priority)");
   if (c.planner_cpu < -1) return fail(message, "planner_cpu must be -1 (no pinning) or a CPU index");
+  if (c.cpu_dma_latency_us < -1) return fail(message, "cpu_dma_latency_us must be -1 (leave alone) or a bound in us");
   return true;
 }
 

@@ -69,6 +69,9 @@ struct FirmwareConfig {
   // control tick on a shared core; on its own core when planner_cpu is set.
   int planner_fifo_priority = 70;
   int planner_cpu = -1;  // -1: no pinning
+  // The CPUs' idle-exit latency bound while the firmware runs (rtos::RtConfig): 0 = no idle
+  // state that takes time to leave. -1 leaves the system's setting.
+  int cpu_dma_latency_us = 0;
 };
 
 // Checks ranges and consistency; false with a message naming the field.

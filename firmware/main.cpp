@@ -49,7 +49,8 @@ constexpr const char* kUsage =
     "                       lift-off)\n"
     "  --check              validate the configuration (and the --dance motion), print the bus plan\n"
     "                       and loads, exit\n"
-    "  --require-rt         refuse to run without mlockall, SCHED_FIFO and CPU affinity\n"
+    "  --require-rt         refuse to run without mlockall, SCHED_FIFO, CPU affinity and the CPU\n"
+    "                       idle-latency request (/dev/cpu_dma_latency)\n"
     "  --stand              request stand-up once the self-check has passed\n"
     "  --dance MOTION_FILE  a robot motion file from `kuavo retarget` (this robot's variant): stand up\n"
     "                       to its first frame, dance it with the online stack (estimator, MPC 50 Hz,\n"
@@ -272,6 +273,7 @@ int run(int argc, char** argv) {
   rt.fifo_priority = fw_config.fifo_priority;
   rt.cpu = fw_config.cpu;
   rt.lock_memory = true;
+  rt.cpu_dma_latency_us = fw_config.cpu_dma_latency_us;
   rt.on_failure = require_rt ? rtos::RtFailurePolicy::kRequire : rtos::RtFailurePolicy::kBestEffort;
   if (timing) {
     return run_timing_command(model, drivers, fw_config, memory->motion, rt, evict_cache, memory->dance, memory->planner,

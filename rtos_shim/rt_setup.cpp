@@ -1,11 +1,15 @@
 #include "rtos_shim/rt_setup.h"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
+#include <mutex>
 
 namespace kuavo::rtos {
 namespace {
@@ -25,6 +29,25 @@ constexpr std::size_t kPageBytes = 4096;
   asm volatile("" : : "r"(buffer) : "memory");
 }
 
+// The PM QoS request's file: open for the life of the process once a task asked (closing it
+// would drop the request). A later request writes its value on the same file. Two tasks may
+// start at once: the mutex (start-up only) keeps it one file.
+int g_cpu_dma_latency_fd = -1;
+std::mutex g_cpu_dma_latency_mutex;
+
+// 0 or the errno of the failed call.
+int request_cpu_dma_latency(int latency_us) noexcept {
+  const std::lock_guard<std::mutex> lock(g_cpu_dma_latency_mutex);
+  if (g_cpu_dma_latency_fd < 0) {
+    g_cpu_dma_latency_fd = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+    if (g_cpu_dma_latency_fd < 0) return errno;
+  }
+  const std::int32_t value = latency_us;
+  const ssize_t n = ::write(g_cpu_dma_latency_fd, &value, sizeof value);
+  if (n == static_cast<ssize_t>(sizeof value)) return 0;
+  return n < 0 ? errno : EIO;
+}
+
 }  // namespace
 
 bool RtStatus::ok() const noexcept {
@@ -41,6 +64,7 @@ const char* rt_step_call_name(RtStep step) noexcept {
     case RtStep::kCpuAffinity: return "pthread_setaffinity_np";
     case RtStep::kSchedFifo: return "pthread_setschedparam(SCHED_FIFO)";
     case RtStep::kThreadCreate: return "thread creation";
+    case RtStep::kCpuDmaLatency: return "write(/dev/cpu_dma_latency)";
   }
   return "unknown step";
 }
@@ -76,7 +100,7 @@ RtStatus apply_realtime_to_this_thread(const RtConfig& config) noexcept {
       return status;  // a wrong number is a bug, not a missing privilege: never continue
     }
   }
-  if (config.cpu < -1 || config.cpu >= CPU_SETSIZE) {
+  if (config.cpu < -1 || config.cpu >= CPU_SETSIZE || config.cpu_dma_latency_us < -1) {
     status.set_failed(RtStep::kConfig, EINVAL);
     return status;
   }
@@ -85,6 +109,14 @@ RtStatus apply_realtime_to_this_thread(const RtConfig& config) noexcept {
   if (config.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
     status.set_failed(RtStep::kLockMemory, errno);
     if (require) return status;
+  }
+
+  if (config.cpu_dma_latency_us >= 0) {
+    const int e = request_cpu_dma_latency(config.cpu_dma_latency_us);
+    if (e != 0) {
+      status.set_failed(RtStep::kCpuDmaLatency, e);
+      if (require) return status;
+    }
   }
 
   if (config.cpu >= 0) {

@@ -20,8 +20,9 @@ enum class RtStep : std::uint8_t {
   kCpuAffinity = 2,  // pthread_setaffinity_np
   kSchedFifo = 3,    // pthread_setschedparam(SCHED_FIFO)
   kThreadCreate = 4, // creating the task's thread
+  kCpuDmaLatency = 5, // open + write /dev/cpu_dma_latency (the PM QoS request)
 };
-inline constexpr std::size_t kNumRtSteps = 5;
+inline constexpr std::size_t kNumRtSteps = 6;
 
 // What the caller wants when a step is refused.
 enum class RtFailurePolicy : std::uint8_t {
@@ -36,6 +37,13 @@ struct RtConfig {
   int cpu = -1;
   // mlockall(MCL_CURRENT | MCL_FUTURE): no page faults later. Process-wide.
   bool lock_memory = false;
+  // The CPU idle states' exit latency bound [us], process-wide, for the life of the process
+  // (/dev/cpu_dma_latency, the kernel's PM QoS request: held while the file stays open).
+  // 0 keeps the CPUs out of every idle state that takes time to leave, as cyclictest does:
+  // a deep C-state (each state's exit latency is in /sys/devices/system/cpu/cpu*/cpuidle/
+  // state*/latency) or, in a VM, a halted vCPU the host must reschedule, is a wake-up late
+  // by that much. -1 leaves it alone.
+  int cpu_dma_latency_us = -1;
   // Stack touched once after setup so its pages are resident before the loop
   // (with lock_memory they then stay). 64 KiB covers the loop bodies we run.
   std::size_t stack_prefault_bytes = 64 * 1024;

@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
+#include <cstdint>
 #include <thread>
 
 namespace kuavo::rtos {
@@ -53,6 +57,30 @@ TEST(RtosRtSetup, RequireStopsAtTheFirstRefusalBestEffortTriesAll) {
   if (s.failed(RtStep::kSchedFifo)) {
     EXPECT_NE(s.describe().find("pthread_setschedparam(SCHED_FIFO)"), std::string::npos);
   }
+}
+
+// The idle-latency bound is the kernel's PM QoS request: /dev/cpu_dma_latency reads back the
+// bound in force (the least of every open request; 2e9 us when there is none), which this
+// process's request of 0 makes 0 for as long as the process lives. Without the device or the
+// permission (not root) the step is refused by name, with its errno.
+TEST(RtosRtSetup, CpuDmaLatencyRequestIsHeldByTheKernel) {
+  RtConfig c;
+  c.on_failure = RtFailurePolicy::kBestEffort;
+  c.cpu_dma_latency_us = -2;
+  EXPECT_TRUE(apply_on_scratch_thread(c).failed(RtStep::kConfig));
+  c.cpu_dma_latency_us = 0;
+  const RtStatus s = apply_on_scratch_thread(c);
+  if (s.failed(RtStep::kCpuDmaLatency)) {
+    EXPECT_NE(s.describe().find("write(/dev/cpu_dma_latency) failed"), std::string::npos) << s.describe();
+    GTEST_SKIP() << "no PM QoS request here: " << s.describe();
+  }
+  EXPECT_TRUE(s.ok()) << s.describe();
+  const int fd = ::open("/dev/cpu_dma_latency", O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  std::int32_t bound_us = -1;
+  EXPECT_EQ(::read(fd, &bound_us, sizeof bound_us), static_cast<ssize_t>(sizeof bound_us));
+  ::close(fd);
+  EXPECT_EQ(bound_us, 0);
 }
 
 TEST(RtosRtSetup, DescribeNamesEveryFailedCallWithItsErrno) {
