@@ -49,7 +49,10 @@ StageFigures figures(std::vector<double>& us, double deadline_us, const std::vec
   f.samples = us.size();
   if (us.empty()) return f;
   for (double x : us) f.deadline_misses += x > deadline_us;
-  if (at_s.size() == us.size()) f.max_at_s = at_s[static_cast<std::size_t>(std::max_element(us.begin(), us.end()) - us.begin())];
+  if (at_s.size() == us.size()) {
+    const auto slowest = std::max_element(us.begin(), us.end()) - us.begin();
+    f.max_at_s = at_s[static_cast<std::size_t>(slowest)];
+  }
   std::sort(us.begin(), us.end());
   const auto at = [&](double p) {
     return us[std::min(us.size() - 1, static_cast<std::size_t>(static_cast<double>(us.size()) * p / 100.0))];
