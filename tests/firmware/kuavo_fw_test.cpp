@@ -12,7 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "firmware/firmware_config.h"
+#include "firmware/fault.h"
 #include "tests/support/test_robot.h"
 #include "tools/mocap/motion_file.h"
 
@@ -334,9 +334,11 @@ TEST(KuavoFw, TimingRunsTheWholeMotionThroughTheTaskBodies) {
   for (int attempt = 0; attempt < 5; ++attempt) {
     r = run_fw("--timing " + motion);
     std::printf("%s", r.output.c_str());
-    const bool stale = r.output.find("dance joint sample stale") != std::string::npos ||
-                       r.output.find("dance IMU sample stale") != std::string::npos ||
-                       r.output.find("dance MPC result too old") != std::string::npos;
+    using kuavo::firmware::Fault;
+    bool stale = false;
+    for (const Fault f : {Fault::kSensorStale, Fault::kImuStale, Fault::kPlanStale}) {
+      stale = stale || r.output.find(std::string("dance ") + kuavo::firmware::to_string(f)) != std::string::npos;
+    }
     if (!stale) break;
     ASSERT_EQ(r.exit_code, 3) << "a staleness fault without a missed deadline:\n" << r.output;
   }
