@@ -193,6 +193,9 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
   planner.motion = &motion;
   planner.epoch = 0;
   planner.last_sequence = 0;
+  planner.plans = 0;
+  planner.rehearsals = 0;
+  planner.rehearsal_failures = 0;
   if (!stack::stack_prepare(model, config, control.stack, planner.ws)) {
     return error = "the online stack could not be prepared (estimator configuration)", false;
   }
@@ -291,14 +294,35 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
   return true;
 }
 
+namespace {
+
+// DancePlanner's rehearsal: the opening planned from a cold start, the plan discarded.
+void rehearse_opening_rt(DancePlanner& p) noexcept {
+  // Before the dance only: afterwards the workspace keeps the dance's counters for the summary.
+  if (!p.rehearse || p.plans != 0 || p.model == nullptr || p.config == nullptr || p.motion == nullptr) return;
+  if (p.config->planner != stack::PlannerKind::kMpc) return;
+  stack::PlannerWorkspace& ws = p.ws;
+  const auto failures = ws.mpc_failures;
+  const auto on_a_stop = ws.plan_positions_on_a_stop;
+  stack::stack_reset_planner_rt(*p.config, ws);
+  stack::stack_plan_rt(*p.model, *p.config, ws, *p.motion, p.motion->q[0], dynamics::VelocityVector::Zero(), 0,
+                       p.rehearsal_plan);
+  ++p.rehearsals;
+  p.rehearsal_failures += ws.mpc_failures - failures;
+  ws.mpc_failures = failures;
+  ws.plan_positions_on_a_stop = on_a_stop;
+}
+
+}  // namespace
+
 bool dance_plan_rt(DancePlanner& p, DanceChannels& channels) noexcept {
   channels.request.update_rt();
-  if (!channels.request.has_value()) return false;
-  const PlanRequest& r = channels.request.front_rt();
-  if (r.epoch == 0) {
+  if (!channels.request.has_value() || channels.request.front_rt().epoch == 0) {
     p.epoch = 0;
+    rehearse_opening_rt(p);
     return false;
   }
+  const PlanRequest& r = channels.request.front_rt();
   if (r.epoch == p.epoch && r.sequence == p.last_sequence) return false;
   if (r.epoch != p.epoch) {
     stack::stack_reset_planner_rt(*p.config, p.ws);

@@ -90,6 +90,16 @@ struct DanceChannels {
 };
 
 // The planning task's state. The MPC workspace is ~15 MB: static storage.
+//
+// Rehearsal: until the dance's first request (stand-up, ready), each planner period plans the motion's
+// opening -- the robot at its first frame, at rest, motion time 0 -- from a cold start and
+// throws the plan away. The dance's first MPC iteration then finds its ~15 MB workspace
+// written 20 ms before, not seconds before: on a VM that write-protects guest memory left
+// unwritten (dirty-page tracking; a page idle 1 s costs 12-15 us at its next write) the
+// first iteration took 40-70 ms, past plan_max_age_ns, and the dance ended in fault 16 at
+// its start. On the NUC the same keeps the caches and TLB warm. The dance's first request
+// resets the workspace (a new epoch: stack_reset_planner_rt), so the dance plans as it
+// would without rehearsals. Rehearsals feed no counter of the stack's (mpc_failures, ...).
 struct DancePlanner {
   const model::Model* model = nullptr;
   const stack::StackConfig* config = nullptr;
@@ -98,6 +108,10 @@ struct DancePlanner {
   std::uint32_t epoch = 0;          // of the last request planned
   std::uint64_t last_sequence = 0;  // of the last request planned
   std::uint64_t plans = 0;
+  bool rehearse = true;             // plan the opening while idle (above)
+  std::uint64_t rehearsals = 0;
+  std::uint64_t rehearsal_failures = 0;  // the MPC did not solve the opening
+  planner::ReferencePlan rehearsal_plan{};
 };
 
 struct DanceCounters {
@@ -228,7 +242,8 @@ void limit_references_rt(const model::Model& m, double slack_rad, hal::CommandFr
 
 // Takes the latest request; if it is new and a dance runs, plans into the channel's back
 // slot and returns true (the caller then publishes: channels.plan.publish_rt(), at once on
-// the robot, after the modelled latency in the lockstep tests). false: nothing to publish.
+// the robot, after the modelled latency in the lockstep tests). false: nothing to publish
+// (idle: a rehearsal of the opening ran, see DancePlanner).
 bool dance_plan_rt(DancePlanner& p, DanceChannels& channels) noexcept;
 
 // The firmware's controller: standing in stand-up and ready, the dance in dance and in

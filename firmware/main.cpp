@@ -366,6 +366,9 @@ int run(int argc, char** argv) {
   if (dancing) {
     // After real time: what the dance's output stage changed or refused is reported, never silent.
     const fw::DanceCounters& c = memory->dance.counters;
+    std::printf("dance: the planner rehearsed the opening %llu times before it (%llu failed)\n",
+                static_cast<unsigned long long>(memory->planner.rehearsals),
+                static_cast<unsigned long long>(memory->planner.rehearsal_failures));
     std::printf("dance: %llu plans taken, %llu rejected (non-finite), %llu kinematic fallbacks, %llu WBC ticks not ok, "
                 "%llu joint references put on a stop (%llu more in finish), %llu torques clipped at peak (largest demand %.2f x peak)\n",
                 static_cast<unsigned long long>(c.plans_taken), static_cast<unsigned long long>(c.plans_rejected),

@@ -193,6 +193,8 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   planner_task.join();
   report.control_overruns = control_task.perf().overruns;
   report.planner_overruns = planner_task.perf().overruns;
+  report.rehearsals = planner.rehearsals;
+  report.rehearsal_failures = planner.rehearsal_failures;
   report.control_skipped_periods = control_task.perf().skipped_periods;
   report.max_wake_latency_us = 1e-3 * static_cast<double>(control_task.perf().max_wake_latency_ns);
 
@@ -229,10 +231,12 @@ std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, h
   row("cycle", r.cycle, control_period_ns);
   row("mpc", r.mpc, planner_period_ns);
   std::snprintf(line, sizeof line,
-                "control task: %llu overruns (%llu periods skipped), worst wake latency %.1f us; planning task: %llu overruns\n",
+                "control task: %llu overruns (%llu periods skipped), worst wake latency %.1f us; planning task: %llu overruns, "
+                "%llu rehearsals of the opening before the dance (%llu failed)\n",
                 static_cast<unsigned long long>(r.control_overruns),
                 static_cast<unsigned long long>(r.control_skipped_periods), r.max_wake_latency_us,
-                static_cast<unsigned long long>(r.planner_overruns));
+                static_cast<unsigned long long>(r.planner_overruns), static_cast<unsigned long long>(r.rehearsals),
+                static_cast<unsigned long long>(r.rehearsal_failures));
   out += line;
   return out;
 }

@@ -278,6 +278,71 @@ TEST(Dance, PlansOfAnEarlierDanceAreDropped) {
   EXPECT_FALSE(in.watch.estimator_diverged);
 }
 
+// Rehearsal (dance.h, DancePlanner): before the dance the idle planner plans the motion's
+// opening from a cold start each period. The oracle is the planner that did not rehearse:
+// the dance's first plan is the same to the bit, rehearsals are each the same plan (none
+// warm-starts the next), they feed none of the stack's counters, and they stop once the
+// dance has been planned (the workspace then keeps the dance's figures for the summary).
+TEST(Dance, RehearsalsBeforeTheDanceLeaveItsFirstPlanUnchanged) {
+  const model::Model& m = test_model();
+  const planner::MotionPlan& motion = standing_motion();
+  Firmware& f = firmware();
+  firmware_init(f, m, FirmwareConfig{}, nullptr);
+  f.mode.mode = Mode::kDance;
+  const hal::SensorFrame s = standing_sensors(motion.q[0].tail<model::kNumJoints>(), 0);
+  hal::CommandFrame out;
+  DancePlanner& p = planner_side();
+  const auto first_plan = [&](bool rehearse, int idle_periods, planner::ReferencePlan& plan,
+                              planner::ReferencePlan* first_rehearsal) {
+    static DanceChannels channels_cold, channels_rehearsed;  // a clean pair for each run
+    DanceChannels& fresh = rehearse ? channels_rehearsed : channels_cold;
+    const char* error = nullptr;
+    ASSERT_TRUE(dance_init(control_side(), p, fresh, m, mpc_stack(), f.config, motion, error)) << error;
+    p.rehearse = rehearse;
+    for (int i = 0; i < idle_periods; ++i) {
+      EXPECT_FALSE(dance_plan_rt(p, fresh));
+      if (i == 0 && first_rehearsal != nullptr) *first_rehearsal = p.rehearsal_plan;
+    }
+    ASSERT_TRUE(dance_step_rt(control_side(), f.standing, s, 0, out));
+    ASSERT_TRUE(dance_plan_rt(p, fresh));
+    plan = fresh.plan.back_rt().plan;
+  };
+  static planner::ReferencePlan cold, rehearsed, first_rehearsal;
+  first_plan(false, 3, cold, nullptr);
+  EXPECT_EQ(p.rehearsals, 0u);
+  first_plan(true, 5, rehearsed, &first_rehearsal);
+  EXPECT_EQ(p.rehearsals, 5u);
+  EXPECT_EQ(p.rehearsal_failures, 0u);
+  EXPECT_EQ(p.ws.mpc_failures, 0);
+  EXPECT_EQ(p.ws.plan_positions_on_a_stop, 0);
+  const auto same = [](const planner::ReferencePlan& a, const planner::ReferencePlan& b, const char* what) {
+    ASSERT_GT(a.count, 0) << what;
+    ASSERT_EQ(a.count, b.count) << what;
+    EXPECT_EQ(a.stamp_ns, b.stamp_ns) << what;
+    for (int k = 0; k < a.count; ++k) {
+      const wbc::WbcReference &x = a.knots[k], &y = b.knots[k];
+      EXPECT_TRUE(x.joint_position_rad == y.joint_position_rad && x.joint_velocity_rad_s == y.joint_velocity_rad_s &&
+                  x.joint_acceleration_rad_s2 == y.joint_acceleration_rad_s2 && x.com_position_m == y.com_position_m &&
+                  x.com_velocity_m_s == y.com_velocity_m_s && x.momentum_rate == y.momentum_rate &&
+                  x.contact_force_N == y.contact_force_N && x.point_position_m == y.point_position_m &&
+                  x.base_euler_zyx_rad == y.base_euler_zyx_rad)
+          << what << ", knot " << k;
+    }
+  };
+  same(cold, rehearsed, "the dance's first plan, without and after rehearsals");
+  same(first_rehearsal, p.rehearsal_plan, "the first and the fifth rehearsal");
+  // The opening planned is the motion's: at rest on both feet, its weight on the ground.
+  double normal_N = 0.0;
+  for (int c = 0; c < model::kNumContactPoints; ++c) normal_N += first_rehearsal.knots[0].contact_force_N[3 * c + 2];
+  EXPECT_NEAR(normal_N, m.total_mass_kg * model::kGravity_m_s2, 0.05 * m.total_mass_kg * model::kGravity_m_s2);
+  // The dance has been planned: idle again (epoch 0), the planner no longer rehearses.
+  control_side().channels->request.back_rt().epoch = 0;
+  control_side().channels->request.publish_rt();
+  EXPECT_FALSE(dance_plan_rt(p, *control_side().channels));
+  EXPECT_EQ(p.rehearsals, 5u);
+  p.rehearse = true;
+}
+
 // The output stage's reference limit: within the slack a reference past a stop is put on it
 // and counted; beyond it the reference is left for the safety filter (dance), unless the
 // slack is infinite (finish, gains fading): then every excess goes on the stop, counted.

@@ -122,6 +122,15 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
 
   const std::size_t allocs_before = loop.allocations_in_cycle();
   const std::size_t planner_allocs_before = loop.planner_allocations();
+  // Stand-up and ready: the idle planner rehearsed the opening each period (dance.h), every
+  // one solved, without the heap, and the dance's first plan is unchanged by them
+  // (Dance.RehearsalsBeforeTheDanceLeaveItsFirstPlanUnchanged).
+  const std::uint64_t rehearsals = FirmwareLoop::planner().rehearsals;
+  std::printf("[ figures  ] %s: %llu rehearsals of the opening before the dance, %zu planner allocations\n", name,
+              static_cast<unsigned long long>(rehearsals), planner_allocs_before);
+  EXPECT_GE(rehearsals, 100u);  // the 2 s stand-up alone is 100 planner periods
+  EXPECT_EQ(FirmwareLoop::planner().rehearsal_failures, 0u);
+  EXPECT_EQ(planner_allocs_before, 0u) << "heap use in the planning task's rehearsals";
   const DanceControl& d = FirmwareLoop::dance();
   static dynamics::Data data;
   planner::PlanKnot knot;
