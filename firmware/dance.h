@@ -91,15 +91,16 @@ struct DanceChannels {
 
 // The planning task's state. The MPC workspace is ~15 MB: static storage.
 //
-// Rehearsal: until the dance's first request (stand-up, ready), each planner period plans the motion's
-// opening -- the robot at its first frame, at rest, motion time 0 -- from a cold start and
-// throws the plan away. The dance's first MPC iteration then finds its ~15 MB workspace
-// written 20 ms before, not seconds before: on a VM that write-protects guest memory left
-// unwritten (dirty-page tracking; a page idle 1 s costs 12-15 us at its next write) the
-// first iteration took 40-70 ms, past plan_max_age_ns, and the dance ended in fault 16 at
-// its start. On the NUC the same keeps the caches and TLB warm. The dance's first request
-// resets the workspace (a new epoch: stack_reset_planner_rt), so the dance plans as it
-// would without rehearsals. Rehearsals feed no counter of the stack's (mpc_failures, ...).
+// Rehearsal: until the dance's first request (stand-up, ready), each planner period plans
+// the motion's opening -- the robot at its first frame, at rest, motion time 0 -- from a
+// cold start and throws the plan away. The dance's first MPC iteration then finds its
+// ~15 MB workspace written 20 ms before, not seconds before: on a VM that write-protects
+// guest memory left unwritten (dirty-page tracking; a page idle 1 s costs 12-15 us at its
+// next write) the first iteration took 40-70 ms, past plan_max_age_ns, and the dance ended
+// in fault 16 at its start. On the NUC the same keeps the caches and TLB warm. The dance's
+// first request resets the workspace (a new epoch: stack_reset_planner_rt), so the dance
+// plans as it would without rehearsals. Rehearsals feed no counter of the stack's
+// (mpc_failures, ...).
 struct DancePlanner {
   const model::Model* model = nullptr;
   const stack::StackConfig* config = nullptr;
