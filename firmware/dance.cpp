@@ -299,7 +299,8 @@ namespace {
 // DancePlanner's rehearsal: the opening planned from a cold start, the plan discarded.
 void rehearse_opening_rt(DancePlanner& p) noexcept {
   // Before the dance only: afterwards the workspace keeps the dance's counters for the summary.
-  if (!p.rehearse || p.plans != 0 || p.model == nullptr || p.config == nullptr || p.motion == nullptr) return;
+  // dance_init sets model, config and motion together.
+  if (!p.rehearse || p.plans != 0 || p.motion == nullptr) return;
   if (p.config->planner != stack::PlannerKind::kMpc) return;
   stack::PlannerWorkspace& ws = p.ws;
   const auto failures = ws.mpc_failures;

@@ -58,6 +58,13 @@ Firmware& firmware() {
   static Firmware f;
   return f;
 }
+// The firmware freshly initialized and in dance mode, for the tests that drive the dance by hand.
+Firmware& firmware_in_dance() {
+  Firmware& f = firmware();
+  firmware_init(f, test_model(), FirmwareConfig{}, nullptr);
+  f.mode.mode = Mode::kDance;
+  return f;
+}
 
 TEST(Dance, BlendIsTheConvexCombinationOfTheTwoTorqueLaws) {
   hal::CommandFrame standing, wbc;
@@ -197,9 +204,7 @@ struct PlannerBody {
 TEST(Dance, TwoThreadsHandOverWithoutAllocating) {
   const model::Model& m = test_model();
   const planner::MotionPlan& motion = standing_motion();
-  Firmware& f = firmware();
-  firmware_init(f, m, FirmwareConfig{}, nullptr);
-  f.mode.mode = Mode::kDance;
+  Firmware& f = firmware_in_dance();
   const char* error = nullptr;
   ASSERT_TRUE(dance_init(control_side(), planner_side(), channels(), m, mpc_stack(), f.config, motion, error)) << error;
   static ControlBody control;
@@ -244,9 +249,7 @@ TEST(Dance, TwoThreadsHandOverWithoutAllocating) {
 TEST(Dance, PlansOfAnEarlierDanceAreDropped) {
   const model::Model& m = test_model();
   const planner::MotionPlan& motion = standing_motion();
-  Firmware& f = firmware();
-  firmware_init(f, m, FirmwareConfig{}, nullptr);
-  f.mode.mode = Mode::kDance;
+  Firmware& f = firmware_in_dance();
   const char* error = nullptr;
   static DanceChannels fresh;  // a clean pair of buffers for this test
   ASSERT_TRUE(dance_init(control_side(), planner_side(), fresh, m, mpc_stack(), f.config, motion, error)) << error;
@@ -286,9 +289,7 @@ TEST(Dance, PlansOfAnEarlierDanceAreDropped) {
 TEST(Dance, RehearsalsBeforeTheDanceLeaveItsFirstPlanUnchanged) {
   const model::Model& m = test_model();
   const planner::MotionPlan& motion = standing_motion();
-  Firmware& f = firmware();
-  firmware_init(f, m, FirmwareConfig{}, nullptr);
-  f.mode.mode = Mode::kDance;
+  Firmware& f = firmware_in_dance();
   const hal::SensorFrame s = standing_sensors(motion.q[0].tail<model::kNumJoints>(), 0);
   hal::CommandFrame out;
   DancePlanner& p = planner_side();
