@@ -1,6 +1,7 @@
 #include "controllers/model/model.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -85,6 +86,21 @@ ModelError build_model(Variant v, double total_mass_kg, Model& out) {
     out.limits.peak_torque_Nm[j] = l.peak_torque_Nm;
   }
   return ModelError::kOk;
+}
+
+void inset_sole_corners(Model& m, double inset_m) {
+  static_assert(kNumContactPoints == 8, "four sole corners per foot");
+  for (int foot = 0; foot < 2; ++foot) {
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centre += 0.25 * m.frames[4 * foot + k].position_m;
+    for (int k = 0; k < 4; ++k) {
+      Vec3& p = m.frames[4 * foot + k].position_m;
+      for (int axis = 0; axis < 2; ++axis) {
+        const double half = std::abs(p[axis] - centre[axis]);
+        p[axis] = centre[axis] + std::copysign(std::max(half - inset_m, 0.0), p[axis] - centre[axis]);
+      }
+    }
+  }
 }
 
 }  // namespace kuavo::model

@@ -70,6 +70,12 @@ const ModelTables& tables_for(Variant v);
 // torso CoM and inertia unchanged (as Leju's update_mass.sh does).
 ModelError build_model(Variant v, double total_mass_kg, Model& out);
 
+// The sole corners (contact frames 0..7, four per foot) moved in toward their sole's centre
+// by inset_m in the foot's x and y (the corners' mean; a half-width below inset_m ends on the
+// centre line). The planners' narrower soles (StackConfig::planner_sole_inset_m, the offline
+// TO's support_margin_m). Load time; inset_m >= 0.
+void inset_sole_corners(Model& m, double inset_m);
+
 // Convenience names.
 inline const char* joint_name(const Model& m, int joint) { return m.tables->bodies[joint + 1].joint_name; }
 inline const char* frame_name(const Model& m, int frame) { return m.tables->frames[frame].name; }

@@ -2,6 +2,7 @@
 // typed in here by hand as the independent record.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -106,6 +107,38 @@ TEST(Model, ZeroPoseGeometryMatchesTheFactSheet) {
   // The neutral configuration puts the soles on the ground.
   dynamics::forward_kinematics(m, d, dynamics::neutral_configuration(m));
   for (int f = 0; f < model::kNumContactPoints; ++f) EXPECT_NEAR(dynamics::frame_position(m, d, f).z(), 0.0, 1e-4);
+}
+
+// The planners' narrower soles (model::inset_sole_corners) against the fact sheet's corners
+// (FACTS.md §2.2, typed in: toe x +0.17084, heel x −0.073164, y ±0.04773, z −0.0595 on each
+// ankle roll link): each corner d closer to the sole's centre in x and y, z and the other
+// frames untouched; an inset beyond the half-width ends on the centre line.
+TEST(Model, InsetSoleCornersMovesEachCornerInByTheInset) {
+  Model m;
+  ASSERT_EQ(model::build_model(model::Variant::kS45, 55.0, m), model::ModelError::kOk);
+  const double toe = 0.17084, heel = -0.073164, side = 0.04773, z = -0.0595;
+  const double centre_x = 0.5 * (toe + heel);
+  for (const double d : {0.0, 0.01, 0.025}) {
+    Model inset = m;
+    model::inset_sole_corners(inset, d);
+    for (int c = 0; c < model::kNumContactPoints; ++c) {
+      const Eigen::Vector3d& p = inset.frames[c].position_m;
+      const Eigen::Vector3d& o = m.frames[c].position_m;
+      ASSERT_NEAR(std::abs(o.x() - centre_x), 0.5 * (toe - heel), 1e-9) << "corner " << c;  // the fact sheet's sole
+      ASSERT_NEAR(std::abs(o.y()), side, 1e-9) << "corner " << c;
+      EXPECT_NEAR(p.x(), centre_x + (o.x() > centre_x ? 1.0 : -1.0) * (0.5 * (toe - heel) - d), 1e-12) << c << " " << d;
+      EXPECT_NEAR(p.y(), (o.y() > 0.0 ? 1.0 : -1.0) * (side - d), 1e-12) << c << " " << d;
+      EXPECT_EQ(p.z(), o.z());
+      EXPECT_NEAR(p.z(), z, 1e-9);
+      EXPECT_EQ(inset.frames[c].body, m.frames[c].body);
+    }
+    for (int f = model::kNumContactPoints; f < model::kNumFrames; ++f) {
+      EXPECT_EQ(inset.frames[f].position_m, m.frames[f].position_m) << "frame " << f;
+    }
+  }
+  Model past = m;
+  model::inset_sole_corners(past, 0.06);  // wider than the sole's half-width (0.0477)
+  for (int c = 0; c < model::kNumContactPoints; ++c) EXPECT_NEAR(past.frames[c].position_m.y(), 0.0, 1e-12) << c;
 }
 
 TEST(ModelCli, JsonSummaryHasTheDocumentedShape) {

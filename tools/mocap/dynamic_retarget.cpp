@@ -205,17 +205,7 @@ model::Model planning_model(const model::Model& robot, double support_margin_m) 
       planning.limits.torque_Nm[j + k] = std::min(planning.limits.torque_Nm[j + k], motors.limit_Nm[leg].minCoeff());
     }
   }
-  for (int foot = 0; foot < 2; ++foot) {
-    Vec3 centre = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) centre += 0.25 * robot.frames[4 * foot + k].position_m;
-    for (int k = 0; k < 4; ++k) {
-      Vec3& p = planning.frames[4 * foot + k].position_m;
-      for (int axis = 0; axis < 2; ++axis) {
-        const double half = std::abs(p[axis] - centre[axis]);
-        p[axis] = centre[axis] + std::copysign(std::max(half - support_margin_m, 0.0), p[axis] - centre[axis]);
-      }
-    }
-  }
+  model::inset_sole_corners(planning, support_margin_m);
   return planning;
 }
 
