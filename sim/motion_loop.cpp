@@ -401,6 +401,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.estimator_gated_corner_ticks = control->estimator.gated_corner_ticks;
   out.estimator_unloaded_foot_ticks = control->estimator_unloaded_foot_ticks;
   out.lean_trim = config.stack.lean_trim.enabled;
+  out.planner_sole_inset_m = config.stack.planner == stack::PlannerKind::kMpc ? config.stack.planner_sole_inset_m : 0.0;
   out.lean_trim_roll_deg = control->lean_trim.theta_rad.x() * 180.0 / 3.14159265358979323846;
   out.lean_trim_pitch_deg = control->lean_trim.theta_rad.y() * 180.0 / 3.14159265358979323846;
   out.lean_trim_integrated_ticks = control->lean_trim.integrated_ticks;
@@ -488,20 +489,24 @@ std::string motion_summary_json(const MotionSummary& s) {
                 static_cast<unsigned long long>(s.estimator_unloaded_foot_ticks), s.estimator_tilt_err_deg_rms,
                 s.com_over_feet_err_m_end);
   std::string json = base + buf;
-  if (s.lean_trim) {
+  // One more key before the closing brace.
+  const auto append = [&json](const std::string& key_and_value) {
     json.resize(json.rfind('}'));
     while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();
+    json += ",\n  " + key_and_value + "\n}\n";
+  };
+  if (s.lean_trim) {
     std::snprintf(buf, sizeof buf,
-                  ",\n  \"lean_trim\": {\"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, \"saturated_ticks\": %llu}\n}\n",
+                  "\"lean_trim\": {\"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, \"saturated_ticks\": %llu}",
                   s.lean_trim_roll_deg, s.lean_trim_pitch_deg, static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
                   static_cast<unsigned long long>(s.lean_trim_saturated_ticks));
-    json += buf;
+    append(buf);
   }
-  if (!s.perturbation_json.empty()) {
-    json.resize(json.rfind('}'));
-    while (!json.empty() && (json.back() == '\n' || json.back() == ' ')) json.pop_back();
-    json += ",\n  \"perturbation\": " + s.perturbation_json + "\n}\n";
+  if (s.planner_sole_inset_m > 0.0) {
+    std::snprintf(buf, sizeof buf, "\"planner_sole_inset_m\": %.4f", s.planner_sole_inset_m);
+    append(buf);
   }
+  if (!s.perturbation_json.empty()) append("\"perturbation\": " + s.perturbation_json);
   return json;
 }
 

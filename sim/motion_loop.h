@@ -113,6 +113,8 @@ struct MotionSummary {
   // corners and the plant's (the model's CoM errors and the tilt together) [m].
   double estimator_tilt_err_deg_rms = 0.0;
   double com_over_feet_err_m_end = 0.0;
+  // StackConfig::planner_sole_inset_m of an MPC run, in the summary only when above 0.
+  double planner_sole_inset_m = 0.0;
   // The lean trim (controllers/stack/lean_trim.h), in the summary only when it is on.
   bool lean_trim = false;
   double lean_trim_roll_deg = 0.0, lean_trim_pitch_deg = 0.0;  // at the end

@@ -37,6 +37,9 @@ const char* stack_validate_config(const StackConfig& config) {
   if (config.planner == PlannerKind::kMpc) {
     if (const char* why = mpc::mpc_validate_config(config.mpc)) return why;
     if (mpc::mpc_window_knots(config.mpc) > planner::kMaxWindowKnots) return "MPC horizon longer than the plan window";
+    if (!(config.planner_sole_inset_m >= 0.0 && config.planner_sole_inset_m <= 0.04)) {
+      return "planner sole inset outside 0..0.04 m (the soles are 0.095 m wide)";
+    }
     if (const char* why = planner::recovery_step_validate(config.recovery)) return why;
     if (const char* why = planner::liftoff_hold_validate(config.liftoff_hold)) return why;
     if (const char* why = planner::plan_anchor_validate(config.anchor)) return why;
@@ -117,9 +120,10 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   return status;
 }
 
-void stack_plan_rt(const model::Model& model, const StackConfig& config, PlannerWorkspace& ws,
+void stack_plan_rt(const model::Model& robot, const StackConfig& config, PlannerWorkspace& ws,
                    const planner::MotionPlan& motion, const dynamics::ConfigVector& q,
                    const dynamics::VelocityVector& v, hal::TimeNs t_state_ns, planner::ReferencePlan& out) {
+  const model::Model& model = ws.planning_model_set ? ws.planning_model : robot;
   if (config.planner == PlannerKind::kMpc) {
     const int knots = mpc::mpc_window_knots(config.mpc);
     const bool recovering = ws.recovery.foot[0].active || ws.recovery.foot[1].active;
@@ -166,7 +170,11 @@ bool stack_prepare(const model::Model& model, const StackConfig& config, Control
   if (stack_validate_config(config) != nullptr) return false;
   if (!estimator::estimator_init(config.estimator, control.estimator)) return false;
   wbc::wbc_init(model, config.wbc, control.wbc);
+  planner_ws.planning_model_set = false;
   if (config.planner == PlannerKind::kMpc) {
+    planner_ws.planning_model = model;
+    if (config.planner_sole_inset_m > 0.0) model::inset_sole_corners(planner_ws.planning_model, config.planner_sole_inset_m);
+    planner_ws.planning_model_set = true;
     mpc::mpc_init(model, config.mpc, planner_ws.mpc);
     planner_ws.mpc_failures = 0;
     planner_ws.plan_positions_on_a_stop = 0;

@@ -93,6 +93,22 @@ struct StackConfig {
   planner::LiftoffHoldConfig liftoff_hold{};
   // MPC planner only: the window shifted to where the stance foot measures (plan_anchor.h).
   planner::PlanAnchorConfig anchor{};
+  // MPC planner only: the planner (the MPC, the recovery step, the lift-off hold, the anchor)
+  // plans with the robot whose sole corners are this much closer to each sole's centre, in x
+  // and y (model::inset_sole_corners); the WBC keeps the whole soles (it fits its corners to
+  // the plan's swing corners in least squares: the same foot centre and heading). Meant as a
+  // reserve for what the model gets wrong: a plan whose centre of pressure runs along a sole's
+  // edge leaves the WBC nothing. cmu_05_07's single supports at 2.3–4.8 s run it 0.4–1.4 cm
+  // inside the outer edge on the nominal robot, and with the show set's model errors seeds 25,
+  // 52, 64 and 100 fall there (25 and 64 before their push); the show set without its link-CoM
+  // errors (±1 cm a link) saves 25, 52 and 64 and moves 100's fall from 3.8 to 4.8 s (without
+  // the ground tilt, the steps, the encoder offsets or the inertia errors, all four still fall).
+  // Measured at 0.01 m, show campaign (BENCHMARKS.md): on the motions of 51eb55c 14/400 as off
+  // (saves built-in 39, cmu_05_07 52 and 85, perfume 94; loses perfume 51, 64, 70, 89); end to
+  // end, each motion retargeted with it on (the check runs this stack), 16/400 against 14/400
+  // (built-in 0, perfume 7, cmu_05_07 7, cmu_05_20 2). Off (0), `kuavo simulate
+  // --planner-sole-inset M`, campaign key "planner_sole_inset_m".
+  double planner_sole_inset_m = 0.0;
   estimator::EstimatorConfig estimator = dance_estimator_config();
 
   // Leju's IMU low-pass corners (gyro 20 Hz, accelerometer 12 Hz) lag a dancing robot:
@@ -157,6 +173,10 @@ struct PlannerWorkspace {
   planner::RecoveryStepState recovery;  // its count: recovery.steps
   planner::LiftoffHoldState liftoff;    // lift-offs held, the motion's lag
   planner::PlanAnchorState anchor;      // the plan's offset to the measured stance foot
+  // The model the planner plans with (StackConfig::planner_sole_inset_m), set by stack_prepare;
+  // until then stack_plan_rt plans with the model it is given.
+  model::Model planning_model;
+  bool planning_model_set = false;
 };
 
 // The estimator's contact flags less an unloaded foot (StackConfig::estimator_unloaded_foot_N):

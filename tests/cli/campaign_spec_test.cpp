@@ -4,7 +4,9 @@
 // z²/(n + z²).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -85,20 +87,32 @@ TEST(CampaignSpec, PlanAnchorKeysPassThroughOnlyWhenGiven) {
   EXPECT_NE(error.find("plan_anchor_home"), std::string::npos);
 }
 
-// The estimator's unloaded-foot threshold is opt-in: absent, simulate's default (off); given,
-// passed on; out of range or not a number, refused by name.
-TEST(CampaignSpec, EstimatorUnloadedFootIsOptIn) {
-  cli::CampaignSpec s;
-  std::string error;
+// The optional numbers are opt-in: absent, simulate's default (off); given, passed on; out of
+// range or not a number, refused by name. The estimator's unloaded-foot threshold
+// (--estimator-unloaded-foot) and the planner's sole inset (--planner-sole-inset).
+TEST(CampaignSpec, OptionalNumbersAreOptIn) {
+  struct Key {
+    const char* name;
+    std::optional<double> cli::CampaignSpec::*field;
+    const char* good;
+    double value;
+    std::array<const char*, 3> bad;
+  };
+  const Key keys[] = {
+      {"estimator_unloaded_foot_N", &cli::CampaignSpec::estimator_unloaded_foot_N, "50", 50.0, {"-1", "2000", "\"50\""}},
+      {"planner_sole_inset_m", &cli::CampaignSpec::planner_sole_inset_m, "0.01", 0.01, {"-0.001", "0.05", "\"0.01\""}}};
   const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
-  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
-  EXPECT_FALSE(s.estimator_unloaded_foot_N.has_value());
-  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"estimator_unloaded_foot_N":50})", s, error)) << error;
-  EXPECT_EQ(s.estimator_unloaded_foot_N.value_or(-1.0), 50.0);
-  for (const char* bad : {R"(,"estimator_unloaded_foot_N":-1})", R"(,"estimator_unloaded_foot_N":2000})",
-                          R"(,"estimator_unloaded_foot_N":"50"})"}) {
-    EXPECT_FALSE(cli::parse_campaign_spec(head + bad, s, error)) << bad;
-    EXPECT_NE(error.find("estimator_unloaded_foot_N"), std::string::npos) << error;
+  for (const Key& k : keys) {
+    cli::CampaignSpec s;
+    std::string error;
+    ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+    EXPECT_FALSE((s.*k.field).has_value()) << k.name;
+    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + k.name + "\":" + k.good + "}", s, error)) << error;
+    EXPECT_EQ((s.*k.field).value_or(-1.0), k.value) << k.name;
+    for (const char* bad : k.bad) {
+      EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"" + k.name + "\":" + bad + "}", s, error)) << k.name << " " << bad;
+      EXPECT_NE(error.find(k.name), std::string::npos) << error;
+    }
   }
 }
 

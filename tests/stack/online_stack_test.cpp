@@ -237,6 +237,14 @@ TEST(OnlineStack, RefusesABadConfiguration) {
   cfg.lean_trim.enabled = true;
   EXPECT_NE(stack_validate_config(cfg), nullptr);
   cfg = StackConfig{};
+  cfg.planner = PlannerKind::kMpc;
+  for (const double bad : {-0.001, 0.041, std::nan("")}) {
+    cfg.planner_sole_inset_m = bad;
+    EXPECT_NE(stack_validate_config(cfg), nullptr) << bad;
+  }
+  cfg.planner_sole_inset_m = 0.04;
+  EXPECT_EQ(stack_validate_config(cfg), nullptr);
+  cfg = StackConfig{};
   EXPECT_EQ(stack_validate_config(cfg), nullptr);
   PlannerKind k;
   EXPECT_TRUE(parse_planner("kinematic", k));
@@ -316,6 +324,56 @@ TEST(OnlineStack, MpcKnotsPastAStopAreHandedOverOnTheStop) {
       EXPECT_LE(pending->knots[k].joint_position_rad[knee], tight->limits.position_max_rad[knee]) << "knot " << k;
     }
   }
+}
+
+// StackConfig::planner_sole_inset_m: stack_prepare gives the planner the robot with its sole
+// corners inset (the oracle: model::inset_sole_corners on a copy, frame for frame), the WBC
+// keeps the robot; an inset of 0 plans bit for bit as the robot itself does (a workspace
+// that was never given a planning model), and an inset the MPC plans differently with.
+TEST(OnlineStack, ThePlannerPlansOnTheInsetSoles) {
+  const model::Model& m = robot();
+  Rig& rig = the_rig();
+  auto& [plan, control, planner_ws, pending, data] = rig;
+  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
+  planner::StepInPlaceConfig gait;
+  gait.steps = 2;
+  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
+  const hal::TimeNs t = plan->start_ns + 600'000'000;  // in the first single support
+  const dynamics::ConfigVector q = plan->q[planner::motion_plan_frame_at(*plan, t)];
+  const auto plan_with = [&](double inset_m, bool prepared, planner::ReferencePlan& out) {
+    StackConfig cfg;
+    cfg.planner = PlannerKind::kMpc;
+    cfg.planner_sole_inset_m = inset_m;
+    EXPECT_TRUE(stack_prepare(m, cfg, *control, *planner_ws));
+    if (!prepared) planner_ws->planning_model_set = false;
+    stack_plan_rt(m, cfg, *planner_ws, *plan, q, dynamics::VelocityVector::Zero(), t, out);
+    EXPECT_EQ(planner_ws->last_mpc_status, mpc::MpcStatus::kOk);
+  };
+  auto robot_plan = std::make_unique<planner::ReferencePlan>();
+  auto zero_plan = std::make_unique<planner::ReferencePlan>();
+  auto inset_plan = std::make_unique<planner::ReferencePlan>();
+  plan_with(0.0, false, *robot_plan);
+  plan_with(0.0, true, *zero_plan);
+  plan_with(0.02, true, *inset_plan);
+  auto expected = std::make_unique<model::Model>(m);
+  model::inset_sole_corners(*expected, 0.02);
+  ASSERT_TRUE(planner_ws->planning_model_set);
+  for (int f = 0; f < model::kNumFrames; ++f) {
+    EXPECT_EQ(planner_ws->planning_model.frames[f].position_m, expected->frames[f].position_m) << "frame " << f;
+  }
+  EXPECT_EQ(planner_ws->planning_model.limits.torque_Nm, m.limits.torque_Nm);
+  ASSERT_GT(robot_plan->count, 0);
+  ASSERT_EQ(zero_plan->count, robot_plan->count);
+  int same = 0, moved = 0;
+  for (int k = 0; k < robot_plan->count; ++k) {
+    const wbc::WbcReference& a = robot_plan->knots[k];
+    same += a.com_position_m == zero_plan->knots[k].com_position_m &&
+            a.joint_position_rad == zero_plan->knots[k].joint_position_rad &&
+            a.contact_force_N == zero_plan->knots[k].contact_force_N;
+    moved += (a.contact_force_N - inset_plan->knots[k].contact_force_N).norm() > 1.0;
+  }
+  EXPECT_EQ(same, robot_plan->count);
+  EXPECT_GT(moved, 0);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 //   "plan_anchor"    true | false: kuavo simulate --plan-anchor on | off (absent: simulate's default)
 //   "plan_anchor_home"  SHARE: --plan-anchor-home SHARE (absent: simulate's default)
 //   "estimator_unloaded_foot_N"  N: --estimator-unloaded-foot N (absent: simulate's default, off)
+//   "planner_sole_inset_m"  M: --planner-sole-inset M (absent: simulate's default, 0)
 //   "lean_trim"      true: kuavo simulate --lean-trim on (default false)
 //   "holdable_soles" false: kuavo simulate --holdable-soles off (default true)
 //   "duration_s"     0 or absent: each motion's length plus the settling second
@@ -59,6 +60,7 @@ struct CampaignSpec {
   std::optional<bool> plan_anchor;
   std::optional<double> plan_anchor_home;
   std::optional<double> estimator_unloaded_foot_N;
+  std::optional<double> planner_sole_inset_m;
   bool lean_trim = false;
   bool holdable_soles = true;
   double duration_s = 0.0;

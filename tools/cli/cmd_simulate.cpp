@@ -5,6 +5,7 @@
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--estimator-unloaded-foot N]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]
+//                [--planner-sole-inset M]
 //                [--early-touchdown on|off] [--holdable-soles on|off] [--liftoff-hold on|off] [--plan-anchor on|off]
 //                [--plan-anchor-home SHARE]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
@@ -93,6 +94,10 @@ int run_simulate(int argc, char** argv) {
   // Opt-in: a foot the WBC loads with less than N newtons leaves the estimator's stance set
   // (controllers/stack/online_stack.h, estimator_unloaded_foot_N); 0 (default): off.
   p.number("--estimator-unloaded-foot", "N", 0.0, 1000.0, "N", &motion_cfg.stack.estimator_unloaded_foot_N).modes =
+      kMotionRun | kStepRun;
+  // Opt-in: the MPC planner plans on soles this much narrower (online_stack.h,
+  // planner_sole_inset_m); 0 (default): the whole soles.
+  p.number("--planner-sole-inset", "M", 0.0, 0.04, "m", &motion_cfg.stack.planner_sole_inset_m).modes =
       kMotionRun | kStepRun;
   // Opt-in: the estimate's base tilt trimmed until the WBC's horizontal forces are the ones the
   // CoM obeys (controllers/stack/lean_trim.h); off (default): the estimator's tilt.

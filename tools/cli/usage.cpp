@@ -52,6 +52,7 @@ constexpr CommandHelp kHelp[] = {
      "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--estimator-unloaded-foot N]   (opt-in: a foot the WBC loads below N leaves the estimator's stance set)\n"
+     "               [--planner-sole-inset M]   (opt-in: the MPC planner plans on soles M m narrower each side, 0..0.04)\n"
      "               [--lean-trim on|off]   (opt-in: the base tilt trimmed until the WBC's forces move the CoM as planned)\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
