@@ -327,9 +327,9 @@ TEST(OnlineStack, MpcKnotsPastAStopAreHandedOverOnTheStop) {
 }
 
 // StackConfig::planner_sole_inset_m: stack_prepare gives the planner the robot with its sole
-// corners inset (the oracle: model::inset_sole_corners on a copy, frame for frame), the WBC
-// keeps the robot; an inset of 0 plans bit for bit as the robot itself does (a workspace
-// that was never given a planning model), and an inset the MPC plans differently with.
+// corners inset (the oracle: model::inset_sole_corners on a copy, frame for frame; the torque
+// limits kept); an inset of 0 plans bit for bit as the robot itself does (a workspace that was
+// never given a planning model), and an inset the MPC plans differently with.
 TEST(OnlineStack, ThePlannerPlansOnTheInsetSoles) {
   const model::Model& m = robot();
   Rig& rig = the_rig();
@@ -338,7 +338,7 @@ TEST(OnlineStack, ThePlannerPlansOnTheInsetSoles) {
   planner::StepInPlaceConfig gait;
   gait.steps = 2;
   ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
-  const hal::TimeNs t = plan->start_ns + 600'000'000;  // in the first single support
+  const hal::TimeNs t = plan->start_ns + 600'000'000;  // 0.6 s into the stepping
   const dynamics::ConfigVector q = plan->q[planner::motion_plan_frame_at(*plan, t)];
   const auto plan_with = [&](double inset_m, bool prepared, planner::ReferencePlan& out) {
     StackConfig cfg;
