@@ -36,6 +36,15 @@ Rig& the_rig() {
   return rig;
 }
 
+// The rig's plan: stepping in place from the standing configuration (make_step_in_place's
+// message, or nullptr).
+const char* rig_steps_in_place(int steps, double rate_hz = planner::StepInPlaceConfig{}.rate_hz) {
+  planner::StepInPlaceConfig gait;
+  gait.steps = steps;
+  gait.rate_hz = rate_hz;
+  return planner::make_step_in_place(robot(), kuavo::test::standing_configuration(), gait, *the_rig().plan);
+}
+
 // The rig's plan run through the stack for `ticks` control ticks on sensors that replay it
 // (ideal, the plan as the truth), the planner every 10th tick and its plan applied at once,
 // under the allocation trap. on_tick(truth, command) sees each tick's oracle and output.
@@ -73,12 +82,8 @@ TickCounts run_on_plan(const StackConfig& cfg, int ticks, OnTick on_tick) {
 }
 
 TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
-  const model::Model& m = robot();
   auto& [plan, control, planner_ws, pending, data] = the_rig();
-  planner::StepInPlaceConfig gait;
-  gait.steps = 124;
-  gait.rate_hz = 50.0;  // 200 s within the plan's frame capacity
-  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(124, 50.0), nullptr);  // 200 s within the plan's frame capacity
 
   constexpr int kTicks = 100'000;
   int bad_commands = 0;
@@ -107,10 +112,7 @@ TEST(OnlineStack, HundredThousandTicksWithoutAllocationAndWithFiniteCommands) {
 // quite produce, so the trim moves a little: 0.078° at the time of writing, held under 0.15°.
 TEST(OnlineStack, LeanTrimTicksWithoutAllocation) {
   auto& [plan, control, planner_ws, pending, data] = the_rig();
-  planner::StepInPlaceConfig gait;
-  gait.steps = 10;
-  gait.rate_hz = 50.0;
-  ASSERT_EQ(planner::make_step_in_place(robot(), kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(10, 50.0), nullptr);
   StackConfig cfg;
   cfg.lean_trim.enabled = true;
   constexpr int kTicks = 8'000;  // 16 s, within the plan's 18
@@ -132,9 +134,7 @@ TEST(OnlineStack, StartIsAFreshStartWithTheMpc) {
   const model::Model& m = robot();
   Rig& rig = the_rig();
   auto& [plan, control, planner_ws, pending, data] = rig;
-  planner::StepInPlaceConfig gait;
-  gait.steps = 2;
-  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(2), nullptr);
   StackConfig cfg;
   cfg.planner = PlannerKind::kMpc;
   constexpr int kTicks = 300;
@@ -174,9 +174,7 @@ TEST(OnlineStack, ANewPlanTakesOverLinearlyOverTheBlendTime) {
   const model::Model& m = robot();
   Rig& rig = the_rig();
   auto& [plan, control, planner_ws, pending, data] = rig;
-  planner::StepInPlaceConfig gait;
-  gait.steps = 1;
-  ASSERT_EQ(planner::make_step_in_place(m, kuavo::test::standing_configuration(), gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(1), nullptr);
   StackConfig cfg;  // kinematic planner
   cfg.plan_blend_s = 0.02;
   static hal::SensorFrame frame;
@@ -302,9 +300,7 @@ TEST(OnlineStack, MpcKnotsPastAStopAreHandedOverOnTheStop) {
   Rig& rig = the_rig();
   auto& [plan, control, planner_ws, pending, data] = rig;
   const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
-  planner::StepInPlaceConfig gait;
-  gait.steps = 4;
-  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(4), nullptr);
   StackConfig cfg;
   cfg.planner = PlannerKind::kMpc;
   const int knee = model::kLeftLegFirst + 3;
@@ -334,10 +330,7 @@ TEST(OnlineStack, ThePlannerPlansOnTheInsetSoles) {
   const model::Model& m = robot();
   Rig& rig = the_rig();
   auto& [plan, control, planner_ws, pending, data] = rig;
-  const dynamics::ConfigVector q0 = kuavo::test::standing_configuration();
-  planner::StepInPlaceConfig gait;
-  gait.steps = 2;
-  ASSERT_EQ(planner::make_step_in_place(m, q0, gait, *plan), nullptr);
+  ASSERT_EQ(rig_steps_in_place(2), nullptr);
   const hal::TimeNs t = plan->start_ns + 600'000'000;  // 0.6 s into the stepping
   const dynamics::ConfigVector q = plan->q[planner::motion_plan_frame_at(*plan, t)];
   const auto plan_with = [&](double inset_m, bool prepared, planner::ReferencePlan& out) {
