@@ -65,6 +65,8 @@ void control_task_step_rt(ControlTask& t, std::uint64_t cycle, hal::TimeNs now_n
   if (t.stage_clock != nullptr) t.stamps.cycled_ns = t.stage_clock();
   robot_send_rt(*t.io, cycle, t.command, now_ns);
   if (t.stage_clock != nullptr) t.stamps.sent_ns = t.stage_clock();
+  // The command is out: before the first dance, its first tick rehearses (dance.h).
+  if (t.dance != nullptr) dance_rehearse_rt(*t.dance, t.firmware->mode.mode, t.io->sensors);
   if (in.estop && t.estop_since_ns < 0) t.estop_since_ns = now_ns;
   if (mode == Mode::kFinish && t.firmware->mode.mode == Mode::kDamping && t.dance != nullptr &&
       t.firmware->mode.latched == Fault::kNone) {

@@ -186,6 +186,9 @@ bool dance_init(DanceControl& control, DancePlanner& planner, DanceChannels& cha
   control.duration_ns = static_cast<hal::TimeNs>(std::llround(planner::motion_plan_duration_s(motion) * 1e9));
   control.running = false;
   control.counters = DanceCounters{};
+  control.danced = false;
+  control.rehearsals = 0;
+  control.rehearsal_failures = 0;
   kinematic_plan_rt(control, 0);
   control.first_plan = control.scratch_plan;
   planner.model = &model;
@@ -266,6 +269,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
       return false;
     }
     d.running = true;
+    d.danced = true;
     d.epoch = d.epoch + 1 == 0 ? 1 : d.epoch + 1;  // 0 means "idle"
     d.start_ns = now_ns;
     d.plan_stamp_ns = now_ns;  // the first plan (the motion's knots) counts as delivered now
@@ -292,6 +296,25 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
     blend_torque_laws_rt(d.standing_command, static_cast<double>(t_ns) / static_cast<double>(d.blend_ns), out);
   }
   return true;
+}
+
+void dance_rehearse_rt(DanceControl& d, Mode mode, const hal::SensorFrame& sensors) noexcept {
+  if (!d.rehearse || d.running || d.danced || d.model == nullptr) return;
+  if (mode != Mode::kStandUp && mode != Mode::kReady) return;
+  const stack::StageClock clock = d.stack.stage_clock;
+  d.stack.stage_clock = nullptr;
+  bool ok = stack::stack_begin_rt(*d.model, d.config, d.stack, *d.motion, d.first_plan, sensors, 0);
+  if (ok) {
+    if (d.ankle_motors.active) drivers::map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
+    d.stack.wbc.serial_drive_limits = d.serial_drives;
+    d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
+    ok = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, 0, stack::StateOverride{},
+                                      d.rehearsal_command) == wbc::WbcStatus::kOk;
+  }
+  d.stack.started = false;
+  d.stack.stage_clock = clock;
+  ++d.rehearsals;
+  if (!ok) ++d.rehearsal_failures;
 }
 
 namespace {

@@ -369,6 +369,9 @@ int run(int argc, char** argv) {
     std::printf("dance: the planner rehearsed the opening %llu times before it (%llu failed)\n",
                 static_cast<unsigned long long>(memory->planner.rehearsals),
                 static_cast<unsigned long long>(memory->planner.rehearsal_failures));
+    std::printf("dance: the control task rehearsed the first tick %llu times before it (%llu failed)\n",
+                static_cast<unsigned long long>(memory->dance.rehearsals),
+                static_cast<unsigned long long>(memory->dance.rehearsal_failures));
     std::printf("dance: %llu plans taken, %llu rejected (non-finite), %llu kinematic fallbacks, %llu WBC ticks not ok, "
                 "%llu joint references put on a stop (%llu more in finish), %llu torques clipped at peak (largest demand %.2f x peak)\n",
                 static_cast<unsigned long long>(c.plans_taken), static_cast<unsigned long long>(c.plans_rejected),

@@ -195,6 +195,8 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   report.planner_overruns = planner_task.perf().overruns;
   report.rehearsals = planner.rehearsals;
   report.rehearsal_failures = planner.rehearsal_failures;
+  report.control_rehearsals = dance.rehearsals;
+  report.control_rehearsal_failures = dance.rehearsal_failures;
   report.control_skipped_periods = control_task.perf().skipped_periods;
   report.max_wake_latency_us = 1e-3 * static_cast<double>(control_task.perf().max_wake_latency_ns);
 
@@ -212,7 +214,7 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
 
 std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, hal::TimeNs planner_period_ns) {
   std::string out;
-  char line[256];
+  char line[512];
   std::snprintf(line, sizeof line, "%-10s %8s %10s %10s %10s %10s %8s %8s %9s\n", "stage", "samples", "p50 us", "p99 us",
                 "p99.99 us", "max us", "deadline", "misses", "max at s");
   out += line;
@@ -231,10 +233,13 @@ std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, h
   row("cycle", r.cycle, control_period_ns);
   row("mpc", r.mpc, planner_period_ns);
   std::snprintf(line, sizeof line,
-                "control task: %llu overruns (%llu periods skipped), worst wake latency %.1f us; planning task: %llu overruns, "
+                "control task: %llu overruns (%llu periods skipped), worst wake latency %.1f us, %llu rehearsals of the "
+                "first tick before the dance (%llu failed); planning task: %llu overruns, "
                 "%llu rehearsals of the opening before the dance (%llu failed)\n",
                 static_cast<unsigned long long>(r.control_overruns),
                 static_cast<unsigned long long>(r.control_skipped_periods), r.max_wake_latency_us,
+                static_cast<unsigned long long>(r.control_rehearsals),
+                static_cast<unsigned long long>(r.control_rehearsal_failures),
                 static_cast<unsigned long long>(r.planner_overruns), static_cast<unsigned long long>(r.rehearsals),
                 static_cast<unsigned long long>(r.rehearsal_failures));
   out += line;

@@ -50,6 +50,7 @@ struct TimingReport {
   // plus wake latency; with evict_caches the eviction is in the body) and the worst wake latency.
   std::uint64_t control_overruns = 0, planner_overruns = 0;
   std::uint64_t rehearsals = 0, rehearsal_failures = 0;  // the planner's, before the dance (dance.h)
+  std::uint64_t control_rehearsals = 0, control_rehearsal_failures = 0;  // the control task's (dance.h)
   // Control-task release times dropped to recover from its overruns (each one a tick the
   // dance did not run: the stack follows the clock, not a tick count).
   std::uint64_t control_skipped_periods = 0;

@@ -237,6 +237,8 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   out.dance = dc.counters;
   out.rehearsals = FirmwareLoop::planner().rehearsals;
   out.rehearsal_failures = FirmwareLoop::planner().rehearsal_failures;
+  out.control_rehearsals = dc.rehearsals;
+  out.control_rehearsal_failures = dc.rehearsal_failures;
   for (const CanopenBusIo& c : loop->io().canopen) {
     for (std::size_t i = 0; i < c.st.size(); ++i) {
       if (c.slot[i] < 2 * model::kLegJoints) out.leg_torque_clamps[static_cast<std::size_t>(c.slot[i] % model::kLegJoints)] += c.st[i].torque_clamps;
@@ -286,6 +288,8 @@ std::string sitl_summary_json(const SitlSummary& s) {
   }
   add("],\n  \"fault_at_s\": %.3f,\n  \"dance_started_at_s\": %.3f,\n", s.fault_at_s, s.dance_started_at_s);
   add("  \"planner_rehearsals\": {\"runs\": %llu, \"failures\": %llu},\n", u(s.rehearsals), u(s.rehearsal_failures));
+  add("  \"control_rehearsals\": {\"runs\": %llu, \"failures\": %llu},\n", u(s.control_rehearsals),
+      u(s.control_rehearsal_failures));
   add("  \"output_stage\": {\"references_put_on_a_stop\": %llu, \"finish_references_put_on_a_stop\": %llu, "
       "\"torques_clipped_at_peak\": %llu, \"max_torque_demand_x_peak\": %.3f},\n",
       u(s.dance.references_limited), u(s.dance.finish_references_limited), u(s.dance.torques_saturated),

@@ -69,6 +69,7 @@ struct SitlSummary {
   double dance_started_at_s = -1.0;  // virtual time of the motion's time 0 (-1: no dance)
   DanceCounters dance{};            // the output stage: references on a stop, torques clipped
   std::uint64_t rehearsals = 0, rehearsal_failures = 0;  // the planner's, before the dance (dance.h)
+  std::uint64_t control_rehearsals = 0, control_rehearsal_failures = 0;  // the control task's (dance.h)
   std::array<std::uint64_t, 6> leg_torque_clamps{};  // drivers' clamps per leg slot (both legs)
   std::uint64_t refused_commands = 0, csp_holds = 0, drive_loop_saturations = 0;
   std::uint64_t ruiwo_clamp_events = 0;

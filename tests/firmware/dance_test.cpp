@@ -4,6 +4,7 @@
 // both ways) -- allocation-free on both.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -347,6 +348,67 @@ TEST(Dance, RehearsalsBeforeTheDanceLeaveItsFirstPlanUnchanged) {
 // The output stage's reference limit: within the slack a reference past a stop is put on it
 // and counted; beyond it the reference is left for the safety filter (dance), unless the
 // slack is infinite (finish, gains fading): then every excess goes on the stop, counted.
+// The control task's rehearsal (dance.h, dance_rehearse_rt): in stand-up and ready, before
+// the first dance, the dance's first tick runs on that tick's sensors and its command is
+// dropped. The oracle is the dance without rehearsals: rehearsed on sensors far from the
+// dance's (joints 0.05 rad off, moving, the base tilted), the dance's first 60 ticks give
+// the same commands to the bit. The rehearsals ran the WBC (a torque comes out of them),
+// count, and stop once the dance has started.
+TEST(Dance, ControlRehearsalsLeaveTheDanceUnchanged) {
+  const model::Model& m = test_model();
+  const planner::MotionPlan& motion = standing_motion();
+  const dynamics::JointVector pose = motion.q[0].tail<model::kNumJoints>();
+  DanceControl& d = control_side();
+  constexpr int kTicks = 60;
+  static std::array<hal::CommandFrame, kTicks> plain, rehearsed;
+  const auto dance = [&](bool rehearse, std::array<hal::CommandFrame, kTicks>& out) {
+    Firmware& f = firmware_in_dance();
+    const char* error = nullptr;
+    ASSERT_TRUE(dance_init(d, planner_side(), channels(), m, mpc_stack(), f.config, motion, error)) << error;
+    d.rehearse = rehearse;
+    for (int i = 0; i < 20; ++i) {
+      hal::SensorFrame away = standing_sensors(pose, 0);
+      for (int j = 0; j < model::kNumJoints; ++j) {
+        away.joints[j].position_rad += 0.05 * std::sin(0.7 * j + 0.3 * i);
+        away.joints[j].velocity_rad_s = 0.4 * std::cos(0.5 * j + 0.2 * i);
+      }
+      away.imu.orientation_xyzw = {0.02, -0.03, 0.0, std::sqrt(1.0 - 0.02 * 0.02 - 0.03 * 0.03)};
+      away.imu.angular_rate_rad_s = {0.1, -0.2, 0.05};
+      dance_rehearse_rt(d, i % 2 == 0 ? Mode::kStandUp : Mode::kReady, away);
+    }
+    dance_rehearse_rt(d, Mode::kDamping, standing_sensors(pose, 0));  // not in damping
+    EXPECT_EQ(d.rehearsals, rehearse ? 20u : 0u);
+    EXPECT_EQ(d.rehearsal_failures, 0u);
+    EXPECT_FALSE(d.stack.started);
+    if (rehearse) {
+      EXPECT_TRUE(d.rehearsal_command.joints[3].torque_ff_Nm != 0.0 &&
+                  std::isfinite(d.rehearsal_command.joints[3].torque_ff_Nm));  // the left knee carries weight
+    }
+    for (int k = 0; k < kTicks; ++k) {
+      const hal::TimeNs t = 2'000'000 * static_cast<hal::TimeNs>(k);
+      ASSERT_TRUE(dance_step_rt(d, f.standing, standing_sensors(pose, t), t, out[static_cast<std::size_t>(k)]));
+      dance_rehearse_rt(d, Mode::kReady, standing_sensors(pose, t));  // the dance runs: no rehearsal
+    }
+    EXPECT_EQ(d.rehearsals, rehearse ? 20u : 0u);
+    EXPECT_EQ(d.counters.wbc_not_ok_ticks, 0u);
+    dance_stop_rt(d);
+    dance_rehearse_rt(d, Mode::kReady, standing_sensors(pose, 0));  // after a dance: none
+    EXPECT_EQ(d.rehearsals, rehearse ? 20u : 0u);
+  };
+  dance(false, plain);
+  dance(true, rehearsed);
+  for (int k = 0; k < kTicks; ++k) {
+    for (int j = 0; j < model::kNumJoints; ++j) {
+      const hal::JointCommand &a = plain[static_cast<std::size_t>(k)].joints[j],
+                             &b = rehearsed[static_cast<std::size_t>(k)].joints[j];
+      ASSERT_TRUE(a.torque_ff_Nm == b.torque_ff_Nm && a.position_ref_rad == b.position_ref_rad &&
+                  a.velocity_ref_rad_s == b.velocity_ref_rad_s && a.kp_Nm_per_rad == b.kp_Nm_per_rad &&
+                  a.kd_Nm_s_per_rad == b.kd_Nm_s_per_rad)
+          << "tick " << k << ", joint " << j;
+    }
+  }
+}
+
 TEST(Dance, ReferencesPastAStopArePutOnItWithinTheSlackAndCounted) {
   const model::Model& m = test_model();
   const int ankle = 4;
