@@ -129,6 +129,13 @@ struct TimedPlanner {
   }
 };
 
+// The stall probe's body: half of each period spinning on the clock (stall_probe.h).
+struct StallProbeBody {
+  rtos::StallStats* stats;
+  hal::TimeNs spin_ns;
+  void operator()(const rtos::CycleInfo&) noexcept { rtos::stall_probe_spin_rt(rtos::MonotonicClock{}, spin_ns, *stats); }
+};
+
 }  // namespace
 
 bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, const FirmwareConfig& fw_config,
@@ -200,6 +207,17 @@ bool run_timing(const model::Model& m, const drivers::DriversConfig& drivers, co
   report.control_skipped_periods = control_task.perf().skipped_periods;
   report.max_wake_latency_us = 1e-3 * static_cast<double>(control_task.perf().max_wake_latency_ns);
 
+  if (config.stall_probe_s > 0.0) {
+    StallProbeBody probe{&report.machine, period_ns / 2};
+    rtos::PeriodicTask probe_task;
+    rtos::PeriodicConfig probe_config = pc;
+    probe_config.max_cycles = static_cast<std::uint64_t>(std::llround(config.stall_probe_s * 1e9 / static_cast<double>(period_ns)));
+    (void)probe_task.start(probe_config, probe);  // the set-up the control task had (reported above)
+    while (!probe_task.finished()) rtos::sleep_until_ns_rt(rtos::now_ns() + 50'000'000);
+    probe_task.join();
+    report.machine_wake_latency_us = 1e-3 * static_cast<double>(probe_task.perf().max_wake_latency_ns);
+  }
+
   report.fault = firmware.mode.latched;
   report.danced_to_end = task.danced_until_ns >= 0 && report.fault == Fault::kNone;
   const double control_deadline_us = 1e-3 * static_cast<double>(period_ns);
@@ -243,6 +261,16 @@ std::string timing_table(const TimingReport& r, hal::TimeNs control_period_ns, h
                 static_cast<unsigned long long>(r.planner_overruns), static_cast<unsigned long long>(r.rehearsals),
                 static_cast<unsigned long long>(r.rehearsal_failures));
   out += line;
+  if (r.machine.reads > 0) {
+    const auto& m = r.machine;
+    std::snprintf(line, sizeof line,
+                  "machine: spinning %.1f s on the control task's CPU and priority (half of each period), the CPU was "
+                  "taken away for up to %.1f us (%llu times over 50 us, %llu over 150 us); wake latency up to %.1f us\n",
+                  1e-9 * static_cast<double>(m.spun_ns), 1e-3 * static_cast<double>(m.max_gap_ns),
+                  static_cast<unsigned long long>(m.gaps_over[1]), static_cast<unsigned long long>(m.gaps_over[3]),
+                  r.machine_wake_latency_us);
+    out += line;
+  }
   return out;
 }
 

@@ -14,6 +14,10 @@
 // A cycle misses its deadline beyond the control period, an MPC iteration beyond the
 // planner period; the control task's overruns (a release missed) count as misses too, except
 // with evict_caches, whose 64 MB write is part of the body.
+// After the dance, the machine's own floor (rtos_shim/stall_probe.h): the control task's
+// CPU and priority spin half of each control period for stall_probe_s, and the longest time
+// the CPU was taken away from them is reported beside the stages (not a deadline: the
+// machine's, which no controller change moves).
 #pragma once
 
 #include <cstdint>
@@ -23,6 +27,7 @@
 #include "drivers/config/drivers_config.h"
 #include "firmware/control_task.h"
 #include "rtos_shim/rt_setup.h"
+#include "rtos_shim/stall_probe.h"
 
 namespace kuavo::firmware {
 
@@ -30,6 +35,7 @@ struct TimingConfig {
   bool evict_caches = false;  // write kEvictBytes before each control tick
   std::uint64_t seed = 1;     // the emulators' generators (no fault is injected)
   rtos::RtConfig rt{};        // the control task's real-time set-up (the loop's thread)
+  double stall_probe_s = 10.0;  // after the dance; 0: none
 };
 
 // Larger than the NUC's i9-13900H last-level cache (24 MB) and this machine's.
@@ -55,6 +61,10 @@ struct TimingReport {
   // dance did not run: the stack follows the clock, not a tick count).
   std::uint64_t control_skipped_periods = 0;
   double max_wake_latency_us = 0.0;
+  // The stall probe after the dance: what the machine took from a spinning thread on the
+  // control task's CPU and priority, and that thread's worst wake latency.
+  rtos::StallStats machine{};
+  double machine_wake_latency_us = 0.0;
   bool danced_to_end = false;  // the dance ran to its finish without a fault
   Fault fault = Fault::kNone;
   bool realtime = false;       // the real-time set-up fully applied
