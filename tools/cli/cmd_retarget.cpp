@@ -357,6 +357,16 @@ int run(int argc, char** argv) {
     }
     out_q = &dynamic.q;
     out_contacts = &dynamic.contacts;
+    // The optimization did not converge to a motion it stands behind (retarget_dynamic.h).
+    if (const auto& unsound = j["dynamic"]["unsound"]; !unsound.empty()) {
+      std::string why;
+      for (const auto& r : unsound) why += (why.empty() ? "" : "; ") + r.get<std::string>();
+      std::fprintf(stderr,
+                   "kuavo retarget: warning: the dynamic optimization did not converge on this dance with %.2f s "
+                   "windows: %s; no robot dances such a motion. A longer window sees each single support to its "
+                   "end (the default, 1.0 s, converges on every dance we have)\n",
+                   j["dynamic"]["window_s"].get<double>(), why.c_str());
+    }
     // The closed-loop check still saw a fall: the motion is written (a user may edit its
     // repairs, or dance it on the other ground), and the message says where it falls.
     const auto& v = j["dynamic"]["verification"];

@@ -8,7 +8,9 @@
 //    single-support frames, the mean CoM speed over the dance (lead-in and tail left out:
 //    they are the same at every horizon) and the oracle's torque / friction violations; the
 //    geometric motion's two speeds as the reference. A horizon whose stage fails keeps its
-//    message under "error" and the sweep goes on.
+//    message under "error" and the sweep goes on; one whose result the optimization does not
+//    stand behind (retarget_dynamic.h: windows at the cap, the oracle's support and torques)
+//    lists why under "unsound", and Fig. 6's titles name it.
 //  - DIR/fig6_horizon.svg: the two speeds and the solve time against the horizon.
 // Solve times are wall clock on this machine, so the JSON differs from run to run there.
 // Exit: 0 when at least one horizon solved, 1 when none did or an output cannot be written,
@@ -226,15 +228,20 @@ int run(int argc, char** argv) {
     row["friction_violations"] = d["friction_violations"];
     row["max_torque_ratio"] = d["max_torque_ratio"];
     row["zmp_outside_m_max"] = d["zmp_outside_m_max"];
+    row["unsound"] = d["unsound"];
     rows.push_back(row);
-    if (const int capped = d["windows_at_iteration_cap"].get<int>(); capped > 0) {
+    const bool sound = d["unsound"].empty();
+    if (!sound) {
+      unsound += (unsound.empty() ? "" : ", ") + short_number(h) + " s unsound";
+    } else if (const int capped = d["windows_at_iteration_cap"].get<int>(); capped > 0) {
       unsound += (unsound.empty() ? "" : ", ") + short_number(h) + " s " + std::to_string(capped) +
                  " windows at the iteration cap";
     }
     std::printf(
         "kuavo retarget-sweep: horizon %.2f s: %.1f s (%.1f s per 1e4 frames), %d windows, %d at the cap, swing leg "
-        "%.3f rad/s, CoM %.3f m/s\n",
-        h, solve_s, per_frames[k], d["windows"].get<int>(), d["windows_at_iteration_cap"].get<int>(), swing[k], com[k]);
+        "%.3f rad/s, CoM %.3f m/s%s\n",
+        h, solve_s, per_frames[k], d["windows"].get<int>(), d["windows_at_iteration_cap"].get<int>(), swing[k], com[k],
+        sound ? "" : " (unsound: the optimization did not converge)");
     std::fflush(stdout);
   }
   sweep["horizons"] = rows;

@@ -126,6 +126,25 @@ bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim:
   return true;
 }
 
+std::vector<std::string> dynamic_unsound_reasons(int windows, int windows_at_cap, double zmp_outside_m,
+                                                 double max_torque_ratio) {
+  std::vector<std::string> why;
+  char buf[160];
+  if (windows > 0 && static_cast<double>(windows_at_cap) > kUnsoundCapShare * windows) {
+    std::snprintf(buf, sizeof buf, "%d of %d optimization windows stopped at the iteration cap", windows_at_cap, windows);
+    why.emplace_back(buf);
+  }
+  if (!(zmp_outside_m <= kUnsoundZmpOutside_m)) {
+    std::snprintf(buf, sizeof buf, "its centre of pressure leaves the support by up to %.3g m", zmp_outside_m);
+    why.emplace_back(buf);
+  }
+  if (!(max_torque_ratio <= kUnsoundTorqueRatio)) {
+    std::snprintf(buf, sizeof buf, "a joint needs %.3g times its torque limit", max_torque_ratio);
+    why.emplace_back(buf);
+  }
+  return why;
+}
+
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
                       DynamicStageResult& result, ordered_json& report, std::string& error) {
@@ -529,6 +548,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["friction_violations"] = dyn_check.friction_violations;
   d["zmp_outside_m_max"] = dyn_check.zmp_outside_m_max;
   d["max_torque_ratio"] = dyn_check.max_torque_ratio;
+  d["unsound"] = dynamic_unsound_reasons(s.windows, s.windows_not_converged, dyn_check.zmp_outside_m_max,
+                                         dyn_check.max_torque_ratio);
   // The CoM path each stage keeps, and where it goes: the geometric frames, the reference the
   // repairs hand the optimization (result.repaired.q), the result. Output frame i shows
   // geometric frame i − lead_frames; a repair's range is in the output clock.

@@ -139,6 +139,25 @@ struct DynamicStageResult {
 // positive or the run is too short for the push's window.
 bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim::Push& out);
 
+// Why the optimization does not stand behind its result (empty: it does), from the TO's own
+// convergence and the independent oracle (dynamics_check.h) on the frames it wrote:
+//  - more than kUnsoundCapShare of its windows stopped at the iteration cap;
+//  - the oracle's centre of pressure leaves the support by more than kUnsoundZmpOutside_m;
+//  - the oracle's largest |τ|/limit exceeds kUnsoundTorqueRatio.
+// What separates them, measured (`kuavo retarget-sweep` and `kuavo retarget --verify 0`, at 736ad8d): at the default 1.0 s window
+// the four dances (built-in, perfume, cmu_05_07, cmu_05_20) stop 0-8 % of their windows at the
+// cap, leave the support by at most 0.004 m and reach |τ|/limit 2.2-3.1; on the CMU clips
+// windows of 0.2-0.6 s stop 21-49 % at the cap, leave the support by 3.6-4655 m and reach
+// 308-695 (the short window cannot see a single support's end, the CoM runs off, the stance
+// leg reaches its stops and the iterations stall: a motion no robot dances), and at 0.8 s
+// cmu_05_20 28 %, 1.74 m, 49 and cmu_05_07 9 %, 0.016 m, 34. `kuavo retarget` warns, the
+// report says it ("unsound"), the sweep marks such horizons.
+inline constexpr double kUnsoundCapShare = 0.2;
+inline constexpr double kUnsoundZmpOutside_m = 0.02;
+inline constexpr double kUnsoundTorqueRatio = 10.0;
+std::vector<std::string> dynamic_unsound_reasons(int windows, int windows_at_cap, double zmp_outside_m,
+                                                 double max_torque_ratio);
+
 // 0 done, 1 the optimization failed, 2 the motion is bad input (the message says why).
 int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targets,
                       const mocap::RetargetResult& geometric, const DynamicStageOptions& options,
