@@ -229,7 +229,7 @@ void dance_stop_rt(DanceControl& d) noexcept;
 // one control tick (estimator, WBC QP from a cold start) -- and its command is discarded.
 // The dance's first tick then finds the stack's memory written 2 ms before and its code
 // and data in the caches. Why: on a VM host that write-protects guest memory left unwritten
-// (firmware/README.md) that first tick took 0.9-1.5 ms, the whole dance's worst cycle, after
+// (firmware/README.md) that first tick took up to 1.5 ms, the whole dance's worst cycle, after
 // the 2 s stand-up left the control state untouched; on the NUC the same is a cold WBC QP.
 // The dance's first tick starts the stack afresh (stack_begin_rt resets the estimator, the
 // WBC and the plan), so the dance runs to the bit as it would without rehearsals

@@ -345,9 +345,6 @@ TEST(Dance, RehearsalsBeforeTheDanceLeaveItsFirstPlanUnchanged) {
   p.rehearse = true;
 }
 
-// The output stage's reference limit: within the slack a reference past a stop is put on it
-// and counted; beyond it the reference is left for the safety filter (dance), unless the
-// slack is infinite (finish, gains fading): then every excess goes on the stop, counted.
 // The control task's rehearsal (dance.h, dance_rehearse_rt): in stand-up and ready, before
 // the first dance, the dance's first tick runs on that tick's sensors and its command is
 // dropped. The oracle is the dance without rehearsals: rehearsed on sensors far from the
@@ -409,6 +406,9 @@ TEST(Dance, ControlRehearsalsLeaveTheDanceUnchanged) {
   }
 }
 
+// The output stage's reference limit: within the slack a reference past a stop is put on it
+// and counted; beyond it the reference is left for the safety filter (dance), unless the
+// slack is infinite (finish, gains fading): then every excess goes on the stop, counted.
 TEST(Dance, ReferencesPastAStopArePutOnItWithinTheSlackAndCounted) {
   const model::Model& m = test_model();
   const int ankle = 4;

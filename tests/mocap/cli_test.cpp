@@ -208,9 +208,9 @@ TEST(mocap_cli, BuiltInDanceTakesADuration) {
 // cmu_05_20's single supports to their ends and stalls (retarget_dynamic.h). The oracle is the
 // independent dynamics check of the frames written (dynamics_check.h): the motion leaves its
 // support by metres and needs many times a joint's torque limit, and `kuavo retarget` says so
-// in a warning (and in the report's "unsound" if the frames are loadable at all) -- while the default window's result of the same
-// clip (mocap_cli.ClosedLoopCheckRepairsWhereTheRobotFalls) and of the built-in dance
-// (mocap_cli.DynamicStageReportAndCsv) have none.
+// in a warning (and in the report's "unsound" if the frames are loadable at all) -- while the
+// default window's result of the same clip (mocap_cli.ClosedLoopCheckRepairsWhereTheRobotFalls)
+// and of the built-in dance (mocap_cli.DynamicStageReportAndCsv) have none.
 TEST(mocap_cli, AWindowTooShortForTheDanceIsReportedUnsound) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string clip = std::string(KUAVO_SHARED_DIR) + "/mocap/cmu_05_20_mb.bvh";
