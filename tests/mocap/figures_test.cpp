@@ -112,6 +112,8 @@ TEST(mocap_figures, HorizonSweepJsonAndFig6) {
   EXPECT_DOUBLE_EQ(rows[0]["horizon_s"].get<double>(), 0.4);  // sorted for the plot
   EXPECT_DOUBLE_EQ(rows[1]["horizon_s"].get<double>(), 1.0);
   EXPECT_FALSE(rows[1].contains("error")) << rows[1]["error"];  // the default horizon solves
+  ASSERT_TRUE(rows[1]["unsound"].is_array());
+  EXPECT_TRUE(rows[1]["unsound"].empty()) << rows[1]["unsound"].dump();  // ... to a result it stands behind
   for (const auto& row : rows) {
     if (row.contains("error")) {  // a failed horizon keeps its message
       EXPECT_FALSE(row["error"].get<std::string>().empty());

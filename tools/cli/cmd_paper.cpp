@@ -216,7 +216,8 @@ int run_paper(int argc, char** argv) {
     }
     fig6.rows.push_back({fmt("%.1f", r.value("horizon_s", 0.0)), fmt("%.3f", r.value("swing_leg_speed_rad_s", NAN)),
                          fmt("%.3f", r.value("com_speed_m_s", NAN)), fmt("%.1f", r.value("solve_s_per_1e4_frames", NAN)),
-                         fmt("%.0f", r.value("windows_at_iteration_cap", 0.0))});
+                         fmt("%.0f", r.value("windows_at_iteration_cap", 0.0)) +
+                             (r.value("unsound", Json::array()).empty() ? "" : " (unsound: not converged)")});
   }
   // Ours between 0.6 and 1.0 s, the paper's steep part, as ratios.
   double swing_06 = NAN, swing_10 = NAN, com_06 = NAN, com_10 = NAN;
