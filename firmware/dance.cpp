@@ -261,6 +261,18 @@ void dance_before_cycle_rt(DanceControl& d, const Firmware& fw, hal::TimeNs now_
   in.dance_done = now_ns - d.start_ns >= d.duration_ns + d.settle_ns;
 }
 
+namespace {
+
+// What the drives can deliver this tick, into the WBC's workspace: the ankle motors mapped at
+// the sampled ankle angles, the serial leg drives' limits, the torque cap.
+void bind_drive_limits_rt(DanceControl& d, const hal::SensorFrame& sensors) noexcept {
+  if (d.ankle_motors.active) drivers::map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
+  d.stack.wbc.serial_drive_limits = d.serial_drives;
+  d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
+}
+
+}  // namespace
+
 bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal::SensorFrame& sensors,
                    hal::TimeNs now_ns, hal::CommandFrame& out) noexcept {
   if (!d.running) {
@@ -276,9 +288,7 @@ bool dance_step_rt(DanceControl& d, control::StandingState& standing, const hal:
     d.on_kinematic_fallback = false;
   }
   const hal::TimeNs t_ns = now_ns - d.start_ns;
-  if (d.ankle_motors.active) drivers::map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
-  d.stack.wbc.serial_drive_limits = d.serial_drives;
-  d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
+  bind_drive_limits_rt(d, sensors);
   d.last_wbc = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, t_ns, stack::StateOverride{}, out);
   if (d.last_wbc != wbc::WbcStatus::kOk) ++d.counters.wbc_not_ok_ticks;
   // Finishing, the gains fade and the robot sags under the controller, which answers with
@@ -305,9 +315,7 @@ void dance_rehearse_rt(DanceControl& d, Mode mode, const hal::SensorFrame& senso
   d.stack.stage_clock = nullptr;
   bool ok = stack::stack_begin_rt(*d.model, d.config, d.stack, *d.motion, d.first_plan, sensors, 0);
   if (ok) {
-    if (d.ankle_motors.active) drivers::map_ankle_motors_rt(d.ankle_motors, sensors, d.stack.wbc.ankle_motor_limits);
-    d.stack.wbc.serial_drive_limits = d.serial_drives;
-    d.stack.wbc.torque_cap_Nm = d.torque_cap_Nm;
+    bind_drive_limits_rt(d, sensors);
     ok = stack::stack_control_tick_rt(*d.model, d.config, d.stack, sensors, 0, stack::StateOverride{},
                                       d.rehearsal_command) == wbc::WbcStatus::kOk;
   }

@@ -132,6 +132,11 @@ void dance_end_to_end(const char* name, const planner::MotionPlan& motion, bool 
   EXPECT_EQ(FirmwareLoop::planner().rehearsal_failures, 0u);
   EXPECT_EQ(planner_allocs_before, 0u) << "heap use in the planning task's rehearsals";
   const DanceControl& d = FirmwareLoop::dance();
+  // The control task rehearsed the dance's first tick in each stand-up and ready tick
+  // (dance_rehearse_rt), every one solved, and none of those cycles touched the heap.
+  EXPECT_GE(d.rehearsals, 1000u);  // the 2 s stand-up alone is 1000 control ticks
+  EXPECT_EQ(d.rehearsal_failures, 0u);
+  EXPECT_EQ(allocs_before, 0u) << "heap use in the control task's cycles before the dance";
   static dynamics::Data data;
   planner::PlanKnot knot;
   double sq_legs = 0.0, sq_arms = 0.0, min_base_z = 1e9, max_tilt_deg = 0.0, entry_step_Nm = 0.0;
