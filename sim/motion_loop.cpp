@@ -401,6 +401,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.estimator_gated_corner_ticks = control->estimator.gated_corner_ticks;
   out.estimator_unloaded_foot_ticks = control->estimator_unloaded_foot_ticks;
   out.lean_trim = config.stack.lean_trim.enabled;
+  out.lean_trim_opening = config.stack.lean_trim.learn == stack::LeanTrimLearn::kOpening;
   out.planner_sole_inset_m = config.stack.planner == stack::PlannerKind::kMpc ? config.stack.planner_sole_inset_m : 0.0;
   out.lean_trim_roll_deg = control->lean_trim.theta_rad.x() * 180.0 / 3.14159265358979323846;
   out.lean_trim_pitch_deg = control->lean_trim.theta_rad.y() * 180.0 / 3.14159265358979323846;
@@ -497,8 +498,9 @@ std::string motion_summary_json(const MotionSummary& s) {
   };
   if (s.lean_trim) {
     std::snprintf(buf, sizeof buf,
-                  "\"lean_trim\": {\"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, \"saturated_ticks\": %llu}",
-                  s.lean_trim_roll_deg, s.lean_trim_pitch_deg, static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
+                  "\"lean_trim\": {\"learn\": \"%s\", \"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, "
+                  "\"saturated_ticks\": %llu}",
+                  s.lean_trim_opening ? "opening" : "always", s.lean_trim_roll_deg, s.lean_trim_pitch_deg, static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
                   static_cast<unsigned long long>(s.lean_trim_saturated_ticks));
     append(buf);
   }

@@ -117,6 +117,7 @@ struct MotionSummary {
   double planner_sole_inset_m = 0.0;
   // The lean trim (controllers/stack/lean_trim.h), in the summary only when it is on.
   bool lean_trim = false;
+  bool lean_trim_opening = false;  // learned in the opening stand only (LeanTrimLearn::kOpening)
   double lean_trim_roll_deg = 0.0, lean_trim_pitch_deg = 0.0;  // at the end
   std::uint64_t lean_trim_integrated_ticks = 0, lean_trim_saturated_ticks = 0;
 };

@@ -113,6 +113,7 @@ wbc::WbcStatus stack_control_tick_rt(const model::Model& model, const StackConfi
   }
   const wbc::WbcStatus status = wbc::wbc_step_rt(model, config.wbc, ws.wbc, *q_wbc, v, ws.reference, now_ns, command);
   if (trim) {
+    lean_trim_note_plan_rt(config.lean_trim, ws.lean_trim, ws.reference.in_contact);
     lean_trim_update_rt(config.lean_trim, ws.lean_trim, ws.wbc.data, ws.wbc.point_position_m,
                         ws.wbc.diagnostics.contact_force_N, v, status == wbc::WbcStatus::kOk, model::kGravity_m_s2, dt_s);
   }

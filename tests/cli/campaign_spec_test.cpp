@@ -116,31 +116,34 @@ TEST(CampaignSpec, OptionalNumbersAreOptIn) {
   }
 }
 
-// The lean trim is opt-in (absent: off), the holdable-soles trigger on by default (absent:
-// on), as in `kuavo simulate`; false and true set them; anything but a boolean is refused by
-// name.
-TEST(CampaignSpec, LeanTrimOptInHoldableSolesOnByDefault) {
+// The holdable-soles trigger on by default (absent: on), as in `kuavo simulate`; false and
+// true set it; anything but a boolean is refused by name. The lean trim: absent, simulate's
+// default; a mode by name, or a boolean (true: "on", false: "off"); anything else refused.
+TEST(CampaignSpec, LeanTrimModesHoldableSolesOnByDefault) {
   const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
-  struct Key {
-    const char* name;
-    bool cli::CampaignSpec::*flag;
-    bool absent;
-  };
-  const Key keys[] = {{"lean_trim", &cli::CampaignSpec::lean_trim, false},
-                      {"holdable_soles", &cli::CampaignSpec::holdable_soles, true}};
-  for (const auto& [key, flag, absent] : keys) {
-    cli::CampaignSpec s;
-    std::string error;
-    ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
-    EXPECT_EQ(s.*flag, absent) << key;
-    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + key + "\":true}", s, error)) << error;
-    EXPECT_TRUE(s.*flag) << key;
-    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"" + key + "\":false}", s, error)) << error;
-    EXPECT_FALSE(s.*flag) << key;
-    for (const char* bad : {"1", "\"on\""}) {
-      EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"" + key + "\":" + bad + "}", s, error)) << key << " " << bad;
-      EXPECT_NE(error.find(key), std::string::npos) << error;
-    }
+  cli::CampaignSpec s;
+  std::string error;
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_TRUE(s.holdable_soles);
+  EXPECT_FALSE(s.lean_trim.has_value());
+  ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"holdable_soles\":false}", s, error)) << error;
+  EXPECT_FALSE(s.holdable_soles);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"holdable_soles\":true}", s, error)) << error;
+  EXPECT_TRUE(s.holdable_soles);
+  for (const char* bad : {"1", "\"on\""}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"holdable_soles\":" + bad + "}", s, error)) << bad;
+    EXPECT_NE(error.find("holdable_soles"), std::string::npos) << error;
+  }
+  const std::pair<const char*, const char*> modes[] = {
+      {"\"off\"", "off"}, {"\"opening\"", "opening"}, {"\"always\"", "always"}, {"true", "on"}, {"false", "off"}};
+  for (const auto& [json, flag] : modes) {
+    ASSERT_TRUE(cli::parse_campaign_spec(head + ",\"lean_trim\":" + json + "}", s, error)) << error;
+    ASSERT_TRUE(s.lean_trim.has_value()) << json;
+    EXPECT_EQ(*s.lean_trim, flag) << json;
+  }
+  for (const char* bad : {"1", "\"on\"", "\"Opening\"", "null"}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"lean_trim\":" + bad + "}", s, error)) << bad;
+    EXPECT_NE(error.find("lean_trim"), std::string::npos) << error;
   }
 }
 

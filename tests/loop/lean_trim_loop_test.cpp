@@ -22,6 +22,8 @@ sim::MotionRunConfig standing_config(bool trim) {
   sim::MotionRunConfig cfg;
   cfg.stack.planner = stack::PlannerKind::kMpc;
   cfg.stack.lean_trim.enabled = trim;
+  // The observer's loop itself: no dead band (lean_trim.h), so the trim can reach the truth.
+  cfg.stack.lean_trim.residual_deadband_N = 0.0;
   cfg.ideal_sensors = true;
   cfg.run.ground = sim::kFloor;
   return cfg;
@@ -88,6 +90,26 @@ TEST(LeanTrimLoop, AModelCoMErrorIsTrimmedOut) {
   // A CoM forward and to the left is trimmed as a lean: pitch forward (+), roll left (−).
   EXPECT_GT(on.lean_trim_pitch_deg, 0.2);
   EXPECT_LT(on.lean_trim_roll_deg, -0.2);
+}
+
+// kOpening on a motion that stands 2 s and then steps (the right foot up over 2.0–2.4 s): the
+// trim learns the injected IMU tilt in the stand, at opening_time_constant_s, and holds it
+// from the lift-off on. Oracle: the injected tilt; the opening's length bounds the ticks.
+TEST(LeanTrimLoop, TheOpeningLearnsATiltedImuBeforeTheFirstStepAndHoldsIt) {
+  static const auto stepping = stepping_motion();
+  const Eigen::Vector2d tilt(0.6 * kDeg, -0.8 * kDeg);
+  sim::MotionRunConfig cfg = standing_config(true);
+  cfg.imu_tilt_rad = tilt;
+  cfg.stack.lean_trim.learn = stack::LeanTrimLearn::kOpening;
+  const sim::MotionSummary on = sim::run_motion(s45_robot(), *stepping, cfg);
+  std::printf("opening trim, IMU tilt (0.6, -0.8) deg: trim (%.3f, %.3f) deg, %llu ticks learned\n",
+              on.lean_trim_roll_deg, on.lean_trim_pitch_deg, static_cast<unsigned long long>(on.lean_trim_integrated_ticks));
+  ASSERT_TRUE(on.run.ok);
+  EXPECT_FALSE(on.run.fell);
+  EXPECT_NEAR(on.lean_trim_roll_deg, -0.6, 0.15);
+  EXPECT_NEAR(on.lean_trim_pitch_deg, 0.8, 0.15);
+  EXPECT_GT(on.lean_trim_integrated_ticks, 0u);
+  EXPECT_LT(on.lean_trim_integrated_ticks, 2.0 / 0.002);  // none after the lift-off at 2.0 s
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // failed QP do what they say.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -39,6 +40,8 @@ struct Ticks {
 TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
+  ASSERT_EQ(cfg.learn, LeanTrimLearn::kAlways);
+  ASSERT_GT(cfg.residual_deadband_N, 0.0);
   LeanTrimState s;
   Ticks t;
   // Standing with the true CoM off the believed one: the ground pushes the CoM with d, the WBC
@@ -57,8 +60,10 @@ TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
     r += cfg.observer_gain_1_s * kDt * (d - r);
     quiet_s += kDt;
     if (quiet_s >= cfg.quasi_static_hold_s) {
-      theta.x() -= kDt * r.y() / (kMass * kG * cfg.time_constant_s);
-      theta.y() += kDt * r.x() / (kMass * kG * cfg.time_constant_s);
+      // Learned: r less the dead band, along r (|r| passes 3 N within 0.1 s here).
+      const double kept = std::max(0.0, 1.0 - cfg.residual_deadband_N / r.norm());
+      theta.x() -= kDt * kept * r.y() / (kMass * kG * cfg.time_constant_s);
+      theta.y() += kDt * kept * r.x() / (kMass * kG * cfg.time_constant_s);
       ++integrated;
     }
     if (k == 50) {
@@ -191,6 +196,85 @@ TEST(LeanTrim, OnlyQuasiStaticPhasesMoveTheTrim) {
   }
 }
 
+// kOpening learns as kAlways does, at its own time constant, until the plan first lifts a
+// sole corner; from that tick the trim holds, whatever the residual, until a reset.
+TEST(LeanTrim, TheOpeningLearnsUntilThePlanLiftsACornerAndThenHolds) {
+  LeanTrimConfig opening;
+  opening.enabled = true;
+  opening.learn = LeanTrimLearn::kOpening;
+  LeanTrimConfig always = opening;
+  always.learn = LeanTrimLearn::kAlways;
+  ASSERT_NE(opening.opening_time_constant_s, always.time_constant_s);
+  Ticks t;
+  t.plan(-Eigen::Vector2d(6.0, -3.0));
+  planner::ContactFlags down;
+  down.fill(true);
+  LeanTrimState a, b;
+  const auto tick = [&](const LeanTrimConfig& c, LeanTrimState& s, const planner::ContactFlags& planned) {
+    lean_trim_note_plan_rt(c, s, planned);
+    lean_trim_update_rt(c, s, t.data, t.points, t.forces, t.v, true, kG, kDt);
+  };
+  for (int k = 0; k < 1000; ++k) {
+    tick(opening, a, down);
+    tick(always, b, down);
+  }
+  // The same residuals and gates: the trims differ by the ratio of the time constants.
+  EXPECT_FALSE(a.opening_over);
+  EXPECT_EQ(a.integrated_ticks, b.integrated_ticks);
+  EXPECT_GT(b.theta_rad.norm(), 1e-3);
+  EXPECT_NEAR((a.theta_rad - b.theta_rad * (always.time_constant_s / opening.opening_time_constant_s)).norm(), 0.0,
+              1e-12);
+  // One corner lifted (the right heel) ends the opening; the trim holds from then on, with
+  // the foot down again too.
+  planner::ContactFlags lifted = down;
+  lifted[model::kNumContactPoints - 1] = false;
+  const Eigen::Vector2d learned = a.theta_rad;
+  const std::uint64_t ticks = a.integrated_ticks;
+  tick(opening, a, lifted);
+  EXPECT_TRUE(a.opening_over);
+  for (int k = 0; k < 500; ++k) tick(opening, a, down);
+  EXPECT_EQ(a.theta_rad, learned);
+  EXPECT_EQ(a.integrated_ticks, ticks);
+  // kAlways goes on learning through a lift-off.
+  const std::uint64_t b_ticks = b.integrated_ticks;
+  for (int k = 0; k < 10; ++k) tick(always, b, lifted);
+  EXPECT_EQ(b.integrated_ticks, b_ticks + 10);
+  // A reset starts a new opening; off, the plan is not even noted.
+  lean_trim_reset(a);
+  EXPECT_FALSE(a.opening_over);
+  opening.enabled = false;
+  lean_trim_note_plan_rt(opening, a, lifted);
+  EXPECT_FALSE(a.opening_over);
+}
+
+// A residual inside the dead band (what joint friction can hold) moves nothing; past it, only
+// the excess is learned.
+TEST(LeanTrim, TheDeadBandLearnsOnlyTheResidualFrictionCannotHold) {
+  LeanTrimConfig cfg;
+  cfg.enabled = true;
+  Ticks t;
+  LeanTrimState inside, past, open;
+  const auto run = [&](const LeanTrimConfig& c, LeanTrimState& s, const Eigen::Vector2d& d) {
+    t.plan(-d);
+    for (int k = 0; k < 1000; ++k) lean_trim_update_rt(c, s, t.data, t.points, t.forces, t.v, true, kG, kDt);
+  };
+  run(cfg, inside, Eigen::Vector2d(0.0, 0.9 * cfg.residual_deadband_N));
+  EXPECT_GT(inside.integrated_ticks, 0u);  // the gate let it learn; there was nothing to learn
+  EXPECT_TRUE(inside.theta_rad.isZero(0.0));
+  // 3·d: once the residual has settled (within 1e-6 N after 2 s), the trim's rate is 2/3 of
+  // what the band-free trim learns from the same residual.
+  LeanTrimConfig no_band = cfg;
+  no_band.residual_deadband_N = 0.0;
+  const Eigen::Vector2d d(3.0 * cfg.residual_deadband_N, 0.0);
+  run(cfg, past, d);
+  run(no_band, open, d);
+  const Eigen::Vector2d before_past = past.theta_rad, before_open = open.theta_rad;
+  run(cfg, past, d);
+  run(no_band, open, d);
+  EXPECT_GT((open.theta_rad - before_open).norm(), 1e-3);
+  EXPECT_NEAR((past.theta_rad - before_past - (2.0 / 3.0) * (open.theta_rad - before_open)).norm(), 0.0, 1e-9);
+}
+
 TEST(LeanTrim, RefusesABadConfiguration) {
   EXPECT_EQ(lean_trim_validate(LeanTrimConfig{}), nullptr);
   for (const double bad : {0.0, -1.0, 1000.0, std::nan("")}) {
@@ -215,6 +299,19 @@ TEST(LeanTrim, RefusesABadConfiguration) {
     c.quasi_static_hold_s = bad;
     EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
   }
+  for (const double bad : {0.05, 101.0, std::nan("")}) {
+    LeanTrimConfig c;
+    c.opening_time_constant_s = bad;
+    EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
+  }
+  for (const double bad : {-0.1, 40.0, std::nan("")}) {  // 40 N: the residual gate
+    LeanTrimConfig c;
+    c.residual_deadband_N = bad;
+    EXPECT_NE(lean_trim_validate(c), nullptr) << bad;
+  }
+  LeanTrimConfig unknown;
+  unknown.learn = static_cast<LeanTrimLearn>(7);
+  EXPECT_NE(lean_trim_validate(unknown), nullptr);
 }
 
 }  // namespace

@@ -119,8 +119,19 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   if (!boolean(j, "liftoff_hold", s.liftoff_hold, error) || !boolean(j, "plan_anchor", s.plan_anchor, error) ||
-      !boolean(j, "lean_trim", s.lean_trim, error) || !boolean(j, "holdable_soles", s.holdable_soles, error)) {
+      !boolean(j, "holdable_soles", s.holdable_soles, error)) {
     return false;
+  }
+  if (j.contains("lean_trim")) {
+    const nlohmann::json& v = j["lean_trim"];
+    if (v.is_boolean()) {
+      s.lean_trim = v.get<bool>() ? "on" : "off";
+    } else if (v.is_string() && (v == "off" || v == "opening" || v == "always")) {
+      s.lean_trim = v.get<std::string>();
+    } else {
+      error = "\"lean_trim\" must be \"off\", \"opening\", \"always\", true or false";
+      return false;
+    }
   }
   if (!optional_number(j, "plan_anchor_home", 0.0, 0.5, "0..0.5", s.plan_anchor_home, error)) return false;
   if (!optional_number(j, "estimator_unloaded_foot_N", 0.0, 1000.0, "0..1000 N", s.estimator_unloaded_foot_N, error)) {

@@ -14,7 +14,8 @@
 //   "plan_anchor_home"  SHARE: --plan-anchor-home SHARE (absent: simulate's default)
 //   "estimator_unloaded_foot_N"  N: --estimator-unloaded-foot N (absent: simulate's default, off)
 //   "planner_sole_inset_m"  M: --planner-sole-inset M (absent: simulate's default, 0)
-//   "lean_trim"      true: kuavo simulate --lean-trim on (default false)
+//   "lean_trim"      "off" | "opening" | "always": kuavo simulate --lean-trim MODE; true, false:
+//                    "on" (always), "off" (absent: simulate's default)
 //   "holdable_soles" false: kuavo simulate --holdable-soles off (default true)
 //   "duration_s"     0 or absent: each motion's length plus the settling second
 //   "push"           {"impulse_Ns", "duration_s", "start_after_s", "end_before_s"}: one
@@ -61,7 +62,7 @@ struct CampaignSpec {
   std::optional<double> plan_anchor_home;
   std::optional<double> estimator_unloaded_foot_N;
   std::optional<double> planner_sole_inset_m;
-  bool lean_trim = false;
+  std::optional<std::string> lean_trim;  // --lean-trim's value
   bool holdable_soles = true;
   double duration_s = 0.0;
   PushSpec push;

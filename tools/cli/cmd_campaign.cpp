@@ -228,7 +228,7 @@ int run_campaign(int argc, char** argv) {
                       std::to_string(r.seed);
     if (errors) cmd += " --perturb-seed " + std::to_string(r.seed);
     if (spec.liftoff_hold) cmd += " --liftoff-hold on";
-    if (spec.lean_trim) cmd += " --lean-trim on";
+    if (spec.lean_trim) cmd += " --lean-trim " + *spec.lean_trim;
     if (!spec.holdable_soles) cmd += " --holdable-soles off";
     if (spec.plan_anchor) cmd += *spec.plan_anchor ? " --plan-anchor on" : " --plan-anchor off";
     const auto add_number = [&cmd](const char* flag, double value) {

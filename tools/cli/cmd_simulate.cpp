@@ -99,9 +99,11 @@ int run_simulate(int argc, char** argv) {
   // planner_sole_inset_m); 0 (default): the whole soles.
   p.number("--planner-sole-inset", "M", 0.0, 0.04, "m", &motion_cfg.stack.planner_sole_inset_m).modes =
       kMotionRun | kStepRun;
-  // Opt-in: the estimate's base tilt trimmed until the WBC's horizontal forces are the ones the
-  // CoM obeys (controllers/stack/lean_trim.h); off (default): the estimator's tilt.
-  p.choice("--lean-trim", {"on", "off"}, &lean_trim).modes = kMotionRun | kStepRun;
+  // The estimate's base tilt trimmed until the WBC's horizontal forces are the ones the CoM
+  // obeys (controllers/stack/lean_trim.h): learned in the motion's opening stand and held
+  // (opening), or in every quasi-static phase (always; on: its older name); off: the
+  // estimator's tilt.
+  p.choice("--lean-trim", {"off", "opening", "always", "on"}, &lean_trim).modes = kMotionRun | kStepRun;
   p.custom("--plan-latency-ms", "MS in 0..100 ms or measured", [&](const char* v) {
      double ms = 0.0;
      if (!std::strcmp(v, "measured")) return motion_cfg.measured_plan_latency = true;
@@ -160,7 +162,8 @@ int run_simulate(int argc, char** argv) {
   motion_cfg.stack.recovery.early_touchdown = early_touchdown == "on";
   planner::set_holdable_soles(motion_cfg.stack.recovery, holdable == "on");
   motion_cfg.stack.liftoff_hold.enabled = liftoff_hold == "on";
-  motion_cfg.stack.lean_trim.enabled = lean_trim == "on";
+  motion_cfg.stack.lean_trim.enabled = lean_trim != "off";
+  motion_cfg.stack.lean_trim.learn = lean_trim == "opening" ? stack::LeanTrimLearn::kOpening : stack::LeanTrimLearn::kAlways;
   motion_cfg.stack.anchor.enabled = anchor == "on";
   motion_cfg.ideal_sensors = sensors == "ideal";
   cfg.command_latency_ticks = static_cast<int>(latency_ticks);
