@@ -36,8 +36,9 @@
 //             (the observer's transient, 1/K, has passed): in a dance's fast phases the
 //             WBC's forces and the plant part for more reasons than an offset.
 //
-// Off by default (`kuavo simulate --lean-trim on`, campaign key "lean_trim"). Measured on
-// Simbody; the campaigns on carpet, the `show` set, one 10 N·s push, the motions of 2e6abcb:
+// Off by default (`kuavo simulate --lean-trim opening|always`, campaign key "lean_trim").
+// Measured on Simbody; the campaigns on carpet, the `show` set, one 10 N·s push; kAlways
+// (the trim of every quasi-static phase, `on` before kOpening) on the motions of 2e6abcb:
 //  - standing, ideal sensors (LeanTrimLoop): an injected IMU tilt of (0.6°, −0.8°) is trimmed
 //    to (−0.56°, +0.75°) in 10 s, the CoM over the feet 14.2 → 1.0 mm off the truth; every
 //    link's CoM 1.5 cm off in the plant: 20.4 → 11.1 mm only (the residual reaches zero with

@@ -22,6 +22,7 @@ sim::MotionRunConfig standing_config(bool trim) {
   sim::MotionRunConfig cfg;
   cfg.stack.planner = stack::PlannerKind::kMpc;
   cfg.stack.lean_trim.enabled = trim;
+  cfg.stack.lean_trim.learn = stack::LeanTrimLearn::kAlways;  // standing: the trim of every quiet phase
   // The observer's loop itself: no dead band (lean_trim.h), so the trim can reach the truth.
   cfg.stack.lean_trim.residual_deadband_N = 0.0;
   cfg.ideal_sensors = true;

@@ -40,7 +40,7 @@ struct Ticks {
 TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
-  ASSERT_EQ(cfg.learn, LeanTrimLearn::kAlways);
+  ASSERT_EQ(cfg.learn, LeanTrimLearn::kAlways);  // learns in every quasi-static tick
   ASSERT_GT(cfg.residual_deadband_N, 0.0);
   LeanTrimState s;
   Ticks t;
@@ -93,6 +93,7 @@ TEST(LeanTrim, TheResidualFollowsAnUnplannedForceAndTheTrimIntegratesIt) {
 TEST(LeanTrim, TheGateTheBoundAndAFailedQpHoldTheTrim) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
+  cfg.learn = LeanTrimLearn::kAlways;
   Ticks t;
   // The WBC plans −d against an unplanned d and the CoM stays: quasi-static while |d| ≤ 20 N.
   const auto run = [&](LeanTrimState& s, const Eigen::Vector2d& d, int ticks, bool ok) {
@@ -153,6 +154,7 @@ TEST(LeanTrim, TheGateTheBoundAndAFailedQpHoldTheTrim) {
 TEST(LeanTrim, OnlyQuasiStaticPhasesMoveTheTrim) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
+  cfg.learn = LeanTrimLearn::kAlways;
   Ticks t;
   const Eigen::Vector2d d(6.0, 0.0);  // an offset's unplanned force
   // After priming, 399 ticks of the first-order filter: r = d·(1 − (1 − K·dt)^399).
@@ -252,6 +254,7 @@ TEST(LeanTrim, TheOpeningLearnsUntilThePlanLiftsACornerAndThenHolds) {
 TEST(LeanTrim, TheDeadBandLearnsOnlyTheResidualFrictionCannotHold) {
   LeanTrimConfig cfg;
   cfg.enabled = true;
+  cfg.learn = LeanTrimLearn::kAlways;
   Ticks t;
   LeanTrimState inside, past, open;
   const auto run = [&](const LeanTrimConfig& c, LeanTrimState& s, const Eigen::Vector2d& d) {
