@@ -69,6 +69,11 @@
 //    Without the dead band (learning until 1.8 s): 15/400 (0, 9, 5, 1); its trims leaned
 //    +0.16° in roll on average over every motion's seeds, the joints' Coulomb friction
 //    (residual_deadband_N).
+//  - kOpening end to end (each clip retargeted with it on, so the check runs it): built-in
+//    unchanged (7d0f0110); cmu_05_07 (round 7, 8/11 steps) 6/100 against 9; cmu_05_20
+//    (round 8, 4 of the check's seeds given up, 3/7 steps, CoM path 14 %) 14/100 against 1.
+//    So it stays off: the check, dancing with the trim, keeps a cmu_05_20 motion the trim
+//    then drops in the campaign (not yet taken apart).
 // Real-time: fixed-size state, no allocation, no kinematics of its own (it reads what the
 // WBC's tick computed: the CoM, the momentum matrix, the sole corners, the forces).
 #pragma once
