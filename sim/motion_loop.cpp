@@ -500,7 +500,8 @@ std::string motion_summary_json(const MotionSummary& s) {
     std::snprintf(buf, sizeof buf,
                   "\"lean_trim\": {\"learn\": \"%s\", \"roll_deg\": %.4f, \"pitch_deg\": %.4f, \"integrated_ticks\": %llu, "
                   "\"saturated_ticks\": %llu}",
-                  s.lean_trim_opening ? "opening" : "always", s.lean_trim_roll_deg, s.lean_trim_pitch_deg, static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
+                  s.lean_trim_opening ? "opening" : "always", s.lean_trim_roll_deg, s.lean_trim_pitch_deg,
+                  static_cast<unsigned long long>(s.lean_trim_integrated_ticks),
                   static_cast<unsigned long long>(s.lean_trim_saturated_ticks));
     append(buf);
   }

@@ -38,7 +38,7 @@
 //
 // Off by default (`kuavo simulate --lean-trim opening|always`, campaign key "lean_trim").
 // Measured on Simbody; the campaigns on carpet, the `show` set, one 10 N·s push; kAlways
-// (the trim of every quasi-static phase, `on` before kOpening) on the motions of 2e6abcb:
+// (`always`, formerly `on`: the trim of every quasi-static phase) on the motions of 2e6abcb:
 //  - standing, ideal sensors (LeanTrimLoop): an injected IMU tilt of (0.6°, −0.8°) is trimmed
 //    to (−0.56°, +0.75°) in 10 s, the CoM over the feet 14.2 → 1.0 mm off the truth; every
 //    link's CoM 1.5 cm off in the plant: 20.4 → 11.1 mm only (the residual reaches zero with
@@ -92,9 +92,9 @@ namespace kuavo::stack {
 // above measured, with time_constant_s). kOpening: only in the motion's opening double
 // support, until the plan first lifts a sole corner, with opening_time_constant_s; the trim
 // then holds through the dance. The errors it is for are constant over a show (a link's CoM,
-// the IMU's mounting, an encoder's zero), and the opening stand is the one phase in which the
-// residual is nothing but them: later, in the dance's fast phases, it is not (the campaign
-// figures above), and a trim learned there wanders.
+// the IMU's mounting, an encoder's zero), and the opening stand is the phase in which the
+// residual holds least else (joint friction aside: residual_deadband_N); in the dance's fast
+// phases it holds much else (the campaign figures above), and a trim learned there wanders.
 enum class LeanTrimLearn { kAlways, kOpening };
 
 struct LeanTrimConfig {
