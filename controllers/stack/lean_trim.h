@@ -109,10 +109,10 @@ struct LeanTrimConfig {
   double residual_gate_N = 40.0;    // a 1 cm offset is 7 N; a 10 N·s push 100 N
   // The trim learns r·(1 − d/|r|), nothing while |r| ≤ d. Joint Coulomb friction holds a
   // standing robot a little off where the WBC steers it, and the residual reads that as an
-  // offset: measured (the built-in dance's opening, carpet, seeds 1–8, the show set's
-  // coulomb_rel_peak alone against no errors, kOpening, d = 0) the trim learned a mean
-  // +0.28° roll and +0.21° pitch, 2.6 / 2.0 N of residual, on a plant whose CoM is the
-  // model's. d = 3 N passes over that, and leaves 3 N of any larger residual unlearned
+  // offset: measured (the built-in dance's opening, carpet, seeds 1–8, kOpening, d = 0),
+  // with the show set's coulomb_rel_peak alone in the plant the trim learned a mean 0.28°
+  // more roll and 0.21° more pitch than with no errors at all (2.6 / 2.0 N of residual), on
+  // a plant whose CoM is the model's. d = 3 N passes over that, and leaves 3 N of any larger residual unlearned
   // (3/7 of a 1 cm offset). The figures of kAlways above were measured with d = 0.
   double residual_deadband_N = 3.0;
   double min_load_share = 0.5;      // of m·g on the soles
