@@ -72,8 +72,13 @@
 //  - kOpening end to end (each clip retargeted with it on, so the check runs it): built-in
 //    unchanged (7d0f0110); cmu_05_07 (round 7, 8/11 steps) 6/100 against 9; cmu_05_20
 //    (round 8, 4 of the check's seeds given up, 3/7 steps, CoM path 14 %) 14/100 against 1.
-//    So it stays off: the check, dancing with the trim, keeps a cmu_05_20 motion the trim
-//    then drops in the campaign (not yet taken apart).
+//    So it stays off. Of six of those cmu_05_20 falls, three fall with the trim off too (the
+//    checked motion is frailer); the trim drops the others with pitch trims of −0.13° to
+//    −0.35°. Its source is joint friction again: on that motion's opening (51eb55c, seeds
+//    1–4, the band on) the MTi alone trims 0.00–0.04°, Coulomb friction alone −0.06° to
+//    −0.23°. The friction residual depends on the pose, and a band wide enough for every pose
+//    swallows the offsets the trim is for: the lever is the friction itself (compensated,
+//    or stiction broken by a dither while the trim learns).
 // Real-time: fixed-size state, no allocation, no kinematics of its own (it reads what the
 // WBC's tick computed: the CoM, the momentum matrix, the sole corners, the forces).
 #pragma once
