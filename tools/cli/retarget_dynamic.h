@@ -147,11 +147,11 @@ bool check_push(std::uint64_t seed, double run_length_s, double impulse_Ns, sim:
 // What separates them, measured at 736ad8d (`kuavo retarget-sweep`, `kuavo retarget --verify 0`):
 // at the default 1.0 s window the four dances (built-in, perfume, cmu_05_07, cmu_05_20) stop
 // 0-8 % of their windows at the cap, leave the support by at most 0.004 m and reach |τ|/limit
-// 2.1-3.1; on the CMU clips windows of 0.2-0.6 s stop 21-52 % at the cap, leave the support by 3.6-4655 m and reach
-// 308-695 (the short window cannot see a single support's end, the CoM runs off, the stance
-// leg reaches its stops and the iterations stall: a motion no robot dances), and at 0.8 s
-// cmu_05_20 28 %, 1.74 m, 49 and cmu_05_07 9 %, 0.016 m, 34. `kuavo retarget` warns, the
-// report says it ("unsound"), the sweep marks such horizons.
+// 2.1-3.1; on the CMU clips windows of 0.2-0.6 s stop 21-52 % at the cap, leave the support
+// by 3.6-4655 m and reach 308-695 (the short window cannot see a single support's end, the
+// CoM runs off, the stance leg reaches its stops and the iterations stall: a motion no robot
+// dances), and at 0.8 s cmu_05_20 28 %, 1.74 m, 49 and cmu_05_07 9 %, 0.016 m, 34.
+// `kuavo retarget` warns, the report says it ("unsound"), the sweep marks such horizons.
 inline constexpr double kUnsoundCapShare = 0.2;
 inline constexpr double kUnsoundZmpOutside_m = 0.02;
 inline constexpr double kUnsoundTorqueRatio = 10.0;
