@@ -268,6 +268,13 @@ TEST(mocap_dynamic_retarget, RefusesABadConfig) {
   error.clear();
   EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
   EXPECT_NE(error.find("ankle_motor_share"), std::string::npos) << error;
+  for (const double t : {0.5e-3, std::numeric_limits<double>::quiet_NaN()}) {
+    cfg = DynamicRetargetConfig{};
+    cfg.tail_step_tolerance = t;  // below step_tolerance (1e-3), or not a number
+    error.clear();
+    EXPECT_FALSE(dynamic_retarget(robot(), *plan, cfg, out, error));
+    EXPECT_NE(error.find("tail_step_tolerance"), std::string::npos) << error;
+  }
   // The online MPC's coarse tail is refused: the windows read their stages as frames.
   cfg = DynamicRetargetConfig{};
   EXPECT_EQ(cfg.ocp.tail_stride, 1);
@@ -724,8 +731,8 @@ double max_left_stance_motor(const DynamicResult& r, double dt, double from_s) {
 // touchdown sat where the foot was one commit (0.2 s) earlier, and each such window spent its
 // first iterations dragging the leg there and back. The landing changes only the path to the
 // window's fixed point, not the point: the deterministic iteration count tells the two apart.
-// Measured: 7.33 SQP iterations a window (max 16), 1 rejected step; read unshifted, 18.13
-// (max 64), 12.
+// Measured: 5.73 SQP iterations a window (max 12), 1 rejected step; read unshifted, 14.40
+// (max 53), 12.
 TEST(mocap_dynamic_retarget, WindowsCrossingATouchdownStartFromWhereTheFootLands) {
   const Standing& st = standing();
   const int n = 301;  // 3 s at 100 Hz
