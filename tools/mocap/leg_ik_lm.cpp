@@ -16,19 +16,23 @@ constexpr int kMaxIterations = 60;
 constexpr double kLambdaStart = 1e-6, kLambdaMin = 1e-9, kLambdaMax = 1e3;
 
 double foot_error(const model::Model& robot, dynamics::Data& data, const std::array<Vec3, model::kNumContactPoints>& targets,
-                  const ConfigVector& q, int foot, Err& err, Jac* jac) {
+                  const ConfigVector& q, int foot, Err& err) {
   dynamics::forward_kinematics(robot, data, q);
-  const int first = foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
-  dynamics::FrameJacobian j;
   for (int r = 0; r < 3; ++r) {
     const int c = kCorners[foot][r];
     err.segment<3>(3 * r) = targets[c] - dynamics::frame_position(robot, data, c);
-    if (jac) {
-      dynamics::frame_jacobian(robot, data, c, j);
-      jac->middleRows<3>(3 * r) = j.block<3, 6>(0, 6 + first);
-    }
   }
   return err.norm();
+}
+
+// The foot's corner Jacobian in its leg's joints at the kinematics data holds (foot_error's q).
+void foot_jacobian(const model::Model& robot, dynamics::Data& data, int foot, Jac& jac) {
+  const int first = foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
+  dynamics::FrameJacobian j;
+  for (int r = 0; r < 3; ++r) {
+    dynamics::frame_jacobian(robot, data, kCorners[foot][r], j);
+    jac.middleRows<3>(3 * r) = j.block<3, 6>(0, 6 + first);
+  }
 }
 
 }  // namespace
@@ -45,15 +49,19 @@ double leg_ik_lm(const model::Model& robot, dynamics::Data& data, const std::arr
     double lambda = kLambdaStart;
     Err err, trial_err;
     Jac jac;
-    double e = foot_error(robot, data, targets, q, foot, err, &jac);
+    double e = foot_error(robot, data, targets, q, foot, err);
+    foot_jacobian(robot, data, foot, jac);
     for (int it = 0; it < kMaxIterations && e > 1e-9; ++it) {
       const Eigen::Matrix<double, 6, 6> normal = jac.transpose() * jac + lambda * Eigen::Matrix<double, 6, 6>::Identity();
       const Eigen::Matrix<double, 6, 1> keep = q.segment<6>(col);
       q.segment<6>(col) = (keep + normal.ldlt().solve(jac.transpose() * err)).cwiseMax(lo).cwiseMin(hi);
-      const double trial = foot_error(robot, data, targets, q, foot, trial_err, nullptr);
+      const double trial = foot_error(robot, data, targets, q, foot, trial_err);
       if (trial < e) {
+        // Accepted: data holds the trial's kinematics; the error and Jacobian come from it.
         lambda = std::max(kLambdaMin, 0.3 * lambda);
-        e = foot_error(robot, data, targets, q, foot, err, &jac);
+        e = trial;
+        err = trial_err;
+        foot_jacobian(robot, data, foot, jac);
       } else {
         q.segment<6>(col) = keep;
         lambda *= 10.0;

@@ -4,7 +4,8 @@
 // it lowers the foot's error (controllers/planner/leg_ik is plain Gauss–Newton for start-up
 // poses; near a straight knee it overshoots and, frame after frame, walks the joints off by
 // multiples of 2π). A target out of reach ends at the nearest reachable pose within limits.
-// Returns the largest remaining corner error [m] over the 8 corners. Offline; no allocation.
+// Returns the largest remaining corner error [m] over the 8 corners; data then holds the
+// forward kinematics of the returned q. Offline; no allocation.
 #pragma once
 
 #include <array>
