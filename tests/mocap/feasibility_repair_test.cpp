@@ -630,6 +630,40 @@ TEST(mocap_feasibility_repair, UnreachablePelvisHeightDoesNotGetWorse) {
   for (const Vec3& c : corners_of(mid)) EXPECT_LE(std::abs(c.z()), 2.0 * reachable);
 }
 
+// leg_ik_lm leaves the kinematics of the pose it returns in data (the repair's leg solve reads
+// the stance corners from there), whether its last trial step was taken or not: the right
+// foot 5 cm forward and 2 cm up (reachable), 0.5 m forward (beyond reach; its iteration ends
+// on a rejected trial), 0.3 m down (beyond reach), and the plié's targets; each against a
+// fresh forward kinematics of the returned pose.
+TEST(mocap_feasibility_repair, LegIkLeavesTheReturnedPosesKinematicsInData) {
+  const std::array<Vec3, 3> right_moved = {Vec3(0.05, 0.0, 0.02), Vec3(0.5, 0.0, 0.0), Vec3(0.0, 0.0, -0.3)};
+  const std::array<double, 3> drops = {0.0, 0.0, 0.15};
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE(k);
+    ConfigVector q = standing().q;
+    q[2] -= drops[k];
+    std::array<Vec3, kCorners> targets;
+    for (int c = 0; c < kCorners; ++c) {
+      targets[c] = standing().feet[c / 4].centre + standing().corner_offset[c] + (c >= 4 ? right_moved[k] : Vec3::Zero());
+    }
+    dynamics::Data& data = scratch();
+    const double miss = leg_ik_lm(robot(), data, targets, q);
+    dynamics::Data fresh;
+    dynamics::forward_kinematics(robot(), fresh, q);
+    double worst = 0.0;
+    for (int c = 0; c < kCorners; ++c) {
+      EXPECT_EQ(dynamics::frame_position(robot(), data, c), dynamics::frame_position(robot(), fresh, c)) << "corner " << c;
+      worst = std::max(worst, (targets[c] - dynamics::frame_position(robot(), fresh, c)).cwiseAbs().maxCoeff());
+    }
+    EXPECT_EQ(miss, worst);
+    if (k == 0) {
+      EXPECT_LT(miss, 1e-6);
+    } else {
+      EXPECT_GT(miss, 0.01) << "the precondition: beyond reach";
+    }
+  }
+}
+
 // A dancer on straight legs: the pelvis raised until the knees are nearly straight (the
 // human's stance, scaled), then held. The repair lowers the pelvis (listed as pelvis_height)
 // until every stance knee of the IK's output is bent at least min_stance_knee_rad, without a
