@@ -117,8 +117,9 @@ struct LeanTrimConfig {
   // offset: measured (the built-in dance's opening, carpet, seeds 1–8, kOpening, d = 0),
   // with the show set's coulomb_rel_peak alone in the plant the trim learned a mean 0.28°
   // more roll and 0.21° more pitch than with no errors at all (2.6 / 2.0 N of residual), on
-  // a plant whose CoM is the model's. d = 3 N passes over that, and leaves 3 N of any larger residual unlearned
-  // (3/7 of a 1 cm offset). The figures of kAlways above were measured with d = 0.
+  // a plant whose CoM is the model's. d = 3 N passes over that, and leaves 3 N of any larger
+  // residual unlearned (3/7 of a 1 cm offset). The figures of kAlways above were measured
+  // with d = 0.
   double residual_deadband_N = 3.0;
   double min_load_share = 0.5;      // of m·g on the soles
   // Quasi-static gate: the trim integrates only after the WBC's horizontal force and the CoM's

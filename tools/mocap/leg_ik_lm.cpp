@@ -26,7 +26,7 @@ double foot_error(const model::Model& robot, dynamics::Data& data, const std::ar
 }
 
 // The foot's corner Jacobian in its leg's joints at the kinematics data holds (foot_error's q).
-void foot_jacobian(const model::Model& robot, dynamics::Data& data, int foot, Jac& jac) {
+void foot_jacobian(const model::Model& robot, const dynamics::Data& data, int foot, Jac& jac) {
   const int first = foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst;
   dynamics::FrameJacobian j;
   for (int r = 0; r < 3; ++r) {
