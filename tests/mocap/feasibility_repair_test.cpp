@@ -1165,6 +1165,121 @@ TEST(mocap_feasibility_repair, AttenuationScalesGesturesInsideItsRangeOnly) {
   EXPECT_NEAR(left, 0.4 / 101.0, 1e-6);
 }
 
+// ---- stance lean (opt-in: RepairConfig::max_stance_lean_m) ----
+
+// The CoM's fore-aft distance ahead of the segment between the two feet's standing centres of
+// pressure (each foot's ankle plus the standing pose's own CoM-ahead-of-ankles), by the
+// fixture's forward kinematics and CRBA: the test's own reading of what the repair measures.
+double lean_of(const ConfigVector& q) {
+  const auto ankles = [](const ConfigVector& x) {
+    dynamics::forward_kinematics(robot(), scratch(), x);
+    std::array<Vec3, 2> a;
+    for (int f = 0; f < 2; ++f) a[f] = scratch().position_m[1 + f * model::kLegJoints + model::kAnklePitchInLeg];
+    return a;
+  };
+  const auto st = ankles(standing().q);
+  const double stand = com_of(standing().q).x() - 0.5 * (st[0].x() + st[1].x());  // standing faces +x
+  const auto feet = feet_of(q);
+  const auto a = ankles(q);
+  Vec3 p[2];
+  for (int f = 0; f < 2; ++f) p[f] = a[f] + stand * (rot_z(feet[f].yaw) * Vec3::UnitX()), p[f].z() = 0.0;
+  Vec3 c = com_of(q);
+  c.z() = 0.0;
+  const Vec3 d = p[1] - p[0];
+  const double t = std::clamp((c - p[0]).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  const double yaw = std::atan2(std::sin(feet[0].yaw) + std::sin(feet[1].yaw), std::cos(feet[0].yaw) + std::cos(feet[1].yaw));
+  return (rot_z(yaw) * Vec3::UnitX()).dot(c - (p[0] + t * d));
+}
+
+// Standing side by side, the pelvis moves 4 cm ahead of its standing place (the CoM ~3.8 cm)
+// for 2 s: with the lean on (max 5 cm, band 1 cm), the repair moves the pelvis back until the
+// CoM stands the band ahead of the standing pose's (the pelvis-to-CoM ratio measured on the
+// standing pose), checked by the fixture's CRBA and kinematics in the middle of the hold; off
+// (the default) and with `forbid lean`, the frames keep the human's lean. Only the pelvis's
+// place changes: its orientation and the arms are the human's, the feet stay on their
+// footholds (expect_dancable).
+TEST(mocap_feasibility_repair, HeldForwardLeanMovesThePelvisBackOverTheAnkles) {
+  const int n = 300, a = 50, b = 250, ramp = 30;
+  const Motion m = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    const double s = std::min({1.0, std::max(0.0, double(i - a) / ramp), std::max(0.0, double(b - i) / ramp)});
+    k.base_shift.x() = 0.04 * s * s * (3.0 - 2.0 * s);
+    k.arms[3] = -0.5;  // left elbow bent: the arms must stay the human's
+    return k;
+  });
+  RepairConfig on;
+  on.max_stance_lean_m = 0.05;
+  const RepairedMotion off = repair(m);
+  const RepairedMotion r = repair(m, {}, on);
+  std::vector<RepairOverride> forbid;
+  std::string error;
+  ASSERT_TRUE(parse_repair_overrides("0 3 forbid lean\n", forbid, error)) << error;
+  const RepairedMotion kept = repair(m, forbid, on);
+  expect_dancable(r, n, on);
+  SCOPED_TRACE(listing(r));
+  EXPECT_FALSE(has(off, RepairKind::kStanceLean));
+  EXPECT_FALSE(has(kept, RepairKind::kStanceLean));
+  const Repair* lean = first(r, RepairKind::kStanceLean);
+  ASSERT_NE(lean, nullptr);
+  const int lead = r.lead_frames, mid = lead + (a + b) / 2;
+  EXPECT_LE(lean->start_s, (lead + a + ramp) / kRate_hz);
+  EXPECT_GE(lean->end_s, (lead + b - ramp) / kRate_hz);
+  const double before = lean_of(off.q[mid]), after = lean_of(r.q[mid]);
+  EXPECT_GT(before, 0.035) << "precondition: the held lean";
+  EXPECT_NEAR(lean_of(kept.q[mid]), before, 1e-9);
+  EXPECT_NEAR(after, on.stance_lean_band_m, 1e-3);
+  RecordProperty("lean_before_m", number(before));
+  RecordProperty("lean_after_m", number(after));
+  for (int i = 0; i < static_cast<int>(r.q.size()); ++i) {
+    ASSERT_LT((r.q[i].segment<4>(3) - off.q[i].segment<4>(3)).cwiseAbs().maxCoeff(), 1e-12) << i;
+    ASSERT_LT((r.q[i].tail<16>() - off.q[i].tail<16>()).cwiseAbs().maxCoeff(), 1e-12) << i;
+    ASSERT_LT(std::abs(r.q[i][2] - off.q[i][2]), 1e-12) << i;  // the height too
+  }
+}
+
+// What is not a lean: the pelvis swaying 4 cm ahead and back at 1 Hz (faster than the 1 s
+// average), and a weight shift towards one foot along the line between the feet, before and
+// after a 0.2 m step (on the staggered feet the CoM is then 5 cm ahead of the feet's midpoint,
+// on the segment between the two standing centres of pressure). With the lean on, neither is repaired and
+// the frames are those of the lean off, bit for bit.
+TEST(mocap_feasibility_repair, SwayAndWeightShiftAreNotLeans) {
+  RepairConfig on;
+  on.max_stance_lean_m = 0.05;
+  const int n = 300;
+  const Motion sway = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.base_shift.x() = 0.04 * std::sin(2.0 * M_PI * i / kRate_hz);
+    return k;
+  });
+  const Foot l0 = standing().feet[0], l1 = moved(l0, 0.20);
+  const Motion step = make_motion(n, [&](int i) {
+    Keyframe k = stand_key();
+    k.left = i < 60 ? l0 : (i >= 110 ? l1 : swing(l0, l1, i, 60, 110, 0.05));
+    k.left_down = i < 60 || i >= 110;
+    // The weight a quarter of the way from the feet's midpoint to the left foot, along the line
+    // between them (standing: 4.5 cm to the left; on the staggered feet: diagonally ahead).
+    k.base_shift = 0.25 * (k.left.centre - k.right.centre);
+    k.base_shift.z() = 0.0;
+    return k;
+  });
+  for (const Motion* m : {&sway, &step}) {
+    const RepairedMotion r = repair(*m, {}, on), off = repair(*m);
+    SCOPED_TRACE(listing(r));
+    expect_dancable(r, n, on);
+    EXPECT_FALSE(has(r, RepairKind::kStanceLean));
+    ASSERT_EQ(r.q.size(), off.q.size());
+    for (std::size_t i = 0; i < r.q.size(); ++i) ASSERT_EQ(r.q[i], off.q[i]) << i;
+  }
+  // The staggered stance's CoM: near the segment, well ahead of the feet's midpoint (which a
+  // lean read from the midpoint would move back).
+  const RepairedMotion r = repair(step, {}, on);
+  const ConfigVector& staggered = r.q[r.lead_frames + 200];
+  EXPECT_LT(std::abs(lean_of(staggered)), 0.25 * on.stance_lean_band_m);
+  const auto f = feet_of(staggered);
+  EXPECT_GT(com_of(staggered).x() - 0.5 * (f[0].centre.x() + f[1].centre.x()), 0.04);
+  RecordProperty("staggered_lean_m", number(lean_of(staggered)));
+}
+
 // A pelvis leaning 0.27 rad (15°, within the tilt bound) to the right while it shifts 9 cm to
 // the left over its feet, in double support: at the middle of the lean the legs cannot lay
 // the left foot flat on its foothold at that pelvis pose (hip roll and ankle roll at their

@@ -35,6 +35,8 @@ constexpr CommandHelp kHelp[] = {
      "                      [--verify-show SEEDS] [--human-csv OUT.csv] [--force-reference static|motion]\n"
      "                      [--ankle-motor-weight W]   (the TO's hinge on the stance ankles' motor torques; 0: off)\n"
      "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
+     "                      [--stance-lean M]   (the repair moves the pelvis back up to M m where a double support holds\n"
+     "                      the CoM ahead of its standing place over the ankles, 0..0.08; default 0: off)\n"
      "                      (--verify: closed-loop check rounds, 0..16, default 12; 0: none)\n"
      "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 24)\n"
      "                      [--verify-show-push NS]   (each of those runs pushed once as in the show campaign; 0..40, default 10; 0: none)\n"

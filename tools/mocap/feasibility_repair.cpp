@@ -188,6 +188,7 @@ const char* to_string(RepairKind k) {
     case RepairKind::kAttenuate: return "attenuate";
     case RepairKind::kBounce: return "bounce";
     case RepairKind::kStanceReach: return "stance_reach";
+    case RepairKind::kStanceLean: return "stance_lean";
   }
   return "unknown";
 }
@@ -231,13 +232,14 @@ bool parse_repair_overrides(const std::string& text, std::vector<RepairOverride>
       else if (what == "attenuate") o.forbid = RepairKind::kAttenuate;
       else if (what == "bounce") o.forbid = RepairKind::kBounce;
       else if (what == "reach") o.forbid = RepairKind::kStanceReach;
+      else if (what == "lean") o.forbid = RepairKind::kStanceLean;
       else ok = false;
     } else {
       ok = false;
     }
     if (!ok) {
       error = "line " + std::to_string(n) +
-              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|reach|all', 'START_S END_S force double|square' "
+              ": expected 'START_S END_S forbid flight|retime|stride|turn|upper|pelvis|bounce|travel|attenuate|reach|lean|all', 'START_S END_S force double|square' "
               "or 'START_S END_S calm steps' (0 <= START_S < END_S)";
       return false;
     }
@@ -939,6 +941,119 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
                 "(%.1f cm off after)",
                 100.0 * reach_before, 100.0 * most, 100.0 * reach_after));
     a = b;
+  }
+  // 7. Stance lean: where the CoM stands, on average over a while, ahead of or behind where
+  // it stands over the ankles in the robot's standing pose, the pelvis moves back (or ahead)
+  // by what exceeds the band, so the stance ankles hold the weight with their reserve (see
+  // RepairConfig::max_stance_lean_m). The dance's own sway (faster than the window) stays.
+  if (cfg.max_stance_lean_m > 0.0) {
+    const auto com_of = [&](const ConfigVector& qi) {
+      dynamics::forward_kinematics(robot, *data, qi);
+      Vec3 sum = Vec3::Zero();
+      double mass = 0.0;
+      for (int b = 0; b < model::kNumBodies; ++b) {
+        sum += robot.bodies[b].mass_kg * (data->position_m[b] + data->rotation[b] * robot.bodies[b].com_m);
+        mass += robot.bodies[b].mass_kg;
+      }
+      return Vec3(sum / mass);
+    };
+    const auto ankle_of = [&](int f) { return data->position_m[1 + f * model::kLegJoints + model::kAnklePitchInLeg]; };
+    // The standing pose's CoM ahead of its ankles' midpoint, and how far the CoM moves when
+    // the pelvis does with the feet held (the legs' own mass moves less): 1 cm forward, the
+    // legs re-solved to the standing soles.
+    const Vec3 c_stand = com_of(q_stand);
+    const Vec3 forward_stand = rot_z(stand_feet[0].yaw) * Vec3::UnitX();
+    const double lean_stand = forward_stand.dot(c_stand - 0.5 * (ankle_of(0) + ankle_of(1)));
+    double gain = 1.0;
+    {
+      std::array<Vec3, model::kNumContactPoints> soles;
+      for (int c = 0; c < model::kNumContactPoints; ++c) {
+        const FootPose& fp = stand_feet[c / kCorners];
+        soles[c] = fp.centre + rot_z(fp.yaw) * corner_offset[c];
+      }
+      ConfigVector q_ahead = q_stand;
+      q_ahead.head<3>() += 0.01 * forward_stand;
+      leg_ik_lm(robot, *data, soles, q_ahead);
+      gain = std::clamp(forward_stand.dot(com_of(q_ahead) - c_stand) / 0.01, 0.5, 1.0);
+    }
+    // How far each double-support frame's CoM stands ahead of (behind: < 0) the segment
+    // between the two points where each foot's centre of pressure sits in the standing pose
+    // (lean_stand ahead of its ankle), along the feet's heading: the CoM anywhere on that
+    // segment is a weight shift the two ankles hold as they hold standing. Single supports
+    // are left out: a step's CoM passes its stance ankle by design.
+    std::vector<double> lean(n, 0.0), weight(n, 0.0);
+    std::vector<Vec3> forward(n, Vec3::UnitX());
+    for (int i = 0; i < n; ++i) {
+      double yaw = 0.0;
+      stance_yaw(i, yaw);
+      forward[i] = rot_z(yaw) * Vec3::UnitX();
+      if (!(on[i][0] && on[i][1])) continue;
+      Vec3 c = com_of(out.q[i]);
+      Vec3 p[kFeet];
+      for (int f = 0; f < kFeet; ++f) p[f] = ankle_of(f) + lean_stand * (rot_z(feet[i][f].yaw) * Vec3::UnitX());
+      c.z() = p[0].z() = p[1].z() = 0.0;
+      const Vec3 d = p[1] - p[0];
+      const double t = d.squaredNorm() > 0.0 ? std::clamp((c - p[0]).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      lean[i] = forward[i].dot(c - (p[0] + t * d));
+      weight[i] = 1.0;
+    }
+    const int w = std::max(1, frames_of(cfg.stance_lean_window_s / 2));
+    std::vector<double> shift(n, 0.0), mean(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      double sum = 0.0, sw = 0.0;
+      for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j) sum += weight[j] * lean[j], sw += weight[j];
+      if (sw < w) continue;  // less than half the window in double support
+      mean[i] = sum / sw;
+      const double over = std::max(0.0, std::abs(mean[i]) - cfg.stance_lean_band_m);
+      if (forbidden(RepairKind::kStanceLean, i)) continue;
+      shift[i] = -std::copysign(std::min(over / gain, cfg.max_stance_lean_m), mean[i]);
+    }
+    // Smoothed like the pelvis height, so the pelvis does not step.
+    {
+      const int b = std::max(1, frames_of(kPelvisBlend_s));
+      std::vector<double> s(n, 0.0);
+      for (int i = 0; i < n; ++i) {
+        double sum = 0.0;
+        int c = 0;
+        for (int j = std::max(0, i - b); j <= std::min(n - 1, i + b); ++j) sum += shift[j], ++c;
+        s[i] = sum / c;
+      }
+      shift = s;
+    }
+    for (int a = 0; a < n;) {
+      if (!(std::abs(shift[a]) > kPelvisReport_m)) {
+        ++a;
+        continue;
+      }
+      int b = a;
+      double most = 0.0, before = 0.0;
+      int unreached = 0;
+      for (; b < n && std::abs(shift[b]) > kPelvisReport_m; ++b) {
+        BasePose p = moved(b, turn[b]);
+        p.pos += shift[b] * forward[b];
+        ConfigVector q_lean;
+        const double e = solve_legs(b, p, q_lean);
+        if (e > std::max(kStanceIkTolerance_m, stance_error[b])) {  // the legs do not reach: as it was
+          ++unreached;
+          continue;
+        }
+        stance_error[b] = e;
+        out.q[b] = q_lean;
+        if (std::abs(shift[b]) > std::abs(most)) most = shift[b];
+        if (std::abs(mean[b]) > std::abs(before)) before = mean[b];
+      }
+      char why[320];
+      std::snprintf(why, sizeof why,
+                    "in double support the CoM stood up to %.1f cm %s where it stands over the ankles in the "
+                    "standing pose (%.1f s average): the pelvis moved up to %.1f cm %s, so the ankles keep their "
+                    "reserve",
+                    100.0 * std::abs(before), before > 0.0 ? "ahead of" : "behind", cfg.stance_lean_window_s,
+                    100.0 * std::abs(most), most < 0.0 ? "back" : "forward");
+      std::string reason = why;
+      if (unreached > 0) reason += " (" + std::to_string(unreached) + " frames kept as they were: the legs do not reach)";
+      log.add(RepairKind::kStanceLean, a, b, reason);
+      a = b;
+    }
   }
   for (int i = 0; i < n; ++i) {
     out.max_leg_ik_error_m = std::max(out.max_leg_ik_error_m, stance_error[i]);
