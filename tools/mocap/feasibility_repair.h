@@ -157,7 +157,7 @@ struct RepairConfig {
   // Measured at 5 cm (built-in / perfume / cmu_05_07 / cmu_05_20), off → on:
   //  - `--verify 0`: oracle torque violations 1068/633/626/580 → 1076/505/613/538, max
   //    |τ|/limit 2.15/2.37/3.54/2.74 → 2.15/2.08/3.17/2.37, CoM path kept 61/55/59/34 % →
-  //    61/55/58/33 %; perfume's hold (20.2–23.0 s): its larger ankle pitch 20–48 → 24–33 N·m;
+  //    61/55/58/33 %; perfume's hold (20.2–23.0 s): its larger ankle pitch 20–48 → 22–33 N·m;
   //  - the whole check: kept round 0/8/11/8 → 0/7/7/8, seeds given up 0/0/6/3 → 0/1/3/1,
   //    steps 41/12/8/6 → 41/15/8/6 (of 41/15/11/7), CoM path kept 61/37/25/21 → 61/44/26/18 %;
   //  - but the show campaign (carpet, `show` set, a 10 N·s push, seeds 1–100) fell 21/400
