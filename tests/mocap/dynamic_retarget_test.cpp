@@ -816,5 +816,86 @@ TEST(mocap_dynamic_retarget, AnkleMotorHingeKeepsTheStanceMotorsWithinTheirClamp
   EXPECT_EQ(on.stats.stages_over_ankle_motors, 0);
 }
 
+
+// The ankle-effort cost (DynamicRetargetConfig::ankle_effort_weight, at 0.1) on a held
+// double support whose reference stands the CoM 3.5 cm farther ahead of the ankles than the
+// standing pose does (4.9 cm ahead), as the human clips' TO output did, and on one that stands
+// it 3 cm behind that (as the built-in dance's mostly did). The plan's centre of pressure is
+// read as the feet's ankle pitch over their normal force (the stages' quasi-static torques),
+// against the plan without the cost: ahead, at least half the lead beyond standing's goes and
+// none of standing's; behind, the plan keeps it (the ankles hold a centre of pressure nearer
+// them with more reserve, and a dance that leans back may). And standing comes back as it was.
+TEST(mocap_dynamic_retarget, AnkleEffortCostBringsALeanAheadBackToStandings) {
+  const Standing& st = standing();
+  dynamics::forward_kinematics(robot(), scratch(), st.q);
+  dynamics::crba(robot(), scratch());
+  const auto ankle = [&](int leg) {
+    return scratch().position_m[1 + leg * model::kLegJoints + model::kAnklePitchInLeg];
+  };
+  const double lead_standing = scratch().com_m.x() - 0.5 * (ankle(0) + ankle(1)).x();
+  RecordProperty("lead_standing_m", number(lead_standing));
+  DynamicRetargetConfig cfg;
+  cfg.ankle_effort_weight = 0.1;
+  {
+    SCOPED_TRACE("standing");
+    const auto plan = standing_plan(2.0);
+    DynamicRetargetConfig c = cfg;
+    c.max_sqp_iterations = 30;
+    DynamicResult out;
+    std::string error;
+    ASSERT_TRUE(dynamic_retarget(robot(), *plan, c, out, error)) << error;
+    const Acceptance a = accept(*plan, out);
+    RecordProperty("standing_base_m", number(a.base_m));
+    // Measured 0.4 mm, 0.04 mrad (without the cost the same).
+    EXPECT_LT(a.base_m, 1e-3);
+    EXPECT_LT(a.orientation_rad, 1e-3);
+  }
+  // Σ |ankle pitch| / Σ f_z over the held stages (1.5 s on).
+  const auto lead = [&](const DynamicResult& r) {
+    double pitch = 0.0, fz = 0.0;
+    for (std::size_t k = 0; k + 1 < r.stage_x.size(); ++k) {
+      if (k * cfg.ocp.dt_s < 1.5) continue;
+      const TauVector tau = torque_at(r.stage_x[k], r.stage_u[k], r.stage_head[k], both_feet());
+      pitch += std::abs(tau[model::kLeftLegFirst + model::kAnklePitchInLeg]) +
+               std::abs(tau[model::kRightLegFirst + model::kAnklePitchInLeg]);
+      for (int c = 0; c < kCorners; ++c) fz += r.stage_u[k][3 * c + 2];
+    }
+    return pitch / fz;
+  };
+  for (const double shift_x : {0.035, -0.03}) {
+    SCOPED_TRACE(shift_x > 0.0 ? "ahead" : "behind");
+    const int n = 301;  // 3 s: the lean in over the first second, then held
+    const Motion m = make_motion(n, [&](int i) {
+      Keyframe k = stand_key();
+      const double s = std::min(1.0, i / 100.0);
+      k.base_shift.x() = s * s * (3.0 - 2.0 * s) * shift_x;
+      return k;
+    });
+    ASSERT_LT(m.worst_ik_error_m, 1e-5);
+    const auto plan = plan_of(m.q, m.labels);
+    DynamicRetargetConfig c = cfg;
+    DynamicResult on, off;
+    std::string error;
+    ASSERT_TRUE(dynamic_retarget(robot(), *plan, c, on, error)) << error;
+    c.ankle_effort_weight = 0.0;
+    ASSERT_TRUE(dynamic_retarget(robot(), *plan, c, off, error)) << error;
+    const double lead_off = lead(off), lead_on = lead(on);
+    RecordProperty(shift_x > 0.0 ? "ahead_off_m" : "behind_off_m", number(lead_off));
+    RecordProperty(shift_x > 0.0 ? "ahead_on_m" : "behind_on_m", number(lead_on));
+    std::printf("centre of pressure ahead of the ankles: standing %.4f m; held %+.3f m: %.4f m without the cost, "
+                "%.4f m with it\n", lead_standing, shift_x, lead_off, lead_on);
+    EXPECT_EQ(on.stats.windows_not_converged, 0);
+    EXPECT_EQ(on.stats.qp_failures, 0);
+    if (shift_x > 0.0) {
+      ASSERT_GT(lead_off - lead_standing, 0.025) << "the precondition: the plan without the cost keeps the lean";
+      EXPECT_LT(lead_on - lead_standing, 0.5 * (lead_off - lead_standing));
+      EXPECT_GT(lead_on - lead_standing, -0.005) << "it goes back to standing's, not behind it";
+    } else {
+      ASSERT_LT(lead_off - lead_standing, -0.02) << "the precondition: the plan without the cost keeps the lean";
+      EXPECT_NEAR(lead_on, lead_off, 0.003) << "a lean behind standing's costs nothing in pitch";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace kuavo::mocap

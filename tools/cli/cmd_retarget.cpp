@@ -6,13 +6,16 @@
 //                  [--torque-weight W] [--attenuate ROUNDS] [--verify ROUNDS] [--figures DIR|none]
 //                  [--support-margin M] [--stage-smoothing PASSES] [--human-csv OUT.csv] [--duration S]
 //                  [--force-reference static|motion] [--ankle-motor-weight W] [--stance-lean M]
+//                  [--ankle-effort-weight W]
 //
 // The whole offline stage by default: geometric retargeting, contact schedule, feasibility
 // repair, dynamic retargeting (retarget_dynamic.h). --stage geometric stops after the
 // geometric stage (what the human did, kinematically on the robot; for those motions
 // `kuavo simulate` and `kuavo_fw` offer --balance-filter on).
 // --ankle-motor-weight W (0…1000, (N·m)⁻² s⁻¹): the TO's hinge on each stance ankle's two motor
-// torques (DynamicRetargetConfig::ankle_motor_weight).
+// torques (DynamicRetargetConfig::ankle_motor_weight). --ankle-effort-weight W (0…10, default
+// 0: off; measured at 0.1): the TO's cost on the stance ankles' torques beyond what standing
+// asks of them, the pitch only forward (DynamicRetargetConfig::ankle_effort_weight).
 // --stance-lean M (0…0.08 m, default 0: off): the repair's stance lean (RepairConfig::
 // max_stance_lean_m, feasibility_repair.h).
 // --torque-weight W turns on the TO's joint-torque hinge (off by default, see
@@ -128,7 +131,8 @@ int run(int argc, char** argv) {
   std::string human_path;
   bool quiet = false;
   double verify_show_push_Ns = DynamicStageOptions{}.verify_show_push_Ns;
-  double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, stance_lean_m = 0.0, ankle_motor_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
+  double horizon_s = 0.0, torque_weight = 0.0, support_margin_m = 0.0, stance_lean_m = 0.0, ankle_motor_weight = 0.0,
+         ankle_effort_weight = 0.0, dance_duration_s = mocap::kDefaultDanceDuration_s;
   long long attenuate_rounds = 0, smoothing_passes = 0, verify_rounds = DynamicStageOptions{}.verify_rounds,
             verify_show = static_cast<long long>(DynamicStageOptions{}.verify_show_seeds.size());
   std::string verify_mujoco = "on", verify_firmware = "on", verify_holdable = "on", force_reference = "static";
@@ -151,6 +155,7 @@ int run(int argc, char** argv) {
   p.number("--support-margin", "M", 0.0, 0.04, "m", &support_margin_m).modes = kDynamic;
   p.number("--stance-lean", "M", 0.0, 0.08, "m", &stance_lean_m).modes = kDynamic;
   p.number("--ankle-motor-weight", "W", 0.0, 1e3, "", &ankle_motor_weight).modes = kDynamic;
+  p.number("--ankle-effort-weight", "W", 0.0, 10.0, "", &ankle_effort_weight).modes = kDynamic;
   p.integer("--stage-smoothing", "PASSES", 0, 8, "passes", &smoothing_passes).modes = kDynamic;
   p.choice("--force-reference", {"static", "motion"}, &force_reference).modes = kDynamic;
   p.integer("--attenuate", "ROUNDS", 0, 5, "rounds", &attenuate_rounds).modes = kDynamic;
@@ -199,6 +204,7 @@ int run(int argc, char** argv) {
   if (p.given("--support-margin")) dyn_options.dynamic.support_margin_m = support_margin_m;
   if (p.given("--stance-lean")) dyn_options.repair.max_stance_lean_m = stance_lean_m;
   if (p.given("--ankle-motor-weight")) dyn_options.dynamic.ankle_motor_weight = ankle_motor_weight;
+  if (p.given("--ankle-effort-weight")) dyn_options.dynamic.ankle_effort_weight = ankle_effort_weight;
   if (p.given("--stage-smoothing")) dyn_options.dynamic.stage_smoothing_passes = static_cast<int>(smoothing_passes);
   dyn_options.dynamic.ocp.reference_forces_from_motion = force_reference == "motion";
   dyn_options.attenuation_rounds = static_cast<int>(attenuate_rounds);

@@ -526,6 +526,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   d["foothold_miss_m_max"] = s.foothold_miss_max_m;
   d["foothold_miss_frames"] = s.foothold_miss_frames;
   d["ankle_motor_weight"] = options.dynamic.ankle_motor_weight;
+  d["ankle_effort_weight"] = options.dynamic.ankle_effort_weight;
   d["stages_over_ankle_motors"] = s.stages_over_ankle_motors;  // the plan's own, before the frames
   // The forces re-solved for the final frames (mocap/contact_forces.h).
   d["forces"] = {{"frames_over_limit", s.forces.frames_over_limit},

@@ -34,6 +34,8 @@ constexpr CommandHelp kHelp[] = {
      "                      [--verify-mujoco on|off] [--verify-firmware on|off] [--support-margin M]\n"
      "                      [--verify-show SEEDS] [--human-csv OUT.csv] [--force-reference static|motion]\n"
      "                      [--ankle-motor-weight W]   (the TO's hinge on the stance ankles' motor torques; 0: off)\n"
+     "                      [--ankle-effort-weight W]   (the TO's cost on the stance ankles' torques beyond standing's,\n"
+     "                      the pitch only forward: a held lean moves back over the ankles; 0..10; default 0: off)\n"
      "                      (--support-margin: the TO's centre of pressure M m inside the soles, 0..0.04, default 0)\n"
      "                      [--stance-lean M]   (the repair moves the pelvis up to M m back or ahead where a double\n"
      "                      support holds the CoM off its standing place over the ankles, 0..0.08; default 0: off)\n"

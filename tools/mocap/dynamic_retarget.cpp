@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "controllers/dynamics/rigid_body.h"
+#include "controllers/standing/standing_controller.h"
 #include "drivers/config/drivers_config.h"
 #include "drivers/transmission/ankle_motors.h"
 #include "tools/mocap/dynamics_check.h"
@@ -128,6 +129,94 @@ void add_ankle_motor_hinge(const model::Model& robot, dynamics::Data& data, cons
   }
 }
 
+// The standing pose's ankle loading (DynamicRetargetConfig::ankle_effort_weight): toe_share,
+// the share of a sole's normal force its toe corners carry when its centre of pressure lies
+// under the standing pose's CoM (4.9 cm ahead of the ankles on the 4Pro), from the planning
+// model's own corners; ahead, the sign of the ankle pitch torque beyond standing's that holds
+// a centre of pressure ahead of that point (the left foot's weight moved onto its toes).
+struct StandingAnkles {
+  double toe_share = 0.5;
+  double ahead = 1.0;
+};
+StandingAnkles standing_ankles(const model::Model& robot, dynamics::Data& data) {
+  ConfigVector q = dynamics::neutral_configuration(robot);
+  q.tail<model::kNumJoints>() = control::centred_standing_pose(robot, data, control::StandingConfig{}.base_height_m);
+  control::place_on_ground(robot, data, q);
+  dynamics::forward_kinematics(robot, data, q);
+  dynamics::crba(robot, data);
+  const auto ankle = [&](int leg) { return data.position_m[1 + leg * model::kLegJoints + model::kAnklePitchInLeg]; };
+  const Vec3 forward = data.rotation[1 + model::kAnklePitchInLeg + 1] * Vec3::UnitX();
+  const double lead = forward.dot(data.com_m - 0.5 * (ankle(0) + ankle(1)));
+  double toe_x = 0.0, heel_x = 0.0;  // the left sole's toe and heel corners, in its frame
+  for (int k = 0; k < mpc::kPointsPerFoot; ++k) {
+    const double x = robot.frames[k].position_m.x();
+    (x > 0.0 ? toe_x : heel_x) += x / (0.5 * mpc::kPointsPerFoot);
+  }
+  StandingAnkles out;
+  out.toe_share = std::clamp((lead - heel_x) / (toe_x - heel_x), 0.0, 1.0);
+  planner::ContactFlags left{};
+  for (int k = 0; k < mpc::kPointsPerFoot; ++k) left[k] = true;
+  const double weight = robot.total_mass_kg * 9.81;
+  InputVector on_toes = InputVector::Zero(), as_standing = InputVector::Zero();
+  for (int k = 0; k < mpc::kPointsPerFoot; ++k) {
+    const bool toe = robot.frames[k].position_m.x() > 0.0;
+    on_toes[3 * k + 2] = toe ? weight / (0.5 * mpc::kPointsPerFoot) : 0.0;
+    as_standing[3 * k + 2] = weight * (toe ? out.toe_share : 1.0 - out.toe_share) / (0.5 * mpc::kPointsPerFoot);
+  }
+  Eigen::Matrix<double, kNumMpcJoints, 1> tau_toes, tau_standing;
+  quasi_static_torques(robot, data, q, on_toes, left, tau_toes, nullptr);
+  quasi_static_torques(robot, data, q, as_standing, left, tau_standing, nullptr);
+  const int j = model::kLeftLegFirst + model::kAnklePitchInLeg;
+  out.ahead = tau_toes[j] - tau_standing[j] > 0.0 ? 1.0 : -1.0;
+  return out;
+}
+
+// The ankle-effort cost of one stage (w_dt: ankle_effort_weight × the stage length), per stance
+// ankle on its quasi-static torques minus those of P f (the foot's normal force spread over its
+// corners as in standing, no horizontal force; the foot's own weight cancels): ½ w k_p e_p² on
+// the pitch e_p where it holds the centre of pressure ahead of standing's (zero behind it), and
+// ½ w k_r e_r² on the roll, k_p and k_r what a unit pitch and a unit roll ask of the two motors
+// (Σ a², Σ b² of the linkage map at the stage's ankle angles: ~0.5 and ~2.4). Linear in f:
+// Gauss-Newton on the forces is its exact Hessian (the pitch part's is C¹ at zero).
+void add_ankle_effort_cost(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
+                           double w_dt, const StandingAnkles& standing, const StateVector& x, const InputVector& u,
+                           const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, Stage& stage) {
+  std::array<bool, 2> stance{};
+  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / mpc::kPointsPerFoot] = stance[c / mpc::kPointsPerFoot] || contact[c];
+  if (!stance[0] && !stance[1]) return;
+  Eigen::Matrix<double, kNumMpcJoints, 1> tau;
+  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
+  quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, tau, &d_df);
+  std::array<Eigen::Vector2d, 2> ankle_rad;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
+    ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
+  }
+  hal::AnkleMotorLimits map;
+  if (!drivers::map_ankle_motors_rt(motors, ankle_rad, map)) return;
+  const Eigen::Matrix<double, kForces, 1> f = u.head<kForces>();
+  for (int leg = 0; leg < 2; ++leg) {
+    if (!stance[leg]) continue;
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
+    const int c0 = leg * mpc::kPointsPerFoot;
+    for (int axis = 0; axis < 2; ++axis) {  // pitch, roll
+      const double k = map.joint_to_motor[leg].col(axis).squaredNorm();
+      // (I − P)ᵀ g: P moves the foot's normal forces to the standing spread.
+      Eigen::Matrix<double, kForces, 1> gc = d_df.row(j + axis).transpose();
+      double spread = 0.0;
+      for (int c = c0; c < c0 + mpc::kPointsPerFoot; ++c) {
+        const bool toe = robot.frames[c].position_m.x() > 0.0;
+        spread += gc[3 * c + 2] * (toe ? standing.toe_share : 1.0 - standing.toe_share) / (0.5 * mpc::kPointsPerFoot);
+      }
+      for (int c = c0; c < c0 + mpc::kPointsPerFoot; ++c) gc[3 * c + 2] -= spread;
+      const double e = gc.dot(f);
+      if (axis == 0 && !(standing.ahead * e > 0.0)) continue;
+      stage.R.topLeftCorner<kForces, kForces>().noalias() += (w_dt * k) * gc * gc.transpose();
+      stage.r.head<kForces>().noalias() += (w_dt * k * e) * gc;
+    }
+  }
+}
+
 }  // namespace
 
 mpc::MpcConfig DynamicRetargetConfig::default_ocp() {
@@ -229,6 +318,10 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
     error = "dynamic retargeting: ankle_motor_weight must be finite and >= 0, ankle_motor_share within (0, 1]";
     return false;
   }
+  if (!(cfg.ankle_effort_weight >= 0.0 && std::isfinite(cfg.ankle_effort_weight))) {
+    error = "dynamic retargeting: ankle_effort_weight must be finite and >= 0";
+    return false;
+  }
   const model::Model robot = planning_model(robot_model, cfg.support_margin_m);
   const auto t_start = std::chrono::steady_clock::now();
   if (const char* why = mpc::mpc_validate_config(cfg.ocp)) {
@@ -308,6 +401,7 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
 
   const auto& lim = robot.limits;
   const drivers::AnkleMotors ankle_motors = drivers::ankle_motors_from_config(drivers::default_drivers_config(robot_model));
+  const StandingAnkles standing_ankle_load = standing_ankles(robot, *data);
   const Eigen::Matrix<double, kNumMpcJoints, 1> soft_start = cfg.torque_soft_start * lim.torque_Nm.head<kNumMpcJoints>();
   Eigen::Matrix<double, kNumMpcJoints, 1> vel_limit = lim.velocity_rad_s.head<kNumMpcJoints>();
   std::vector<Eigen::Matrix<double, kNumMpcJoints, 1>> lag(T + 1);
@@ -447,6 +541,10 @@ bool dynamic_retarget(const model::Model& robot_model, const planner::MotionPlan
             stage.r.head<kForces>().noalias() += g * gu.head<kForces>();
           }
           ws->swing_block_written[k] = true;  // the next build clears Q's joint block
+        }
+        if (cfg.ankle_effort_weight > 0.0 && ankle_motors.active) {
+          add_ankle_effort_cost(robot, *data, ankle_motors, cfg.ankle_effort_weight * dt, standing_ankle_load,
+                                ws->x[k], ws->u[k], ws->head_rad[k], contact, stage);
         }
         if (cfg.ankle_motor_weight > 0.0 && ankle_motors.active) {
           add_ankle_motor_hinge(robot, *data, ankle_motors, cfg.ankle_motor_weight * dt, cfg.ankle_motor_share, ws->x[k],
