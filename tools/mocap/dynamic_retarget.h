@@ -111,8 +111,10 @@ struct DynamicRetargetConfig {
   // cmu_05_07 11 → 7 (show seeds given up 6 → 5), but cmu_05_20 8 → 10 (given up 3 → 7): its
   // rounds fell more often (nominal floor and carpet, 7.2–12.2 s) and the motion it wrote has a
   // frame whose forces pull on the floor ("unsound"); steps 41/41, 12 → 13 of 15, 8 → 8 of
-  // 11, 6 → 4 of 7; CoM path kept 61 → 63, 37 → 43, 25 → 26, 21 → 16 %. Off (0) by default;
-  // `kuavo retarget --ankle-effort-weight W`.
+  // 11, 6 → 4 of 7; CoM path kept 61 → 63, 37 → 43, 25 → 26, 21 → 16 %. Show campaign on those
+  // motions (carpet, `show` set, a 10 N·s push, seeds 1–50): perfume 0/50 (3/50 off), cmu_05_07
+  // 3/50 (3/50), cmu_05_20 21/50 at 6.4–8.7 s (0/50), built-in 0/34 (seeds 1–34). Off (0) by
+  // default; `kuavo retarget --ankle-effort-weight W`.
   double ankle_effort_weight = 0.0;  // (N·m)⁻² s⁻¹
   double velocity_barrier_mu = 0.01;
   double velocity_barrier_delta_rad_s = 0.1;
