@@ -816,7 +816,6 @@ TEST(mocap_dynamic_retarget, AnkleMotorHingeKeepsTheStanceMotorsWithinTheirClamp
   EXPECT_EQ(on.stats.stages_over_ankle_motors, 0);
 }
 
-
 // The ankle-effort cost (DynamicRetargetConfig::ankle_effort_weight, at 0.1) on a held
 // double support whose reference stands the CoM 3.5 cm farther ahead of the ankles than the
 // standing pose does (4.9 cm ahead), as the human clips' TO output did, and on one that stands

@@ -94,6 +94,31 @@ void quasi_static_torques(const model::Model& robot, dynamics::Data& data, const
 }
 
 
+// A stage's stance ankles: which feet stand, the stage's quasi-static torques and their force
+// derivatives, and the linkage map at its ankle angles. False: no foot stands, or the map fails.
+struct StanceAnkles {
+  std::array<bool, 2> stance{};
+  Eigen::Matrix<double, kNumMpcJoints, 1> tau;
+  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
+  hal::AnkleMotorLimits map;
+};
+bool stance_ankles(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
+                   const StateVector& x, const InputVector& u, const mpc::HeadVector& head_rad,
+                   const planner::ContactFlags& contact, StanceAnkles& out) {
+  out.stance = {};
+  for (int c = 0; c < model::kNumContactPoints; ++c) {
+    out.stance[c / mpc::kPointsPerFoot] = out.stance[c / mpc::kPointsPerFoot] || contact[c];
+  }
+  if (!out.stance[0] && !out.stance[1]) return false;
+  quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, out.tau, &out.d_df);
+  std::array<Eigen::Vector2d, 2> ankle_rad;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
+    ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
+  }
+  return drivers::map_ankle_motors_rt(motors, ankle_rad, out.map);
+}
+
 // The ankle-motor hinge of one stage (DynamicRetargetConfig::ankle_motor_weight; w_dt its
 // weight × the stage length): per stance ankle and motor, ½ w (|τ_motor| − s·L)² above s·L on
 // the quasi-static joint torques mapped at the stage's ankle angles, Gauss-Newton on the forces.
@@ -101,19 +126,12 @@ using Stage = std::remove_reference_t<decltype(std::declval<mpc::Ocp&>().stages[
 void add_ankle_motor_hinge(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
                            double w_dt, double share, const StateVector& x, const InputVector& u,
                            const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, Stage& stage) {
-  std::array<bool, 2> stance{};
-  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / mpc::kPointsPerFoot] = stance[c / mpc::kPointsPerFoot] || contact[c];
-  if (!stance[0] && !stance[1]) return;
-  Eigen::Matrix<double, kNumMpcJoints, 1> tau;
-  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
-  quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, tau, &d_df);
-  std::array<Eigen::Vector2d, 2> ankle_rad;
-  for (int leg = 0; leg < 2; ++leg) {
-    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
-    ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
-  }
-  hal::AnkleMotorLimits map;
-  if (!drivers::map_ankle_motors_rt(motors, ankle_rad, map)) return;
+  StanceAnkles sa;
+  if (!stance_ankles(robot, data, motors, x, u, head_rad, contact, sa)) return;
+  const auto& stance = sa.stance;
+  const auto& tau = sa.tau;
+  const auto& d_df = sa.d_df;
+  const auto& map = sa.map;
   for (int leg = 0; leg < 2; ++leg) {
     if (!stance[leg]) continue;
     const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
@@ -181,19 +199,11 @@ StandingAnkles standing_ankles(const model::Model& robot, dynamics::Data& data) 
 void add_ankle_effort_cost(const model::Model& robot, dynamics::Data& data, const drivers::AnkleMotors& motors,
                            double w_dt, const StandingAnkles& standing, const StateVector& x, const InputVector& u,
                            const mpc::HeadVector& head_rad, const planner::ContactFlags& contact, Stage& stage) {
-  std::array<bool, 2> stance{};
-  for (int c = 0; c < model::kNumContactPoints; ++c) stance[c / mpc::kPointsPerFoot] = stance[c / mpc::kPointsPerFoot] || contact[c];
-  if (!stance[0] && !stance[1]) return;
-  Eigen::Matrix<double, kNumMpcJoints, 1> tau;
-  Eigen::Matrix<double, kNumMpcJoints, kForces> d_df;
-  quasi_static_torques(robot, data, mpc::configuration_from_state(x, head_rad), u, contact, tau, &d_df);
-  std::array<Eigen::Vector2d, 2> ankle_rad;
-  for (int leg = 0; leg < 2; ++leg) {
-    const int j = (leg == 0 ? model::kLeftLegFirst : model::kRightLegFirst) + model::kAnklePitchInLeg;
-    ankle_rad[leg] = Eigen::Vector2d(x[mpc::kXJoints + j], x[mpc::kXJoints + j + 1]);
-  }
-  hal::AnkleMotorLimits map;
-  if (!drivers::map_ankle_motors_rt(motors, ankle_rad, map)) return;
+  StanceAnkles sa;
+  if (!stance_ankles(robot, data, motors, x, u, head_rad, contact, sa)) return;
+  const auto& stance = sa.stance;
+  const auto& d_df = sa.d_df;
+  const auto& map = sa.map;
   const Eigen::Matrix<double, kForces, 1> f = u.head<kForces>();
   for (int leg = 0; leg < 2; ++leg) {
     if (!stance[leg]) continue;
