@@ -403,6 +403,9 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.lean_trim = config.stack.lean_trim.enabled;
   out.lean_trim_opening = config.stack.lean_trim.learn == stack::LeanTrimLearn::kOpening;
   out.planner_sole_inset_m = config.stack.planner == stack::PlannerKind::kMpc ? config.stack.planner_sole_inset_m : 0.0;
+  out.recovery_fast_swing_s = config.stack.planner == stack::PlannerKind::kMpc && config.stack.recovery.enabled
+                                  ? config.stack.recovery.fast_swing_s
+                                  : 0.0;
   out.lean_trim_roll_deg = control->lean_trim.theta_rad.x() * 180.0 / 3.14159265358979323846;
   out.lean_trim_pitch_deg = control->lean_trim.theta_rad.y() * 180.0 / 3.14159265358979323846;
   out.lean_trim_integrated_ticks = control->lean_trim.integrated_ticks;
@@ -440,6 +443,7 @@ void copy_planner_counters(const stack::PlannerWorkspace& ws, MotionSummary& out
   out.plan_positions_on_a_stop = ws.plan_positions_on_a_stop;
   out.recovery_steps = ws.recovery.steps;
   out.recovery_declined = ws.recovery.declined;
+  out.recovery_fast_steps = ws.recovery.fast_steps;
   out.recovery_early_touchdowns = ws.recovery.early_touchdowns;
   out.liftoff_holds = ws.liftoff.holds;
   out.liftoff_released = ws.liftoff.released;
@@ -507,6 +511,11 @@ std::string motion_summary_json(const MotionSummary& s) {
   }
   if (s.planner_sole_inset_m > 0.0) {
     std::snprintf(buf, sizeof buf, "\"planner_sole_inset_m\": %.4f", s.planner_sole_inset_m);
+    append(buf);
+  }
+  if (s.recovery_fast_swing_s > 0.0) {
+    std::snprintf(buf, sizeof buf, "\"recovery_fast_swing\": {\"swing_s\": %.3f, \"steps\": %llu}", s.recovery_fast_swing_s,
+                  static_cast<unsigned long long>(s.recovery_fast_steps));
     append(buf);
   }
   if (!s.perturbation_json.empty()) append("\"perturbation\": " + s.perturbation_json);

@@ -115,6 +115,10 @@ struct MotionSummary {
   double com_over_feet_err_m_end = 0.0;
   // StackConfig::planner_sole_inset_m of an MPC run, in the summary only when above 0.
   double planner_sole_inset_m = 0.0;
+  // The recovery step's fast swing (RecoveryStepConfig::fast_swing_s) of an MPC run with the
+  // step on, and the steps that took it; in the summary only when it is on.
+  double recovery_fast_swing_s = 0.0;
+  std::uint64_t recovery_fast_steps = 0;
   // The lean trim (controllers/stack/lean_trim.h), in the summary only when it is on.
   bool lean_trim = false;
   bool lean_trim_opening = false;  // learned in the opening stand only (LeanTrimLearn::kOpening)

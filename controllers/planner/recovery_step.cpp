@@ -145,10 +145,10 @@ struct StepCandidate {
 // The step of foot `swing` (the other stands): the centre of pressure at the point of the
 // stance sole nearest ξ until touchdown, ξ propagated there, the sole centre overshoot_m
 // beyond it, inside the reach box and max_step_m; it captures if ξ at touchdown is inside
-// the support the step makes, by capture_margin_m.
+// the support the step makes, by capture_margin_m. swing_s: lift-off to touchdown.
 StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& st, const PlanKnot& m,
                         const PlanKnot& k0, const std::array<Vec2, kNumPoints>& corners, const Vec2& xi,
-                        double omega, int swing, const Vec2& plan_offset) {
+                        double omega, int swing, const Vec2& plan_offset, double swing_s) {
   StepCandidate out;
   out.swing = swing;
   const int stance = 1 - swing;
@@ -156,7 +156,7 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
   for (int i = 0; i < kCornersPerFoot; ++i) stance_corners[i] = corners[stance * kCornersPerFoot + i];
   const Polygon2<kCornersPerFoot> stance_sole = convex_hull<kCornersPerFoot>(stance_corners, kCornersPerFoot);
   const Vec2 p = project_into(stance_sole, xi, 0.0);
-  const Vec2 xi_t = p + (xi - p) * std::exp(omega * (cfg.lift_delay_s + cfg.swing_s));
+  const Vec2 xi_t = p + (xi - p) * std::exp(omega * (cfg.lift_delay_s + swing_s));
   const Vec2 away = xi_t - p;
   Vec2 target = xi_t + (away.norm() > 1e-9 ? Vec2(cfg.overshoot_m * away / away.norm()) : Vec2::Zero());
 
@@ -373,10 +373,19 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   }
 
   // Each foot as the swing foot: where it must land, and whether that captures.
+  // The motion keeps both feet down until the swing_s step's touchdown and quiet_s (above), so
+  // a fast_swing_s step, which lands sooner, fits as well.
   StepCandidate best;
-  for (int swing = 0; swing < 2; ++swing) {
-    const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing, plan_offset);
-    if (c.captures && (!best.captures || c.margin_m > best.margin_m)) best = c;
+  double swing_s = cfg.swing_s;
+  for (int pass = 0; pass < 2 && !best.captures; ++pass) {
+    if (pass == 1) {
+      if (!(cfg.fast_swing_s > 0.0)) break;
+      swing_s = cfg.fast_swing_s;
+    }
+    for (int swing = 0; swing < 2; ++swing) {
+      const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing, plan_offset, swing_s);
+      if (c.captures && (!best.captures || c.margin_m > best.margin_m)) best = c;
+    }
   }
   if (!best.captures) {
     ++st.declined;
@@ -388,11 +397,12 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   d.from = best.current;
   d.to = best.current + best.step;
   d.lift_ns = lift;
-  d.land_ns = land;
+  d.land_ns = lift + static_cast<hal::TimeNs>(std::llround(swing_s * 1e9));
   d.return_known = false;
   st.outside_calls = 0;
   st.creep_calls = 0;
   ++st.steps;
+  if (swing_s != cfg.swing_s) ++st.fast_steps;
 }
 
 }  // namespace
@@ -403,7 +413,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
                            c.reach_ahead_m,     c.reach_behind_m,  c.min_width_m,    c.max_width_m,
                            c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m,
                            c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s,
-                           c.early_plan_margin_min_m, c.ankle_pitch_capacity_Nm};
+                           c.early_plan_margin_min_m, c.ankle_pitch_capacity_Nm, c.fast_swing_s};
   for (double x : values) {
     if (!std::isfinite(x)) return "recovery step: every value must be finite";
   }
@@ -415,6 +425,9 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   if (c.min_width_m <= 0.0 || c.max_width_m < c.min_width_m) return "recovery step: need 0 < min_width_m <= max_width_m";
   if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
   if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
+  if (c.fast_swing_s != 0.0 && !(c.fast_swing_s >= 0.1 && c.fast_swing_s <= c.swing_s)) {
+    return "recovery step: fast_swing_s must be 0 (off) or in [0.1, swing_s]";
+  }
   if (c.ankle_pitch_capacity_Nm < 0.0) return "recovery step: ankle_pitch_capacity_Nm must be >= 0 (0: off)";
   if (c.min_pendulum_height_m <= 0.0) return "recovery step: min_pendulum_height_m must be > 0";
   if (c.early_trigger_m < 0.0 || c.early_lead_s < 0.05 || c.early_min_gain_s < 0.0 || c.early_min_swing_s < 0.0) {
@@ -429,6 +442,7 @@ void recovery_step_reset(RecoveryStepState& state) {
   state.started = false;
   state.foot = {};
   state.steps = 0;
+  state.fast_steps = 0;
   state.declined = 0;
   state.early_touchdowns = 0;
   state.early_calls = 0;

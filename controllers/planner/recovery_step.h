@@ -102,6 +102,21 @@
 // steps catch, which one early landing does not model): since stop 68 the early touchdown
 // needs that margin to be at least early_plan_margin_min_m (0).
 //
+// Fast swing (stop 77, opt-in fast_swing_s, `kuavo simulate --recovery-fast-swing S`): a step
+// that no swing_s landing captures is planned again with the shorter swing, which gives ξ less
+// time to run (e^{ω(0.06 + 0.25)} = 2.9 against e^{ω(0.06 + 0.40)} = 4.8 at ω = 3.4 s⁻¹); a
+// step the swing_s one captures is taken as before, so runs that never decline a step are bit
+// for bit the same. Why: in the show campaign's cmu_05_07 falls the trigger comes and every
+// step is declined (seed 36, pushed at 5.49 s: first trigger at 5.94 s, best margin −8 cm, the
+// left foot 0.11 m short of the reach box's front; 57 declines until the fall at 6.56 s).
+// Screens on the 14 falls of row 33 that had a push (cmu_05_07, perfume; motions of 1c227c7):
+// every step at 0.25 s (swing_s itself) saves cmu_05_07 47, 85 and perfume 94, 96, and loses
+// perfume 58 and 64, which stepped and stood at 0.40 s (100 seeds each: cmu_05_07 7 → 5,
+// perfume 7 → 7); 0.30 s saves none, 0.20 s five. As a fallback (this) it saves cmu_05_07 47,
+// 85 and keeps perfume 58 and 64; perfume's late falls (20.7–22.9 s) decline the 0.25 s step
+// too. Off by default until a whole show campaign and the pipeline's check are measured with it
+// (BENCHMARKS.md).
+//
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
 // 1.3 ms on the call that takes a step, 1.1 ms p50 on the one that lands a swing early, loaded),
@@ -131,6 +146,9 @@ struct RecoveryStepConfig {
   int creep_calls = 4;
   double lift_delay_s = 0.06;       // trigger → lift-off: the load moves to the stance foot
   double swing_s = 0.40;            // lift-off → touchdown (Leju's gait: 0.4–0.45 s a step)
+  // A step no swing_s landing captures is planned again with this shorter swing, and taken if
+  // that captures (0: off, the default; else in [0.1, swing_s]; "Fast swing" above).
+  double fast_swing_s = 0.0;
   double lift_height_m = 0.05;      // swing apex above the motion's sole height
   double quiet_s = 0.20;            // the motion keeps both feet down this long after touchdown
   double overshoot_m = 0.04;        // sole centre beyond the predicted capture point
@@ -236,6 +254,7 @@ struct RecoveryStepState {
   hal::TimeNs start_ns = 0;                // the first call after the reset
   std::array<FootDisplacement, 2> foot{};  // [left, right]
   std::uint64_t steps = 0;                 // recovery steps taken since the reset
+  std::uint64_t fast_steps = 0;            // … of them with RecoveryStepConfig::fast_swing_s
   std::uint64_t declined = 0;              // triggers where no step (or early touchdown) would have captured
   std::uint64_t early_touchdowns = 0;      // swings landed before the motion's touchdown
   int early_calls = 0;                     // consecutive swing calls meeting the early trigger

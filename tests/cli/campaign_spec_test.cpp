@@ -89,7 +89,8 @@ TEST(CampaignSpec, PlanAnchorKeysPassThroughOnlyWhenGiven) {
 
 // The optional numbers are opt-in: absent, simulate's default (off); given, passed on; out of
 // range or not a number, refused by name. The estimator's unloaded-foot threshold
-// (--estimator-unloaded-foot) and the planner's sole inset (--planner-sole-inset).
+// (--estimator-unloaded-foot), the planner's sole inset (--planner-sole-inset) and the recovery
+// step's fast swing (--recovery-fast-swing).
 TEST(CampaignSpec, OptionalNumbersAreOptIn) {
   struct Key {
     const char* name;
@@ -100,7 +101,8 @@ TEST(CampaignSpec, OptionalNumbersAreOptIn) {
   };
   const Key keys[] = {
       {"estimator_unloaded_foot_N", &cli::CampaignSpec::estimator_unloaded_foot_N, "50", 50.0, {"-1", "2000", "\"50\""}},
-      {"planner_sole_inset_m", &cli::CampaignSpec::planner_sole_inset_m, "0.01", 0.01, {"-0.001", "0.05", "\"0.01\""}}};
+      {"planner_sole_inset_m", &cli::CampaignSpec::planner_sole_inset_m, "0.01", 0.01, {"-0.001", "0.05", "\"0.01\""}},
+      {"recovery_fast_swing_s", &cli::CampaignSpec::recovery_fast_swing_s, "0.25", 0.25, {"0.19", "0.41", "\"0.25\""}}};
   const std::string head = R"({"motions":["dance"],"grounds":["floor"],"perturbations":["none"],"seeds":1)";
   for (const Key& k : keys) {
     cli::CampaignSpec s;

@@ -112,6 +112,8 @@ TEST(SimulateCli, ArgumentsAreStrict) {
       {motion + " --duration 0.1 --rtol nan", "--rtol needs TOLERANCE in [1e-12, 0.1], got 'nan'"},
       {"--stand 0.1 --horizon -1", "--horizon needs SECONDS in [0.6, 1.4] s, got '-1'"},
       {"--stand 0.1 --horizon 1.2", "--horizon does not apply to a --stand run"},
+      {motion + " --duration 0.1 --recovery-fast-swing 0.5", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.5'"},
+      {"--stand 0.1 --recovery-fast-swing 0.25", "--recovery-fast-swing does not apply to a --stand run"},
       {"--step-in-place 4 --stand 1", "give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS"},
       {"--stand 0.1 --seed 1 --seed 2", "--seed given twice"},
       {"--stand 0.1 --push 1:10,0,0:inf", "--push must be T:FX,FY,FZ:DURATION"},
@@ -131,6 +133,25 @@ TEST(SimulateCli, ArgumentsAreStrict) {
   }
   // The largest seed is still one.
   EXPECT_EQ(simulate("--stand 0.05 --seed 18446744073709551615", "_seed_max").exit_code, 0);
+}
+
+// --recovery-fast-swing reaches the run: its summary names the fast swing and counts the steps
+// that took it; a run without it says nothing of it.
+TEST(SimulateCli, RecoveryFastSwingIsEchoedWhenOn) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string motion = standing_motion();
+  const auto summary_of = [&](const std::string& extra, const std::string& tag) {
+    const std::string path = kOut + tag + ".json";
+    const CliRun r = simulate(motion + " --duration 0.2" + extra + " --summary " + path, tag);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(path);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  EXPECT_NE(summary_of(" --recovery-fast-swing 0.25", "_swing").find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"),
+            std::string::npos);
+  EXPECT_EQ(summary_of("", "_swing_default").find("recovery_fast_swing"), std::string::npos);
 }
 
 // kuavo campaign's counts are whole numbers (atoi took "5abc" as 5, and --jobs "4x" went to

@@ -236,6 +236,82 @@ TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
   EXPECT_EQ(f.state->steps, 1u);
 }
 
+// The fast swing (RecoveryStepConfig::fast_swing_s; kuavo simulate --recovery-fast-swing) lets ξ
+// diverge for less time: ξ far enough behind the heels that, by the closed form, no landing
+// within max_step_m holds it after lift-off + swing_s, while after lift-off + 0.25 s one does.
+// Off (the default) that is declined; on, the step swings for 0.25 s. Where the swing_s step
+// captures, it is the one taken, fast swing on or off.
+TEST(RecoveryStep, TheFastSwingCapturesWhatTheDefaultSwingCannot) {
+  const Standing s = standing_geometry();
+  const RecoveryStepConfig d;
+  constexpr double kFast = 0.25;
+  // Along x (ξ on the CoM's line, the centre of pressure at the stance heel): after swing_s ξ
+  // is farther behind the heels than a sole moved max_step_m back holds with capture_margin_m
+  // (any D > lo); after kFast it is within one moved max_step_m back less overshoot_m and the
+  // margin (D < hi).
+  const double reach = d.max_step_m - d.capture_margin_m;
+  const double lo = reach / std::exp(s.omega * (d.lift_delay_s + d.swing_s));
+  const double hi = (reach - d.overshoot_m - d.capture_margin_m) / std::exp(s.omega * (d.lift_delay_s + kFast));
+  ASSERT_LT(lo, hi) << "the premise: a gap between the two";
+  const double behind = 0.5 * (lo + hi);
+  const Vec2 velocity = s.backwards(behind);
+  const auto swing_knots = [](const Fixture& f, int foot) {
+    int up = 0;
+    for (int k = 0; k < kKnots; ++k) up += foot_in_contact(f.window->knots[k], foot) ? 0 : 1;
+    return up;
+  };
+
+  Fixture off;
+  ASSERT_EQ(off.config.fast_swing_s, 0.0) << "off by default";
+  for (int i = 0; i < 5; ++i) off.call(1.0 + kDt * i, velocity);
+  EXPECT_EQ(off.state->steps, 0u);
+  EXPECT_GT(off.state->declined, 0u);
+  EXPECT_TRUE(off.window_unchanged());
+
+  Fixture f;
+  f.config.fast_swing_s = kFast;
+  ASSERT_EQ(recovery_step_validate(f.config), nullptr);
+  {
+    kuavo::test::AllocTrap trap;
+    for (int i = 0; i < f.config.trigger_calls; ++i) f.call(1.0 + kDt * i, velocity);
+    EXPECT_EQ(trap.count(), 0u);
+  }
+  ASSERT_EQ(f.state->steps, 1u);
+  EXPECT_EQ(f.state->fast_steps, 1u);
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  const int stance = 1 - swing;
+  EXPECT_EQ(swing_knots(f, swing), static_cast<int>(std::lround(kFast / kDt)));
+  // ξ at touchdown (closed form, centre of pressure at the stance sole's point nearest ξ)
+  // inside the support the landed sole makes (forward kinematics of the last knot).
+  const auto landed = corners_of(f.window->knots[kKnots - 1]);
+  std::array<Vec2, kNumPoints> after;
+  std::array<Vec2, kCornersPerFoot> stance_sole;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    after[stance * kCornersPerFoot + i] = stance_sole[i] = s.corner[stance * kCornersPerFoot + i].head<2>();
+    after[swing * kCornersPerFoot + i] = landed[swing * kCornersPerFoot + i].head<2>();
+  }
+  const Vec2 xi(s.heel_x - behind, s.com.y());
+  const Vec2 p = project_into(convex_hull<kCornersPerFoot>(stance_sole, kCornersPerFoot), xi, 0.0);
+  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + kFast));
+  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 2e-3);
+
+  // ξ 4 cm behind the heels, which the swing_s step captures (CaptureLostBackwards…): that
+  // step, the same with the fast swing on.
+  Fixture slow_off, slow_on;
+  slow_on.config.fast_swing_s = kFast;
+  for (int i = 0; i < 2; ++i) {
+    slow_off.call(1.0 + kDt * i, s.backwards(0.04));
+    slow_on.call(1.0 + kDt * i, s.backwards(0.04));
+  }
+  ASSERT_EQ(slow_on.state->steps, 1u);
+  EXPECT_EQ(slow_on.state->fast_steps, 0u);
+  const int slow_swing = slow_on.state->foot[0].active ? 0 : 1;
+  EXPECT_EQ(swing_knots(slow_on, slow_swing), static_cast<int>(std::lround(d.swing_s / kDt)));
+  for (int k = 0; k < kKnots; ++k) {
+    EXPECT_EQ(slow_on.window->knots[k].q, slow_off.window->knots[k].q) << k;
+  }
+}
+
 // The plan anchor adds its offset to the window after the step is written: the step's
 // landing (chosen on the measured state) has it taken off, so that window + offset lands
 // where the step without an offset lands, and the capture decision is the same.
@@ -905,6 +981,16 @@ TEST(RecoveryStep, ConfigValidation) {
   EXPECT_NE(recovery_step_validate(c), nullptr);
   c.creep_outside_m = c.trigger_outside_m;
   EXPECT_EQ(recovery_step_validate(c), nullptr);
+  for (double fast : {0.05, 0.41, -0.2, std::nan("")}) {  // below 0.1 s, beyond swing_s, negative, NaN
+    c = {};
+    c.fast_swing_s = fast;
+    EXPECT_NE(recovery_step_validate(c), nullptr) << fast;
+  }
+  for (double fast : {0.0, 0.1, 0.25, 0.40}) {
+    c = {};
+    c.fast_swing_s = fast;
+    EXPECT_EQ(recovery_step_validate(c), nullptr) << fast;
+  }
   c = {};
   c.early_lead_s = 0.02;  // no foot comes down from its arc that fast
   EXPECT_NE(recovery_step_validate(c), nullptr);

@@ -78,8 +78,8 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   }
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
                                       "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home",
-                                      "estimator_unloaded_foot_N", "planner_sole_inset_m", "lean_trim", "holdable_soles",
-                                      "duration_s", "push"};
+                                      "estimator_unloaded_foot_N", "planner_sole_inset_m", "recovery_fast_swing_s",
+                                      "lean_trim", "holdable_soles", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -138,6 +138,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
     return false;
   }
   if (!optional_number(j, "planner_sole_inset_m", 0.0, 0.04, "0..0.04 m", s.planner_sole_inset_m, error)) return false;
+  if (!optional_number(j, "recovery_fast_swing_s", 0.2, 0.4, "0.2..0.4 s", s.recovery_fast_swing_s, error)) return false;
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {
     error = "\"duration_s\" must be 0..600 s (0: the motion's length)";

@@ -14,6 +14,7 @@
 //   "plan_anchor_home"  SHARE: --plan-anchor-home SHARE (absent: simulate's default)
 //   "estimator_unloaded_foot_N"  N: --estimator-unloaded-foot N (absent: simulate's default, off)
 //   "planner_sole_inset_m"  M: --planner-sole-inset M (absent: simulate's default, 0)
+//   "recovery_fast_swing_s"  S: --recovery-fast-swing S (absent: simulate's default, off)
 //   "lean_trim"      "off" | "opening" | "always": kuavo simulate --lean-trim MODE; true, false:
 //                    "on" (always), "off" (absent: simulate's default)
 //   "holdable_soles" false: kuavo simulate --holdable-soles off (default true)
@@ -62,6 +63,7 @@ struct CampaignSpec {
   std::optional<double> plan_anchor_home;
   std::optional<double> estimator_unloaded_foot_N;
   std::optional<double> planner_sole_inset_m;
+  std::optional<double> recovery_fast_swing_s;
   std::optional<std::string> lean_trim;  // --lean-trim's value
   bool holdable_soles = true;
   double duration_s = 0.0;

@@ -239,6 +239,7 @@ int run_campaign(int argc, char** argv) {
     if (spec.plan_anchor_home) add_number("--plan-anchor-home", *spec.plan_anchor_home);
     if (spec.estimator_unloaded_foot_N) add_number("--estimator-unloaded-foot", *spec.estimator_unloaded_foot_N);
     if (spec.planner_sole_inset_m) add_number("--planner-sole-inset", *spec.planner_sole_inset_m);
+    if (spec.recovery_fast_swing_s) add_number("--recovery-fast-swing", *spec.recovery_fast_swing_s);
     if (spec.duration_s > 0.0) add_number("--duration", spec.duration_s);
     if (push && r.pushed) {
       char p_arg[128];

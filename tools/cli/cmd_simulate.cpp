@@ -5,7 +5,7 @@
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
 //                [--estimator-unloaded-foot N]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]
-//                [--planner-sole-inset M]
+//                [--planner-sole-inset M] [--recovery-fast-swing SECONDS]
 //                [--early-touchdown on|off] [--holdable-soles on|off] [--liftoff-hold on|off] [--plan-anchor on|off]
 //                [--plan-anchor-home SHARE]
 //                [--duration SECONDS] [--balance-filter on|off] [--perturb none|show|FILE.json [--perturb-seed N]]
@@ -98,6 +98,10 @@ int run_simulate(int argc, char** argv) {
   // Opt-in: the MPC planner plans on soles this much narrower (online_stack.h,
   // planner_sole_inset_m); 0 (default): the whole soles.
   p.number("--planner-sole-inset", "M", 0.0, 0.04, "m", &motion_cfg.stack.planner_sole_inset_m).modes =
+      kMotionRun | kStepRun;
+  // Opt-in: a recovery step no 0.40 s swing captures is planned again with this shorter swing
+  // (planner/recovery_step.h, fast_swing_s); absent: off.
+  p.number("--recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &motion_cfg.stack.recovery.fast_swing_s).modes =
       kMotionRun | kStepRun;
   // The estimate's base tilt trimmed until the WBC's horizontal forces are the ones the CoM
   // obeys (controllers/stack/lean_trim.h): learned in the motion's opening stand and held

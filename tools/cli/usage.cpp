@@ -57,6 +57,8 @@ constexpr CommandHelp kHelp[] = {
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--estimator-unloaded-foot N]   (opt-in: a foot the WBC loads below N leaves the estimator's stance set)\n"
      "               [--planner-sole-inset M]   (opt-in: the MPC planner plans on soles M m narrower each side, 0..0.04)\n"
+     "               [--recovery-fast-swing SECONDS]   (opt-in: a recovery step no 0.40 s swing captures is planned\n"
+     "               again with this swing, 0.2..0.4)\n"
      "               [--lean-trim on|off]   (opt-in: the base tilt trimmed until the WBC's forces move the CoM as planned)\n"
      "               [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]\n"
      "               [--early-touchdown on|off] [--liftoff-hold on|off] [--plan-anchor on|off]\n"
