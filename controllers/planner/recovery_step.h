@@ -109,13 +109,13 @@
 // for bit the same. Why: in the show campaign's cmu_05_07 falls the trigger comes and every
 // step is declined (seed 36, pushed at 5.49 s: first trigger at 5.94 s, best margin −8 cm, the
 // left foot 0.11 m short of the reach box's front; 57 declines until the fall at 6.56 s).
-// Screens on the 14 falls of row 33 that had a push (cmu_05_07, perfume; motions of 1c227c7):
-// every step at 0.25 s (swing_s itself) saves cmu_05_07 47, 85 and perfume 94, 96, and loses
-// perfume 58 and 64, which stepped and stood at 0.40 s (100 seeds each: cmu_05_07 7 → 5,
-// perfume 7 → 7); 0.30 s saves none, 0.20 s five. As a fallback (this) it saves cmu_05_07 47,
-// 85 and keeps perfume 58 and 64; perfume's late falls (20.7–22.9 s) decline the 0.25 s step
-// too. Off by default until a whole show campaign and the pipeline's check are measured with it
-// (BENCHMARKS.md).
+// Screens on the 14 show-campaign falls of cmu_05_07 and perfume (BENCHMARKS.md row 33, motions
+// of 1c227c7): every step at 0.25 s (swing_s itself) saves cmu_05_07 47, 85 and perfume 94, 96,
+// and loses perfume 58 and 64, which stepped and stood at 0.40 s (100 seeds each: cmu_05_07
+// 7 → 5, perfume 7 → 7); 0.30 s saves none, 0.20 s five. As a fallback (this, at 0.25 s):
+// cmu_05_07 5/100 (saves 47, 85; fast steps in 7 runs), perfume 58 and 64 dance, perfume's late
+// falls (20.7–22.9 s) decline the 0.25 s step too. Off by default until a whole show campaign
+// and the pipeline's check are measured with it.
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
