@@ -375,17 +375,19 @@ void maybe_trigger(const model::Model& model, const RecoveryStepConfig& cfg, Rec
   // Each foot as the swing foot: where it must land, and whether that captures.
   // The motion keeps both feet down until the swing_s step's touchdown and quiet_s (above), so
   // a fast_swing_s step, which lands sooner, fits as well.
-  StepCandidate best;
-  double swing_s = cfg.swing_s;
-  for (int pass = 0; pass < 2 && !best.captures; ++pass) {
-    if (pass == 1) {
-      if (!(cfg.fast_swing_s > 0.0)) break;
-      swing_s = cfg.fast_swing_s;
-    }
+  const auto best_step = [&](double swing_s) {
+    StepCandidate best;
     for (int swing = 0; swing < 2; ++swing) {
       const StepCandidate c = plan_step(cfg, st, m, k0, corners, xi, omega, swing, plan_offset, swing_s);
       if (c.captures && (!best.captures || c.margin_m > best.margin_m)) best = c;
     }
+    return best;
+  };
+  double swing_s = cfg.swing_s;
+  StepCandidate best = best_step(swing_s);
+  if (!best.captures && cfg.fast_swing_s > 0.0) {
+    swing_s = cfg.fast_swing_s;
+    best = best_step(swing_s);
   }
   if (!best.captures) {
     ++st.declined;

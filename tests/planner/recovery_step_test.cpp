@@ -122,6 +122,23 @@ std::array<Vec3, kNumPoints> corners_of(const PlanKnot& knot) {
   return out;
 }
 
+// ξ's signed margin at touchdown inside the support after a step of foot `swing` (closed form:
+// the centre of pressure at the standing stance sole's point nearest ξ for t_s, then the stance
+// sole and the swing sole where forward kinematics of `landed_knot` puts it).
+double touchdown_margin(const Standing& s, const PlanKnot& landed_knot, int swing, const Vec2& xi, double t_s) {
+  const int stance = 1 - swing;
+  const auto landed = corners_of(landed_knot);
+  std::array<Vec2, kNumPoints> after;
+  std::array<Vec2, kCornersPerFoot> stance_sole;
+  for (int i = 0; i < kCornersPerFoot; ++i) {
+    after[stance * kCornersPerFoot + i] = stance_sole[i] = s.corner[stance * kCornersPerFoot + i].head<2>();
+    after[swing * kCornersPerFoot + i] = landed[swing * kCornersPerFoot + i].head<2>();
+  }
+  const Vec2 p = project_into(convex_hull<kCornersPerFoot>(stance_sole, kCornersPerFoot), xi, 0.0);
+  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * t_s);
+  return signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
+}
+
 bool foot_in_contact(const PlanKnot& k, int foot) {
   bool all = true, any = false;
   for (int i = 0; i < kCornersPerFoot; ++i) all = all && k.in_contact[foot * kCornersPerFoot + i], any = any || k.in_contact[foot * kCornersPerFoot + i];
@@ -279,21 +296,11 @@ TEST(RecoveryStep, TheFastSwingCapturesWhatTheDefaultSwingCannot) {
   ASSERT_EQ(f.state->steps, 1u);
   EXPECT_EQ(f.state->fast_steps, 1u);
   const int swing = f.state->foot[0].active ? 0 : 1;
-  const int stance = 1 - swing;
   EXPECT_EQ(swing_knots(f, swing), static_cast<int>(std::lround(kFast / kDt)));
-  // ξ at touchdown (closed form, centre of pressure at the stance sole's point nearest ξ)
-  // inside the support the landed sole makes (forward kinematics of the last knot).
-  const auto landed = corners_of(f.window->knots[kKnots - 1]);
-  std::array<Vec2, kNumPoints> after;
-  std::array<Vec2, kCornersPerFoot> stance_sole;
-  for (int i = 0; i < kCornersPerFoot; ++i) {
-    after[stance * kCornersPerFoot + i] = stance_sole[i] = s.corner[stance * kCornersPerFoot + i].head<2>();
-    after[swing * kCornersPerFoot + i] = landed[swing * kCornersPerFoot + i].head<2>();
-  }
-  const Vec2 xi(s.heel_x - behind, s.com.y());
-  const Vec2 p = project_into(convex_hull<kCornersPerFoot>(stance_sole, kCornersPerFoot), xi, 0.0);
-  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + kFast));
-  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 2e-3);
+  // ξ at touchdown inside the support the landed sole makes.
+  EXPECT_GT(touchdown_margin(s, f.window->knots[kKnots - 1], swing, Vec2(s.heel_x - behind, s.com.y()),
+                             f.config.lift_delay_s + kFast),
+            f.config.capture_margin_m - 2e-3);
 
   // ξ 4 cm behind the heels, which the swing_s step captures (CaptureLostBackwards…): that
   // step, the same with the fast swing on.
@@ -486,18 +493,10 @@ TEST(RecoveryStep, AForwardExitTheAnklesCannotHoldSteps) {
   for (int i = 0; i < f.config.trigger_calls; ++i) f.call(1.0 + kDt * i, velocity);
   ASSERT_EQ(f.state->steps, 1u);
   const int swing = f.state->foot[0].active ? 0 : 1;
-  const int stance = 1 - swing;
   const auto landed = corners_of(f.window->knots[kKnots - 1]);
-  std::array<Vec2, kNumPoints> after;
-  std::array<Vec2, kCornersPerFoot> stance_sole;
-  for (int i = 0; i < kCornersPerFoot; ++i) {
-    after[stance * kCornersPerFoot + i] = stance_sole[i] = s.corner[stance * kCornersPerFoot + i].head<2>();
-    after[swing * kCornersPerFoot + i] = landed[swing * kCornersPerFoot + i].head<2>();
-  }
-  const Vec2 xi(xi_x, s.com.y());
-  const Vec2 p = project_into(convex_hull<kCornersPerFoot>(stance_sole, kCornersPerFoot), xi, 0.0);
-  const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + f.config.swing_s));
-  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 2e-3);
+  EXPECT_GT(touchdown_margin(s, f.window->knots[kKnots - 1], swing, Vec2(xi_x, s.com.y()),
+                             f.config.lift_delay_s + f.config.swing_s),
+            f.config.capture_margin_m - 2e-3);
   double dx = 0.0;
   for (int i = 0; i < kCornersPerFoot; ++i) {
     const int c = swing * kCornersPerFoot + i;
