@@ -41,6 +41,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off] [--holdable-soles on|off]\n"
+    "                [--recovery-fast-swing SECONDS]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the CiA 402 drives' mode, legs and shoulder pitches (firmware/README.md,\n"
     "                       leg binding). csp (default): the drives close the PD in their own loop\n"
@@ -65,6 +66,8 @@ constexpr const char* kUsage =
     "                       retarget`'s dynamic stage makes feasible motions; on for --stage geometric)\n"
     "  --holdable-soles on|off  the recovery step's trigger on the part of the soles the ankles hold\n"
     "                       (default on; off: on the soles)\n"
+    "  --recovery-fast-swing SECONDS  opt-in: a recovery step no 0.40 s swing captures is planned\n"
+    "                       again with this shorter swing (0.2..0.4 s; default off)\n"
     "  --require-rt applies to a run and --timing, --stand to a run, --dance to a run and --check,\n"
     "  --evict-cache to --timing; an option outside its mode is refused\n"
     "exit codes: 0 ok, 1 runtime failure (buses, real time, out of memory), 2 bad usage, configuration\n"
@@ -164,6 +167,7 @@ struct DanceMemory {
 
 int run(int argc, char** argv) {
   std::string config_path, dance_path, timing_path, legs = "csp", balance = "off", holdable = "on";
+  double fast_swing_s = 0.0;  // --recovery-fast-swing (0: off)
   bool check = false, require_rt = false, stand = false, evict_cache = false;
   kuavo::args::Parser args("kuavo_fw");
   args.text("--config", "FILE", &config_path);
@@ -176,6 +180,7 @@ int run(int argc, char** argv) {
   args.flag("--evict-cache", &evict_cache).modes = kTimingMode;
   args.choice("--balance-filter", {"on", "off"}, &balance);
   args.choice("--holdable-soles", {"on", "off"}, &holdable);
+  args.number("--recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &fast_swing_s);
   switch (args.parse(argc, argv)) {
     case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
@@ -197,7 +202,7 @@ int run(int argc, char** argv) {
     return 2;
   }
   if (timing) dance_path = timing_path;
-  for (const char* option : {"--balance-filter", "--holdable-soles"}) {
+  for (const char* option : {"--balance-filter", "--holdable-soles", "--recovery-fast-swing"}) {
     if (args.given(option) && dance_path.empty()) {
       std::fprintf(stderr, "kuavo_fw: %s applies to a motion (--dance or --timing)\n%s", option, kUsage);
       return 2;
@@ -236,6 +241,7 @@ int run(int argc, char** argv) {
   // The dance: loaded, validated and balance-filtered before anything is sent.
   kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
   kuavo::planner::set_holdable_soles(stack_config.recovery, holdable == "on");
+  stack_config.recovery.fast_swing_s = fast_swing_s;
   std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
     memory.reset(new (std::nothrow) DanceMemory);

@@ -34,7 +34,7 @@ constexpr const char* kUsage =
     "usage: kuavo_fw_sim [--dance MOTION_FILE | --stand SECONDS] [--config FILE] [--legs csp|cst]\n"
     "                    [--ground floor|carpet] [--seed N] [--push T:FX,FY,FZ:DURATION]\n"
     "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
-    "                    [--holdable-soles on|off] [--inject KIND@SECONDS]\n"
+    "                    [--holdable-soles on|off] [--recovery-fast-swing SECONDS] [--inject KIND@SECONDS]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
     "                       back on the gantry, finish, damping\n"
@@ -44,6 +44,7 @@ constexpr const char* kUsage =
     "                       firmware/README.md)\n"
     "  --balance-filter on|off  as kuavo_fw (default off)\n"
     "  --holdable-soles on|off  as kuavo_fw (default on)\n"
+    "  --recovery-fast-swing SECONDS  as kuavo_fw (0.2..0.4 s; default off)\n"
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
     "  --plan-latency-ms MS the planning task's plan applied this long after its state, 0..18 ms (default 4)\n"
@@ -52,7 +53,8 @@ constexpr const char* kUsage =
     "                       elbow), bus-off (the left knee's bus), frame-loss-1pct (every bus), imu-dropout,\n"
     "                       starved-planner (no planning task from then on). The summary's \"injection\"\n"
     "                       says when it was armed, the fault latched and the time to damping\n"
-    "  --stand applies without --dance, --balance-filter and --holdable-soles with it; in the other\n"
+    "  --stand applies without --dance, --balance-filter, --holdable-soles and --recovery-fast-swing\n"
+    "  with it; in the other\n"
     "  mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
@@ -71,6 +73,7 @@ int run(int argc, char** argv) {
   args.choice("--legs", {"csp", "cst"}, &legs);
   args.choice("--balance-filter", {"on", "off"}, &balance).modes = kDanceMode;
   args.choice("--holdable-soles", {"on", "off"}, &holdable).modes = kDanceMode;
+  args.number("--recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &cfg.recovery_fast_swing_s).modes = kDanceMode;
   args.choice("--ground", {"floor", "carpet"}, &ground);
   args.uint64("--seed", "N", &cfg.loop.seed);
   args.custom("--push", kuavo::sim::kPushValueName, [&](const char* v) { return kuavo::sim::parse_push(v, cfg.loop.push); });

@@ -38,6 +38,9 @@ struct SitlConfig {
   // false: the recovery step's trigger on the soles, not the image's holdable soles
   // (planner::set_holdable_soles; kuavo_fw_sim --holdable-soles off).
   bool holdable_soles = true;
+  // > 0: the recovery step's fast swing as a fallback (planner::RecoveryStepConfig::fast_swing_s;
+  // kuavo_fw_sim --recovery-fast-swing S); 0: off, the image's default.
+  double recovery_fast_swing_s = 0.0;
 };
 
 // What the drill did: when it was armed, the first fault latched from then on, and the

@@ -187,6 +187,10 @@ TEST(CommandsCli, EveryCommandRefusesWithTheOptionNamed) {
       {kBin + " retarget-sweep --out x --horizons 0.2,", "--horizons must be S,S,... with each S in [0.2, 1.4] s, got '0.2,'"},
       {kBin + " retarget-sweep --out x --horizons ' 0.4'", "--horizons must be S,S,... with each S in [0.2, 1.4] s"},
       {kBin + " retarget --stage geometric --dance-bvh d.bvh in.bvh", "--dance-bvh writes the built-in dance"},
+      {kBin + " retarget --verify-recovery-fast-swing 0.45",
+       "--verify-recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.45'"},
+      {kBin + " retarget --stage geometric --verify-recovery-fast-swing 0.25",
+       "--verify-recovery-fast-swing does not apply to --stage geometric"},
       {kBin + " model --mass 55 --mass 56", "kuavo model: --mass given twice"},
       {urdf2model + " --variant bogus", "urdf2model: --variant must be s45|s42|all, got 'bogus'"},
       // A directory as the spec threw from its first read: "internal error", exit 1.

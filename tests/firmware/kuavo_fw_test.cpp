@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <linux/can.h>
 #include <sys/socket.h>
@@ -157,6 +158,8 @@ TEST(KuavoFw, OptionsOutsideTheirModeAreRefused) {
       {"--timing " + motion + " --dance " + motion, "--dance does not apply to --timing"},
       {"--check --timing " + motion, "--check and --timing are two modes"},
       {"--check --balance-filter on", "--balance-filter applies to a motion"},
+      {"--check --recovery-fast-swing 0.25", "--recovery-fast-swing applies to a motion"},
+      {"--recovery-fast-swing 0.5", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.5'"},
       {"--check --check", "--check given twice"},
       {"--legs", "--legs needs a value (csp|cst)"},
       {"--config --check", "--config needs a value (FILE), got option '--check'"},
@@ -301,6 +304,9 @@ TEST(KuavoFwSim, PushesModesAndOutputsAreCheckedFirst) {
       {"--push 1:1e9,0,0:0.1", "--push must be T:FX,FY,FZ:DURATION"},
       {"--push 1:10,0:0.1", "--push must be T:FX,FY,FZ:DURATION"},
       {"--stand 1 --balance-filter on", "--balance-filter does not apply to a --stand run"},
+      {"--stand 1 --recovery-fast-swing 0.25", "--recovery-fast-swing does not apply to a --stand run"},
+      {"--recovery-fast-swing 0.1", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.1'"},
+      {"--recovery-fast-swing nan", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got 'nan'"},
       {"--dance x.motion --stand 1", "--stand does not apply to a --dance run"},
       {"--plan-latency-ms 19", "--plan-latency-ms needs MS in [0, 18] ms, got '19'"},
       {"--log --summary", "--log needs a value (CSV), got option '--summary'"},
@@ -311,6 +317,25 @@ TEST(KuavoFwSim, PushesModesAndOutputsAreCheckedFirst) {
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
     EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
   }
+}
+
+// --recovery-fast-swing reaches the image's dance stack (planner::RecoveryStepConfig::
+// fast_swing_s, as `kuavo simulate --recovery-fast-swing`): the summary names the swing and counts
+// its steps (none while standing); without it the key is absent (off, the image's default).
+TEST(KuavoFwSim, RecoveryFastSwingIsEchoedWhenOn) {
+  const std::string motion = write_standing_motion("fw_sim_fast_swing.motion", kuavo::model::Variant::kS45);
+  const auto summary = [&](const std::string& extra, const char* name) {
+    const std::string path = testing::TempDir() + name;
+    const FwRun r = run_binary("firmware/sitl/kuavo_fw_sim", "--dance " + motion + extra + " --summary " + path);
+    EXPECT_EQ(r.exit_code, 0) << extra << "\n" << r.output;
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string on = summary(" --recovery-fast-swing 0.25", "fw_sim_fast_on.json");
+  EXPECT_NE(on.find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"), std::string::npos) << on;
+  const std::string off = summary("", "fw_sim_fast_off.json");
+  ASSERT_NE(off.find("\"danced_to_end\""), std::string::npos) << off;
+  EXPECT_EQ(off.find("recovery_fast_swing"), std::string::npos) << off;
 }
 
 }  // namespace

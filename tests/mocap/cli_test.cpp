@@ -333,6 +333,8 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   // recovery-step trigger (the report's "holdable_soles": true by default, as online).
   ASSERT_TRUE(v.contains("holdable_soles")) << v.dump();
   EXPECT_TRUE(v["holdable_soles"].get<bool>()) << "the check dances with the online default's trigger";
+  ASSERT_TRUE(v.contains("recovery_fast_swing_s")) << v.dump();
+  EXPECT_EQ(v["recovery_fast_swing_s"].get<double>(), 0.0) << "the fast swing is off by default, as online";
   const auto& last = runs[kept].back();
   EXPECT_EQ(v["danced"].get<bool>(), kept == 1 && !last["fell"].get<bool>());
   const bool fw = last["engine"] == "firmware";
@@ -349,7 +351,12 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
                             std::to_string(last["seed"].get<std::uint64_t>()) +
                             (last.contains("perturbation") ? " --perturb show" : "") + push +
                             // the check's trigger when it ran on the soles (--verify-holdable-soles off)
-                            (v["holdable_soles"].get<bool>() ? "" : " --holdable-soles off") + " --summary " + kOut +
+                            (v["holdable_soles"].get<bool>() ? "" : " --holdable-soles off") +
+                            // and its fast swing when it had one (--verify-recovery-fast-swing S)
+                            (v["recovery_fast_swing_s"].get<double>() > 0.0
+                                 ? " --recovery-fast-swing " + std::to_string(v["recovery_fast_swing_s"].get<double>())
+                                 : "") +
+                            " --summary " + kOut +
                             "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
                              : kBin + " simulate " + kOut + "_ver.motion --quiet --engine " + last["engine"].get<std::string>() + where;

@@ -165,6 +165,10 @@ int run(int argc, char** argv) {
   p.integer("--verify-show", "SEEDS", 0, 48, "seeds", &verify_show).modes = kDynamic;
   p.number("--verify-show-push", "NS", 0.0, 40.0, "N·s", &verify_show_push_Ns).modes = kDynamic;
   p.choice("--verify-holdable-soles", {"on", "off"}, &verify_holdable).modes = kDynamic;
+  // Opt-in: the check's recovery step with the fast swing as kuavo simulate's
+  // --recovery-fast-swing (retarget_dynamic.h); absent: off.
+  p.number("--verify-recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &dyn_options.verify_recovery_fast_swing_s).modes =
+      kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);
   p.number("--duration", "SECONDS", mocap::kDefaultDanceDuration_s,

@@ -226,7 +226,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
 
   // Closed-loop verification: the output danced by the online stack in the simulator, as
   // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model; with --holdable-soles off
-  // when verify_holdable_soles is), on each ground and then in MuJoCo. Where it falls, the
+  // when verify_holdable_soles is, --recovery-fast-swing S when verify_recovery_fast_swing_s
+  // is S), on each ground and then in MuJoCo. Where it falls, the
   // seconds before the fall are repaired (verification_range's ladder) and the motion
   // optimized again, up to verify_rounds times.
   ordered_json verification_runs = ordered_json::array();
@@ -308,6 +309,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         sim::MotionRunConfig cfg;
         cfg.stack.planner = stack::PlannerKind::kMpc;
         planner::set_holdable_soles(cfg.stack.recovery, options.verify_holdable_soles);
+        cfg.stack.recovery.fast_swing_s = options.verify_recovery_fast_swing_s;
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
@@ -342,6 +344,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         fw.loop.ground = ground;
         fw.loop.seed = seed;
         fw.holdable_soles = options.verify_holdable_soles;
+        fw.recovery_fast_swing_s = options.verify_recovery_fast_swing_s;
         const auto t0 = std::chrono::steady_clock::now();
         const firmware::sitl::SitlSummary s = firmware::sitl::run_firmware_sim(robot, plan.get(), fw);
         verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -584,6 +587,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                        {"kept_round", best_round},
                        {"given_up_seeds", given_up_seeds},
                        {"holdable_soles", options.verify_holdable_soles},
+                       {"recovery_fast_swing_s", options.verify_recovery_fast_swing_s},
                        {"danced", verification_runs.empty() ? ordered_json() : ordered_json(danced)},
                        {"sim_s", verify_sim_s},
                        {"runs", verification_runs}};

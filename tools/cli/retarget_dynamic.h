@@ -121,6 +121,11 @@ struct DynamicStageOptions {
   //     CoM path kept 36 %, against round 12 and 24 %) 5, cmu_05_20 1bfabd56 1, built-in 1: 31/400.
   // The check that dances as the show does keeps more of cmu_05_07 and falls less with it.
   bool verify_holdable_soles = true;
+  // The check's recovery step with the fast swing as a fallback (planner::RecoveryStepConfig::
+  // fast_swing_s; `kuavo retarget --verify-recovery-fast-swing S`), in every run of the check
+  // (Simbody, MuJoCo, the firmware loop); 0 (default): off, as `kuavo simulate` dances by
+  // default. A pipeline whose show dances with it on checks with it on.
+  double verify_recovery_fast_swing_s = 0.0;
   VerifyLadder verify_ladder;  // the repair's gain and range about a fall (verify_ladder.h)
   std::string csv_path;   // the dynamic trajectory, "" = none
   std::string plots_dir;  // Fig. 4 / 5 SVGs (retarget_figures.h), "" = none; the directory must exist

@@ -43,6 +43,8 @@ constexpr CommandHelp kHelp[] = {
      "                      (--verify-show: carpet runs with the show set's model errors, 0..48 seeds, default 24)\n"
      "                      [--verify-show-push NS]   (each of those runs pushed once as in the show campaign; 0..40, default 10; 0: none)\n"
      "                      [--verify-holdable-soles on|off]   (the check's recovery step on the holdable soles, as online; default on)\n"
+     "                      [--verify-recovery-fast-swing S]   (the check's recovery step with simulate's --recovery-fast-swing S,\n"
+     "                      0.2..0.4; default off, as online)\n"
      "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
