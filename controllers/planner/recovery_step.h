@@ -116,6 +116,11 @@
 // cmu_05_07 5/100 (saves 47, 85; fast steps in 7 runs), perfume 58 and 64 dance, perfume's late
 // falls (20.7–22.9 s) decline the 0.25 s step too. Off by default until a whole show campaign
 // and the pipeline's check are measured with it.
+// Tried and not kept (stop 78): a last resort, after N triggers in a row where no step
+// captures, the step whose ξ at touchdown lies least far outside the support it makes, taken
+// if that is nearer than ξ with both feet kept down (a sideways exit never is). On the 16
+// falls of row 33: N = 3 saved none (last-resort steps in 12 of them); N = 1 with the fast
+// swing saved cmu_05_07 47, 75 and 85, the fast swing alone 47 and 85.
 //
 // Real-time: fixed-size state, no allocation; per call at most one leg solve per window
 // knot that carries a displacement (≤ kMaxWindowKnots, ≤ 20 Gauss–Newton iterations each:
