@@ -114,8 +114,10 @@
 // and loses perfume 58 and 64, which stepped and stood at 0.40 s (100 seeds each: cmu_05_07
 // 7 → 5, perfume 7 → 7); 0.30 s saves none, 0.20 s five. As a fallback (this, at 0.25 s):
 // cmu_05_07 5/100 (saves 47, 85; fast steps in 7 runs), perfume 58 and 64 dance, perfume's late
-// falls (20.7–22.9 s) decline the 0.25 s step too. Off by default until a whole show campaign
-// and the pipeline's check are measured with it.
+// falls (20.7–22.9 s) decline the 0.25 s step too. The whole show campaign (stop 78): 14/400
+// against 16 on row 33's motions, but end to end (`kuavo retarget --verify-recovery-fast-swing
+// 0.25`, the check dancing with it: cmu_05_07 keeps round 7 instead of 11, CoM path 27 % against
+// 25 %) 16/400, as off (cmu_05_07 7/100). Off by default.
 // Tried and not kept (stop 78): a last resort, after N triggers in a row where no step
 // captures, the step whose ξ at touchdown lies least far outside the support it makes, taken
 // if that is nearer than ξ with both feet kept down (a sideways exit never is). On the 16

@@ -124,7 +124,10 @@ struct DynamicStageOptions {
   // The check's recovery step with the fast swing as a fallback (planner::RecoveryStepConfig::
   // fast_swing_s; `kuavo retarget --verify-recovery-fast-swing S`), in every run of the check
   // (Simbody, MuJoCo, the firmware loop); 0 (default): off, as `kuavo simulate` dances by
-  // default. A pipeline whose show dances with it on checks with it on.
+  // default. A pipeline whose show dances with it on checks with it on. Measured (stop 78, 0.25
+  // s): built-in and cmu_05_20 written bit for bit as off; cmu_05_07 keeps round 7 instead of
+  // 11 (3 show seeds given up against 6, CoM path 27 % against 25 %); perfume round 8 as off.
+  // Show campaign on those motions, danced with it: 16/400, as the default pipeline's.
   double verify_recovery_fast_swing_s = 0.0;
   VerifyLadder verify_ladder;  // the repair's gain and range about a fall (verify_ladder.h)
   std::string csv_path;   // the dynamic trajectory, "" = none
