@@ -53,9 +53,8 @@ constexpr const char* kUsage =
     "                       elbow), bus-off (the left knee's bus), frame-loss-1pct (every bus), imu-dropout,\n"
     "                       starved-planner (no planning task from then on). The summary's \"injection\"\n"
     "                       says when it was armed, the fault latched and the time to damping\n"
-    "  --stand applies without --dance, --balance-filter, --holdable-soles and --recovery-fast-swing\n"
-    "  with it; in the other\n"
-    "  mode they are refused\n"
+    "  --stand applies without --dance; --balance-filter, --holdable-soles and --recovery-fast-swing\n"
+    "  with it; in the other mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
 constexpr kuavo::args::ModeMask kDanceMode = 1, kStandMode = 2;
