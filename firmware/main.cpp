@@ -18,6 +18,7 @@
 #include <new>
 #include <string>
 
+#include "controllers/estimator/estimator.h"
 #include "controllers/model/model.h"
 #include "controllers/motion/load_motion.h"
 #include "drivers/bus/open_buses.h"
@@ -41,7 +42,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: kuavo_fw [--config FILE] [--legs csp|cst] [--check] [--require-rt] [--stand] [--dance MOTION_FILE]\n"
     "                [--timing MOTION_FILE [--evict-cache]] [--balance-filter on|off] [--holdable-soles on|off]\n"
-    "                [--recovery-fast-swing SECONDS]\n"
+    "                [--recovery-fast-swing SECONDS] [--surface-sink M]\n"
     "  --config FILE        drivers configuration (JSON overlay on the built-in defaults)\n"
     "  --legs csp|cst       the CiA 402 drives' mode, legs and shoulder pitches (firmware/README.md,\n"
     "                       leg binding). csp (default): the drives close the PD in their own loop\n"
@@ -68,6 +69,9 @@ constexpr const char* kUsage =
     "                       (default on; off: on the soles)\n"
     "  --recovery-fast-swing SECONDS  opt-in: a recovery step no 0.40 s swing captures is planned\n"
     "                       again with this shorter swing (0.2..0.4 s; default off)\n"
+    "  --surface-sink M     the stage surface's sink under the standing robot, measured at set-up\n"
+    "                       (0..0.05 m; default 0: a hard floor); the estimator puts loaded soles\n"
+    "                       that deep (a carpet: ARCHITECTURE.md, estimator)\n"
     "  --require-rt applies to a run and --timing, --stand to a run, --dance to a run and --check,\n"
     "  --evict-cache to --timing; an option outside its mode is refused\n"
     "exit codes: 0 ok, 1 runtime failure (buses, real time, out of memory), 2 bad usage, configuration\n"
@@ -168,6 +172,7 @@ struct DanceMemory {
 int run(int argc, char** argv) {
   std::string config_path, dance_path, timing_path, legs = "csp", balance = "off", holdable = "on";
   double fast_swing_s = 0.0;  // --recovery-fast-swing (0: off)
+  double surface_sink_m = 0.0;  // --surface-sink (0: a hard floor)
   bool check = false, require_rt = false, stand = false, evict_cache = false;
   kuavo::args::Parser args("kuavo_fw");
   args.text("--config", "FILE", &config_path);
@@ -181,6 +186,7 @@ int run(int argc, char** argv) {
   args.choice("--balance-filter", {"on", "off"}, &balance);
   args.choice("--holdable-soles", {"on", "off"}, &holdable);
   args.number("--recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &fast_swing_s);
+  args.number("--surface-sink", "M", 0.0, kuavo::estimator::kMaxStanceSink_m, "m", &surface_sink_m);
   switch (args.parse(argc, argv)) {
     case kuavo::args::Parser::Result::kHelp:
       std::fputs(kUsage, stdout);
@@ -202,7 +208,7 @@ int run(int argc, char** argv) {
     return 2;
   }
   if (timing) dance_path = timing_path;
-  for (const char* option : {"--balance-filter", "--holdable-soles", "--recovery-fast-swing"}) {
+  for (const char* option : {"--balance-filter", "--holdable-soles", "--recovery-fast-swing", "--surface-sink"}) {
     if (args.given(option) && dance_path.empty()) {
       std::fprintf(stderr, "kuavo_fw: %s applies to a motion (--dance or --timing)\n%s", option, kUsage);
       return 2;
@@ -242,6 +248,7 @@ int run(int argc, char** argv) {
   kuavo::stack::StackConfig stack_config = fw::firmware_stack_config(fw_config);
   kuavo::planner::set_holdable_soles(stack_config.recovery, holdable == "on");
   stack_config.recovery.fast_swing_s = fast_swing_s;
+  stack_config.estimator.stance_sink_m = surface_sink_m;
   std::unique_ptr<DanceMemory> memory;
   if (!dance_path.empty()) {
     memory.reset(new (std::nothrow) DanceMemory);

@@ -403,6 +403,7 @@ MotionSummary motion_run(const model::Model& model, const planner::MotionPlan& m
   out.lean_trim = config.stack.lean_trim.enabled;
   out.lean_trim_opening = config.stack.lean_trim.learn == stack::LeanTrimLearn::kOpening;
   out.planner_sole_inset_m = config.stack.planner == stack::PlannerKind::kMpc ? config.stack.planner_sole_inset_m : 0.0;
+  out.stance_sink_m = config.stack.estimator.stance_sink_m;
   out.recovery_fast_swing_s = config.stack.planner == stack::PlannerKind::kMpc && config.stack.recovery.enabled
                                   ? config.stack.recovery.fast_swing_s
                                   : 0.0;
@@ -511,6 +512,10 @@ std::string motion_summary_json(const MotionSummary& s) {
   }
   if (s.planner_sole_inset_m > 0.0) {
     std::snprintf(buf, sizeof buf, "\"planner_sole_inset_m\": %.4f", s.planner_sole_inset_m);
+    append(buf);
+  }
+  if (s.stance_sink_m > 0.0) {
+    std::snprintf(buf, sizeof buf, "\"surface_sink_m\": %.4f", s.stance_sink_m);
     append(buf);
   }
   if (s.recovery_fast_swing_s > 0.0) {

@@ -115,6 +115,9 @@ struct MotionSummary {
   double com_over_feet_err_m_end = 0.0;
   // StackConfig::planner_sole_inset_m of an MPC run, in the summary only when above 0.
   double planner_sole_inset_m = 0.0;
+  // The estimator's stance sink (EstimatorConfig::stance_sink_m, `--surface-sink`), in the
+  // summary only when above 0.
+  double stance_sink_m = 0.0;
   // The recovery step's fast swing (RecoveryStepConfig::fast_swing_s) of an MPC run with the
   // step on, and the steps that took it; in the summary only when it is on.
   double recovery_fast_swing_s = 0.0;

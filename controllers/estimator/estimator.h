@@ -28,6 +28,8 @@ namespace kuavo::estimator {
 
 using ContactFlags = std::array<bool, model::kNumContactPoints>;
 
+inline constexpr double kMaxStanceSink_m = 0.05;
+
 struct EstimatorConfig {
   // Leju's task.info kalmanFilter (FACTS.md §6). Process noise is scaled per
   // step as in legged_control: position dt/20, velocity dt·9.81/20, points dt.
@@ -67,6 +69,16 @@ struct EstimatorConfig {
   double accel_cutoff_hz = 12.0;
   double gravity_m_s2 = model::kGravity_m_s2;
   double ground_height_m = 0.0;  // stance heights are measured against this plane
+  // How deep a loaded sole rests below that plane: 0 on a hard floor; on a soft stage surface
+  // (carpet, foam) its sink under the standing robot, measured when the stage is set up. The
+  // stance height rows (and the reset) put the soles there. The plan's ground stays the
+  // surface: swings still aim at it. Left at 0 on the simulator's carpet (1.5 cm under the
+  // standing robot, sim/ground_contact.h), the soles are put at the surface, the base reads
+  // 1.6-2.6 cm high (cmu_05_07, show seed 47), every swing aims that much into the carpet and
+  // meets it early. Show campaign's 16 falling runs (carpet, `show` set, 10 N·s push): with
+  // 0.015 m 6 fall; with the true base height and vertical velocity instead of the estimate's,
+  // 6; on a stiff ground of the carpet's friction, 4. Range 0..kMaxStanceSink_m.
+  double stance_sink_m = 0.0;
   // dt outside this range is clamped (and reported): 10 kHz … 50 Hz.
   double dt_min_s = 1e-4;
   double dt_max_s = 0.02;
@@ -132,9 +144,9 @@ struct EstimatorState {
 // noise, cutoff or limit is not finite and positive. Clears the filter.
 bool estimator_init(const EstimatorConfig& config, EstimatorState& state);
 
-// Start-up: the robot stands with all 8 sole corners on the ground plane. Puts
-// the base at base_xy_m and at the height leg kinematics give over the lowest
-// corner, the corners where kinematics put them, velocity zero. Needs a usable
+// Start-up: the robot stands with all 8 sole corners on the ground plane (sunk by
+// stance_sink_m). Puts the base at base_xy_m and at the height leg kinematics give over
+// the lowest corner, the corners where kinematics put them, velocity zero. Needs a usable
 // IMU and joint sample (else kNotInitialized, nothing changed).
 EstimatorStatus estimator_reset(const model::Model& model, EstimatorState& state, const hal::SensorFrame& sensors,
                                 const Eigen::Vector2d& base_xy_m);

@@ -17,6 +17,7 @@
 #include <new>
 #include <string>
 
+#include "controllers/estimator/estimator.h"
 #include "controllers/motion/load_motion.h"
 #include "drivers/config/drivers_config_json.h"
 #include "firmware/sitl/sitl_run.h"
@@ -34,7 +35,8 @@ constexpr const char* kUsage =
     "usage: kuavo_fw_sim [--dance MOTION_FILE | --stand SECONDS] [--config FILE] [--legs csp|cst]\n"
     "                    [--ground floor|carpet] [--seed N] [--push T:FX,FY,FZ:DURATION]\n"
     "                    [--plan-latency-ms MS] [--log run.csv] [--summary run.json] [--balance-filter on|off]\n"
-    "                    [--holdable-soles on|off] [--recovery-fast-swing SECONDS] [--inject KIND@SECONDS]\n"
+    "                    [--holdable-soles on|off] [--recovery-fast-swing SECONDS] [--surface-sink M]\n"
+    "                    [--inject KIND@SECONDS]\n"
     "  --dance MOTION_FILE  a motion file from `kuavo retarget`, loaded as kuavo_fw --dance loads it:\n"
     "                       stand up on the gantry to its first frame, released in ready, dance,\n"
     "                       back on the gantry, finish, damping\n"
@@ -45,6 +47,7 @@ constexpr const char* kUsage =
     "  --balance-filter on|off  as kuavo_fw (default off)\n"
     "  --holdable-soles on|off  as kuavo_fw (default on)\n"
     "  --recovery-fast-swing SECONDS  as kuavo_fw (0.2..0.4 s; default off)\n"
+    "  --surface-sink M     as kuavo_fw (0..0.05 m; default 0); the summary echoes it\n"
     "  --ground, --seed, --push, --log, --summary: as `kuavo simulate`; --seed seeds the IMU model\n"
     "                       and the emulators' fault injection (default 1)\n"
     "  --plan-latency-ms MS the planning task's plan applied this long after its state, 0..18 ms (default 4)\n"
@@ -53,8 +56,8 @@ constexpr const char* kUsage =
     "                       elbow), bus-off (the left knee's bus), frame-loss-1pct (every bus), imu-dropout,\n"
     "                       starved-planner (no planning task from then on). The summary's \"injection\"\n"
     "                       says when it was armed, the fault latched and the time to damping\n"
-    "  --stand applies without --dance; --balance-filter, --holdable-soles and --recovery-fast-swing\n"
-    "  with it; in the other mode they are refused\n"
+    "  --stand applies without --dance; --balance-filter, --holdable-soles, --recovery-fast-swing and\n"
+    "  --surface-sink with it; in the other mode they are refused\n"
     "exit codes: 0 danced to the end (or stood) without a fault or a fall, 1 not, 2 bad usage or input\n";
 
 constexpr kuavo::args::ModeMask kDanceMode = 1, kStandMode = 2;
@@ -73,6 +76,7 @@ int run(int argc, char** argv) {
   args.choice("--balance-filter", {"on", "off"}, &balance).modes = kDanceMode;
   args.choice("--holdable-soles", {"on", "off"}, &holdable).modes = kDanceMode;
   args.number("--recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &cfg.recovery_fast_swing_s).modes = kDanceMode;
+  args.number("--surface-sink", "M", 0.0, kuavo::estimator::kMaxStanceSink_m, "m", &cfg.surface_sink_m).modes = kDanceMode;
   args.choice("--ground", {"floor", "carpet"}, &ground);
   args.uint64("--seed", "N", &cfg.loop.seed);
   args.custom("--push", kuavo::sim::kPushValueName, [&](const char* v) { return kuavo::sim::parse_push(v, cfg.loop.push); });

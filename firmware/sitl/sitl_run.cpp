@@ -75,6 +75,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   stack::StackConfig stack_config = firmware_stack_config(config.loop.firmware);  // as kuavo_fw runs it
   planner::set_holdable_soles(stack_config.recovery, config.holdable_soles);
   stack_config.recovery.fast_swing_s = config.recovery_fast_swing_s;
+  stack_config.estimator.stance_sink_m = config.surface_sink_m;
   if (motion != nullptr && !loop->enable_dance(*motion, stack_config, config.plan_latency_ns)) {
     run.ok = false;
     run.error = "dance: " + loop->error();
@@ -232,6 +233,7 @@ SitlSummary run_firmware_sim(const model::Model& m, const planner::MotionPlan* m
   ms.plans_skipped = dc.counters.plans_rejected + dc.counters.plans_old_epoch;
   sim::copy_planner_counters(FirmwareLoop::planner().ws, ms);
   ms.recovery_fast_swing_s = motion != nullptr && stack_config.recovery.enabled ? stack_config.recovery.fast_swing_s : 0.0;
+  ms.stance_sink_m = motion != nullptr ? stack_config.estimator.stance_sink_m : 0.0;
 
   out.final_mode = to_string(f.mode.mode);
   if (dance_requested && dc.start_ns > 0) out.dance_started_at_s = 1e-9 * static_cast<double>(dc.start_ns);

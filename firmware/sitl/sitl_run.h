@@ -41,6 +41,9 @@ struct SitlConfig {
   // > 0: the recovery step's fast swing as a fallback (planner::RecoveryStepConfig::fast_swing_s;
   // kuavo_fw_sim --recovery-fast-swing S); 0: off, the image's default.
   double recovery_fast_swing_s = 0.0;
+  // The stage surface's sink under the standing robot (estimator::EstimatorConfig::stance_sink_m;
+  // kuavo_fw_sim --surface-sink M); 0: a hard floor, the image's default.
+  double surface_sink_m = 0.0;
 };
 
 // What the drill did: when it was armed, the first fault latched from then on, and the

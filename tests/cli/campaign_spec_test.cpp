@@ -118,6 +118,29 @@ TEST(CampaignSpec, OptionalNumbersAreOptIn) {
   }
 }
 
+// The stage surface's sink belongs to a ground: absent, 0 on both (a hard floor); given per
+// ground, only that ground's runs get it; another ground, a value outside 0..0.05 m, a string
+// or a bare number are refused by name.
+TEST(CampaignSpec, SurfaceSinkIsPerGround) {
+  const std::string head = R"({"motions":["dance"],"grounds":["floor","carpet"],"perturbations":["none"],"seeds":1)";
+  cli::CampaignSpec s;
+  std::string error;
+  ASSERT_TRUE(cli::parse_campaign_spec(head + "}", s, error)) << error;
+  EXPECT_EQ(s.carpet_sink_m, 0.0);
+  EXPECT_EQ(s.floor_sink_m, 0.0);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"surface_sink_m":{"carpet":0.015}})", s, error)) << error;
+  EXPECT_EQ(s.carpet_sink_m, 0.015);
+  EXPECT_EQ(s.floor_sink_m, 0.0);
+  ASSERT_TRUE(cli::parse_campaign_spec(head + R"(,"surface_sink_m":{"floor":0.001,"carpet":0.02}})", s, error)) << error;
+  EXPECT_EQ(s.carpet_sink_m, 0.02);
+  EXPECT_EQ(s.floor_sink_m, 0.001);
+  for (const char* bad : {R"({"grass":0.01})", R"({"carpet":0.06})", R"({"carpet":-0.01})", R"({"carpet":"0.01"})",
+                          "0.015", "[0.015]"}) {
+    EXPECT_FALSE(cli::parse_campaign_spec(head + ",\"surface_sink_m\":" + bad + "}", s, error)) << bad;
+    EXPECT_NE(error.find("surface_sink_m"), std::string::npos) << error;
+  }
+}
+
 // The holdable-soles trigger on by default (absent: on), as in `kuavo simulate`; false and
 // true set it; anything but a boolean is refused by name. The lean trim: absent, simulate's
 // default; a mode by name, or a boolean (true: "on", false: "off"); anything else refused.

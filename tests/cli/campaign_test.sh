@@ -49,6 +49,18 @@ for k in 1 2; do
 done
 cmp "$dir/r1.motion" "$dir/r2.motion" || fail "two retargets of the built-in dance gave different motions"
 
+# The surface sink is per ground: the carpet's runs get --surface-sink and echo it, the floor's not.
+cat > "$dir/sink.json" <<'SPEC'
+{"name": "sink", "motions": ["dance"], "grounds": ["floor", "carpet"], "perturbations": ["none"], "seeds": 1,
+ "duration_s": 0.3, "surface_sink_m": {"carpet": 0.015}}
+SPEC
+mkdir -p "$dir/s/motions" && cp "$dir/a/motions/dance.motion" "$dir/s/motions/" || fail "copy the motion"
+"$kuavo" campaign "$dir/sink.json" --out "$dir/s" > /dev/null 2>&1 || fail "campaign with a surface sink"
+grep -q -- "--ground carpet .*--surface-sink 0.015" "$dir/s/jobs.txt" || fail "the carpet run lacks its sink: $(cat "$dir/s/jobs.txt")"
+! grep -q -- "--ground floor .*--surface-sink" "$dir/s/jobs.txt" || fail "the floor run got the carpet's sink"
+grep -q '"surface_sink_m": 0.0150' "$dir/s/runs/dance__carpet__none__1.json" || fail "the carpet run does not echo its sink"
+! grep -q surface_sink "$dir/s/runs/dance__floor__none__1.json" || fail "the floor run echoes a sink"
+
 # --seeds overrides the spec. The built-in dance's motion is reused from the first campaign.
 mkdir -p "$dir/c/motions" && cp "$dir/a/motions/dance.motion" "$dir/c/motions/" || fail "copy the motion"
 "$kuavo" campaign "$dir/spec.json" --out "$dir/c" --seeds 1 > /dev/null 2>&1 || fail "--seeds 1"

@@ -114,6 +114,9 @@ TEST(SimulateCli, ArgumentsAreStrict) {
       {"--stand 0.1 --horizon 1.2", "--horizon does not apply to a --stand run"},
       {motion + " --duration 0.1 --recovery-fast-swing 0.5", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.5'"},
       {"--stand 0.1 --recovery-fast-swing 0.25", "--recovery-fast-swing does not apply to a --stand run"},
+      {motion + " --duration 0.1 --surface-sink 0.06", "--surface-sink needs M in [0, 0.05] m, got '0.06'"},
+      {motion + " --duration 0.1 --surface-sink nan", "--surface-sink needs M in [0, 0.05] m, got 'nan'"},
+      {"--stand 0.1 --surface-sink 0.015", "--surface-sink does not apply to a --stand run"},
       {"--step-in-place 4 --stand 1", "give exactly one of --stand SECONDS, a MOTION file or --step-in-place STEPS"},
       {"--stand 0.1 --seed 1 --seed 2", "--seed given twice"},
       {"--stand 0.1 --push 1:10,0,0:inf", "--push must be T:FX,FY,FZ:DURATION"},
@@ -152,6 +155,24 @@ TEST(SimulateCli, RecoveryFastSwingIsEchoedWhenOn) {
   EXPECT_NE(summary_of(" --recovery-fast-swing 0.25", "_swing").find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"),
             std::string::npos);
   EXPECT_EQ(summary_of("", "_swing_default").find("recovery_fast_swing"), std::string::npos);
+}
+
+// --surface-sink reaches the run's stack (its summary echoes the estimator's stance sink); a run
+// without it says nothing of it. The estimator's use of it is tested in tests/estimator.
+TEST(SimulateCli, SurfaceSinkIsEchoedWhenGiven) {
+  if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
+  const std::string motion = standing_motion();
+  const auto summary_of = [&](const std::string& extra, const std::string& tag) {
+    const std::string path = kOut + tag + ".json";
+    const CliRun r = simulate(motion + " --duration 0.2 --ground carpet" + extra + " --summary " + path, tag);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(path);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  EXPECT_NE(summary_of(" --surface-sink 0.015", "_sink").find("\"surface_sink_m\": 0.0150"), std::string::npos);
+  EXPECT_EQ(summary_of("", "_sink_default").find("surface_sink"), std::string::npos);
 }
 
 // kuavo campaign's counts are whole numbers (atoi took "5abc" as 5, and --jobs "4x" went to

@@ -365,6 +365,19 @@ TEST(EstimatorBadInput, JointsDtConfigAndStartUp) {
   }
   config.contact_velocity_gate_m_s = 0.0;  // off
   EXPECT_TRUE(estimator::estimator_init(config, g_state));
+  for (const double sink : {-0.001, estimator::kMaxStanceSink_m + 0.001, std::nan(""),
+                            std::numeric_limits<double>::infinity()}) {
+    config = {};
+    config.stance_sink_m = sink;
+    EXPECT_FALSE(estimator::estimator_init(config, g_state)) << sink;
+    EXPECT_EQ(g_state.config.stance_sink_m, 0.0);
+  }
+  // A stance sink resets the base that much lower over the same kinematics.
+  config = {};
+  config.stance_sink_m = 0.015;
+  ASSERT_TRUE(estimator::estimator_init(config, g_state));
+  estimator::estimator_step_rt(robot(), g_state, good, kAllContact, kDt_s, out);
+  EXPECT_NEAR(out.q[2], q0[2] - 0.015, 1e-9);
   config = {};
   config.covariance_trace_limit = 1e-9;  // watchdog trips
   ASSERT_TRUE(estimator::estimator_init(config, g_state));

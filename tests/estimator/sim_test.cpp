@@ -151,6 +151,24 @@ TEST(EstimatorAgainstSimulator, StandingAndPushOnCarpet) {
   EXPECT_LT(r.max_drift_z_m, 0.03);
 }
 
+TEST(EstimatorAgainstSimulator, StanceSinkPutsTheBaseAtItsHeightOnCarpet) {
+  // The oracle is the carpet's law, f = k·d^n: the standing robot's weight over its 8 sole
+  // corners sinks each d = (m·g / 8k)^(1/n), 1.49 cm. With stance_sink_m = d the height
+  // estimate is the plant's; without it the base reads about d high. 3 s standing, no push.
+  const sim::GroundParams& g = sim::kCarpet;
+  const double sink_m = std::pow(55.0 * model::kGravity_m_s2 / 8.0 / g.normal_stiffness, 1.0 / g.normal_exponent);
+  estimator::EstimatorConfig sunk;
+  sunk.stance_sink_m = sink_m;
+  const RunResult surface = run(g, sim::Vec3::Zero(), 3.0, 1);
+  const RunResult told = run(g, sim::Vec3::Zero(), 3.0, 1, sunk);
+  std::printf("carpet sink %.4f m: z error at 3 s %.4f m at the surface, %.4f m with the sink\n", sink_m,
+              surface.drift_z_m, told.drift_z_m);
+  EXPECT_EQ(told.bad_status, 0);
+  EXPECT_GT(surface.drift_z_m, 0.7 * sink_m);
+  EXPECT_LT(told.drift_z_m, 0.2 * sink_m);
+  EXPECT_LT(told.velocity_standing.rms(), 0.02);
+}
+
 TEST(EstimatorAgainstSimulator, StandingErrorIsTheImuTiltBias) {
   // Without the 0.2° tilt error the standing velocity error all but vanishes
   // (measured 0.6 mm/s RMS against 12 mm/s with it): the filter itself is not

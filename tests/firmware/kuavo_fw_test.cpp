@@ -160,6 +160,8 @@ TEST(KuavoFw, OptionsOutsideTheirModeAreRefused) {
       {"--check --balance-filter on", "--balance-filter applies to a motion"},
       {"--check --recovery-fast-swing 0.25", "--recovery-fast-swing applies to a motion"},
       {"--recovery-fast-swing 0.5", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.5'"},
+      {"--check --surface-sink 0.015", "--surface-sink applies to a motion"},
+      {"--surface-sink -0.01", "--surface-sink needs M in [0, 0.05] m, got '-0.01'"},
       {"--check --check", "--check given twice"},
       {"--legs", "--legs needs a value (csp|cst)"},
       {"--config --check", "--config needs a value (FILE), got option '--check'"},
@@ -307,6 +309,8 @@ TEST(KuavoFwSim, PushesModesAndOutputsAreCheckedFirst) {
       {"--stand 1 --recovery-fast-swing 0.25", "--recovery-fast-swing does not apply to a --stand run"},
       {"--recovery-fast-swing 0.1", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.1'"},
       {"--recovery-fast-swing nan", "--recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got 'nan'"},
+      {"--stand 1 --surface-sink 0.015", "--surface-sink does not apply to a --stand run"},
+      {"--surface-sink 0.5", "--surface-sink needs M in [0, 0.05] m, got '0.5'"},
       {"--dance x.motion --stand 1", "--stand does not apply to a --dance run"},
       {"--plan-latency-ms 19", "--plan-latency-ms needs MS in [0, 18] ms, got '19'"},
       {"--log --summary", "--log needs a value (CSV), got option '--summary'"},
@@ -321,7 +325,8 @@ TEST(KuavoFwSim, PushesModesAndOutputsAreCheckedFirst) {
 
 // --recovery-fast-swing reaches the image's dance stack (planner::RecoveryStepConfig::
 // fast_swing_s, as `kuavo simulate --recovery-fast-swing`): the summary names the swing and counts
-// its steps (none while standing); without it the key is absent (off, the image's default).
+// its steps (none while standing); without it the key is absent (off, the image's default). So
+// does --surface-sink (estimator::EstimatorConfig::stance_sink_m): the summary echoes it.
 TEST(KuavoFwSim, RecoveryFastSwingIsEchoedWhenOn) {
   const std::string motion = write_standing_motion("fw_sim_fast_swing.motion", kuavo::model::Variant::kS45);
   const auto summary = [&](const std::string& extra, const char* name) {
@@ -331,11 +336,13 @@ TEST(KuavoFwSim, RecoveryFastSwingIsEchoedWhenOn) {
     std::ifstream in(path);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   };
-  const std::string on = summary(" --recovery-fast-swing 0.25", "fw_sim_fast_on.json");
+  const std::string on = summary(" --recovery-fast-swing 0.25 --surface-sink 0.015", "fw_sim_fast_on.json");
   EXPECT_NE(on.find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"), std::string::npos) << on;
+  EXPECT_NE(on.find("\"surface_sink_m\": 0.0150"), std::string::npos) << on;
   const std::string off = summary("", "fw_sim_fast_off.json");
   ASSERT_NE(off.find("\"danced_to_end\""), std::string::npos) << off;
   EXPECT_EQ(off.find("recovery_fast_swing"), std::string::npos) << off;
+  EXPECT_EQ(off.find("surface_sink"), std::string::npos) << off;
 }
 
 }  // namespace

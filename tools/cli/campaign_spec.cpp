@@ -3,6 +3,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "controllers/estimator/estimator.h"
 #include "sim/push_option.h"
 
 namespace kuavo::cli {
@@ -79,7 +80,7 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   static const char* const kKeys[] = {"name", "motions", "grounds", "perturbations", "seeds",
                                       "first_seed", "planner", "liftoff_hold", "plan_anchor", "plan_anchor_home",
                                       "estimator_unloaded_foot_N", "planner_sole_inset_m", "recovery_fast_swing_s",
-                                      "lean_trim", "holdable_soles", "duration_s", "push"};
+                                      "surface_sink_m", "lean_trim", "holdable_soles", "duration_s", "push"};
   for (const auto& [key, value] : j.items()) {
     bool known = false;
     for (const char* k : kKeys) known = known || key == k;
@@ -139,6 +140,25 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
   }
   if (!optional_number(j, "planner_sole_inset_m", 0.0, 0.04, "0..0.04 m", s.planner_sole_inset_m, error)) return false;
   if (!optional_number(j, "recovery_fast_swing_s", 0.2, 0.4, "0.2..0.4 s", s.recovery_fast_swing_s, error)) return false;
+  if (j.contains("surface_sink_m")) {
+    const nlohmann::json& sink = j["surface_sink_m"];
+    if (!sink.is_object()) {
+      error = "\"surface_sink_m\" must be an object {GROUND: M}";
+      return false;
+    }
+    for (const auto& [ground, value] : sink.items()) {
+      double* out_m = ground == "carpet" ? &s.carpet_sink_m : ground == "floor" ? &s.floor_sink_m : nullptr;
+      if (out_m == nullptr) {
+        error = "\"surface_sink_m\": ground '" + ground + "' must be floor or carpet";
+        return false;
+      }
+      if (!value.is_number() || !(value.get<double>() >= 0.0 && value.get<double>() <= estimator::kMaxStanceSink_m)) {
+        error = "\"surface_sink_m\"." + ground + " must be a number in 0..0.05 m";
+        return false;
+      }
+      *out_m = value.get<double>();
+    }
+  }
   if (!number(j, "duration_s", s.duration_s, error)) return false;
   if (!(s.duration_s >= 0.0 && s.duration_s <= sim::kMaxRunDuration_s)) {
     error = "\"duration_s\" must be 0..600 s (0: the motion's length)";

@@ -15,6 +15,8 @@
 //   "estimator_unloaded_foot_N"  N: --estimator-unloaded-foot N (absent: simulate's default, off)
 //   "planner_sole_inset_m"  M: --planner-sole-inset M (absent: simulate's default, 0)
 //   "recovery_fast_swing_s"  S: --recovery-fast-swing S (absent: simulate's default, off)
+//   "surface_sink_m" {GROUND: M, ...}: --surface-sink M on that ground's runs, the stage
+//                    surface's sink under the standing robot (absent: 0, a hard floor)
 //   "lean_trim"      "off" | "opening" | "always": kuavo simulate --lean-trim MODE; true, false:
 //                    "on" (always), "off" (absent: simulate's default)
 //   "holdable_soles" false: kuavo simulate --holdable-soles off (default true)
@@ -64,6 +66,7 @@ struct CampaignSpec {
   std::optional<double> estimator_unloaded_foot_N;
   std::optional<double> planner_sole_inset_m;
   std::optional<double> recovery_fast_swing_s;
+  double carpet_sink_m = 0.0, floor_sink_m = 0.0;  // "surface_sink_m"
   std::optional<std::string> lean_trim;  // --lean-trim's value
   bool holdable_soles = true;
   double duration_s = 0.0;

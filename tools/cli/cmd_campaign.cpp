@@ -240,6 +240,8 @@ int run_campaign(int argc, char** argv) {
     if (spec.estimator_unloaded_foot_N) add_number("--estimator-unloaded-foot", *spec.estimator_unloaded_foot_N);
     if (spec.planner_sole_inset_m) add_number("--planner-sole-inset", *spec.planner_sole_inset_m);
     if (spec.recovery_fast_swing_s) add_number("--recovery-fast-swing", *spec.recovery_fast_swing_s);
+    const double sink_m = r.ground == "carpet" ? spec.carpet_sink_m : spec.floor_sink_m;
+    if (sink_m > 0.0) add_number("--surface-sink", sink_m);
     if (spec.duration_s > 0.0) add_number("--duration", spec.duration_s);
     if (push && r.pushed) {
       char p_arg[128];

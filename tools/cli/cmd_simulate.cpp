@@ -3,7 +3,7 @@
 //                [--latency-ticks N] [--integrator cvode|rkm|euler] [--variant s45|s42] [--mass KG]
 //                [--engine simbody|mujoco|both]
 //                [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]
-//                [--estimator-unloaded-foot N]
+//                [--estimator-unloaded-foot N] [--surface-sink M]
 //                [--horizon SECONDS] [--plan-latency-ms MS|measured] [--recovery-step on|off]
 //                [--planner-sole-inset M] [--recovery-fast-swing SECONDS]
 //                [--early-touchdown on|off] [--holdable-soles on|off] [--liftoff-hold on|off] [--plan-anchor on|off]
@@ -95,6 +95,10 @@ int run_simulate(int argc, char** argv) {
   // (controllers/stack/online_stack.h, estimator_unloaded_foot_N); 0 (default): off.
   p.number("--estimator-unloaded-foot", "N", 0.0, 1000.0, "N", &motion_cfg.stack.estimator_unloaded_foot_N).modes =
       kMotionRun | kStepRun;
+  // The stage surface's sink under the standing robot, measured at set-up (0, the default: a
+  // hard floor): the estimator puts loaded soles that deep (EstimatorConfig::stance_sink_m).
+  p.number("--surface-sink", "M", 0.0, estimator::kMaxStanceSink_m, "m", &motion_cfg.stack.estimator.stance_sink_m)
+      .modes = kMotionRun | kStepRun;
   // Opt-in: the MPC planner plans on soles this much narrower (online_stack.h,
   // planner_sole_inset_m); 0 (default): the whole soles.
   p.number("--planner-sole-inset", "M", 0.0, 0.04, "m", &motion_cfg.stack.planner_sole_inset_m).modes =

@@ -58,6 +58,8 @@ constexpr CommandHelp kHelp[] = {
      "               both: a run on each, one summary saying where they disagree; MuJoCo's log NAME.mujoco.csv)\n"
      "               [--planner kinematic|mpc] [--state estimator|truth] [--sensors mti|ideal]\n"
      "               [--estimator-unloaded-foot N]   (opt-in: a foot the WBC loads below N leaves the estimator's stance set)\n"
+     "               [--surface-sink M]   (the stage surface's sink under the standing robot, 0..0.05; default 0:\n"
+     "               a hard floor)\n"
      "               [--planner-sole-inset M]   (opt-in: the MPC planner plans on soles M m narrower each side, 0..0.04)\n"
      "               [--recovery-fast-swing SECONDS]   (opt-in: a recovery step no 0.40 s swing captures is planned\n"
      "               again with this swing, 0.2..0.4)\n"
