@@ -42,6 +42,9 @@ TEST(CampaignSpec, ExampleIsTheShowConditions) {
   EXPECT_EQ(s.grounds, std::vector<std::string>{"carpet"});
   EXPECT_EQ(s.perturbations, std::vector<std::string>{"show"});
   EXPECT_EQ(s.seeds, 100);
+  // The show's stage is set up: the carpet's sink under the standing robot, 1.5 cm
+  // (sim/ground_contact.h), is given to the estimator.
+  EXPECT_EQ(s.carpet_sink_m, 0.015);
   ASSERT_TRUE(s.push.enabled);
   EXPECT_DOUBLE_EQ(s.push.impulse_Ns, 10.0);
 }

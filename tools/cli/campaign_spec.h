@@ -34,6 +34,9 @@
 
 namespace kuavo::cli {
 
+// The goal campaign (issue 20): carpet, the `show` set, one random 10 N·s push a run. The stage
+// is set up as a show's is: the carpet's sink under the standing robot (1.5 cm,
+// sim/ground_contact.h) is given to the estimator (--surface-sink).
 inline constexpr const char* kShowConditionsSpec = R"({
   "name": "show conditions",
   "motions": ["dance"],
@@ -42,6 +45,7 @@ inline constexpr const char* kShowConditionsSpec = R"({
   "seeds": 100,
   "first_seed": 1,
   "planner": "mpc",
+  "surface_sink_m": {"carpet": 0.015},
   "push": {"impulse_Ns": 10.0, "duration_s": 0.1, "start_after_s": 1.0, "end_before_s": 1.0}
 }
 )";
