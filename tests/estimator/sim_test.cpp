@@ -153,7 +153,7 @@ TEST(EstimatorAgainstSimulator, StandingAndPushOnCarpet) {
 
 TEST(EstimatorAgainstSimulator, StanceSinkPutsTheBaseAtItsHeightOnCarpet) {
   // The oracle is the carpet's law, f = k·d^n: the standing robot's weight over its 8 sole
-  // corners sinks each d = (m·g / 8k)^(1/n), 1.49 cm. With stance_sink_m = d the height
+  // corners sinks each d = (m·g / 8k)^(1/n), 1.50 cm. With stance_sink_m = d the height
   // estimate is the plant's; without it the base reads about d high. 3 s standing, no push.
   const sim::GroundParams& g = sim::kCarpet;
   const double sink_m = std::pow(55.0 * model::kGravity_m_s2 / 8.0 / g.normal_stiffness, 1.0 / g.normal_exponent);
