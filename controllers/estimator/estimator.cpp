@@ -78,7 +78,10 @@ void relative_kinematics(const model::Model& model, EstimatorState& s) {
   dynamics::forward_velocities(model, s.data, s.v_relative);
 }
 
-// Base over the lowest corner at the ground plane less the stance sink, corners from kinematics,
+// Where a loaded sole rests: the ground plane less the stage surface's sink.
+double stance_height_m(const EstimatorConfig& c) { return c.ground_height_m - c.stance_sink_m; }
+
+// Base over the lowest corner at the stance height, corners from kinematics,
 // velocity zero. Requires relative_kinematics().
 void seed_filter(const model::Model& model, EstimatorState& s, const Eigen::Vector2d& base_xy_m) {
   const EstimatorConfig& c = s.config;
@@ -88,7 +91,7 @@ void seed_filter(const model::Model& model, EstimatorState& s, const Eigen::Vect
     lowest_m = (i == 0 || z < lowest_m) ? z : lowest_m;
   }
   s.x.setZero();
-  s.x.head<3>() << base_xy_m, c.ground_height_m - c.stance_sink_m - lowest_m;
+  s.x.head<3>() << base_xy_m, stance_height_m(c) - lowest_m;
   for (int i = 0; i < kPoints; ++i) {
     s.x.segment<3>(point_index(i, 0)) = s.x.head<3>() + dynamics::frame_position(model, s.data, i);
   }
@@ -119,14 +122,14 @@ void fill_kinematic_rows(const model::Model& model, EstimatorState& s) {
   }
 }
 
-// y's height rows and R from the contact flags. Stance heights are the ground plane less the
-// stance sink; a swing point's height is what the base estimate and kinematics say (so it does
-// not pull the point down), with the ×1000 noise anyway. Requires fill_kinematic_rows().
+// y's height rows and R from the contact flags. Stance heights are stance_height_m; a swing
+// point's height is what the base estimate and kinematics say (so it does not pull the point
+// down), with the ×1000 noise anyway. Requires fill_kinematic_rows().
 void fill_contact_rows(EstimatorState& s, const ContactFlags& contact) {
   const EstimatorConfig& c = s.config;
   for (int i = 0; i < kPoints; ++i) {
     const double scale = contact[i] ? 1.0 : c.non_contact_noise_scale;
-    s.y[kHeightRows + i] = contact[i] ? c.ground_height_m - c.stance_sink_m : s.x[2] + s.y[kPositionRows + 3 * i + 2];
+    s.y[kHeightRows + i] = contact[i] ? stance_height_m(c) : s.x[2] + s.y[kPositionRows + 3 * i + 2];
     s.measurement_variance.segment<3>(kPositionRows + 3 * i).setConstant(scale * c.foot_sensor_noise_position);
     s.measurement_variance.segment<3>(kVelocityRows + 3 * i).setConstant(scale * c.foot_sensor_noise_velocity);
     s.measurement_variance[kHeightRows + i] = scale * c.foot_height_sensor_noise;

@@ -23,6 +23,13 @@ struct CliRun {
   std::string err;
 };
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 // `kuavo simulate ARGS` in a shell (`prefix` e.g. a ulimit), limited to 60 s of wall time so
 // an unbounded run fails the test instead of hanging it (timeout's exit 124).
 CliRun simulate(const std::string& args, const std::string& tag, const std::string& prefix = "") {
@@ -31,11 +38,16 @@ CliRun simulate(const std::string& args, const std::string& tag, const std::stri
   const int status = std::system(cmd.c_str());
   CliRun r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
+  r.err = read_text(err);
   return r;
+}
+
+// `kuavo simulate ARGS --summary PATH` that must succeed; the summary's text.
+std::string summary_of(const std::string& args, const std::string& tag) {
+  const std::string path = kOut + tag + ".json";
+  const CliRun r = simulate(args + " --summary " + path, tag);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return read_text(path);
 }
 
 // A 2 s standing motion (valid: loads and runs).
@@ -142,37 +154,19 @@ TEST(SimulateCli, ArgumentsAreStrict) {
 // that took it; a run without it says nothing of it.
 TEST(SimulateCli, RecoveryFastSwingIsEchoedWhenOn) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
-  const std::string motion = standing_motion();
-  const auto summary_of = [&](const std::string& extra, const std::string& tag) {
-    const std::string path = kOut + tag + ".json";
-    const CliRun r = simulate(motion + " --duration 0.2" + extra + " --summary " + path, tag);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    std::ifstream in(path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  EXPECT_NE(summary_of(" --recovery-fast-swing 0.25", "_swing").find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"),
+  const std::string run = standing_motion() + " --duration 0.2";
+  EXPECT_NE(summary_of(run + " --recovery-fast-swing 0.25", "_swing").find("\"recovery_fast_swing\": {\"swing_s\": 0.250, \"steps\": 0}"),
             std::string::npos);
-  EXPECT_EQ(summary_of("", "_swing_default").find("recovery_fast_swing"), std::string::npos);
+  EXPECT_EQ(summary_of(run, "_swing_default").find("recovery_fast_swing"), std::string::npos);
 }
 
 // --surface-sink reaches the run's stack (its summary echoes the estimator's stance sink); a run
 // without it says nothing of it. The estimator's use of it is tested in tests/estimator.
 TEST(SimulateCli, SurfaceSinkIsEchoedWhenGiven) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
-  const std::string motion = standing_motion();
-  const auto summary_of = [&](const std::string& extra, const std::string& tag) {
-    const std::string path = kOut + tag + ".json";
-    const CliRun r = simulate(motion + " --duration 0.2 --ground carpet" + extra + " --summary " + path, tag);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    std::ifstream in(path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  EXPECT_NE(summary_of(" --surface-sink 0.015", "_sink").find("\"surface_sink_m\": 0.0150"), std::string::npos);
-  EXPECT_EQ(summary_of("", "_sink_default").find("surface_sink"), std::string::npos);
+  const std::string run = standing_motion() + " --duration 0.2 --ground carpet";
+  EXPECT_NE(summary_of(run + " --surface-sink 0.015", "_sink").find("\"surface_sink_m\": 0.0150"), std::string::npos);
+  EXPECT_EQ(summary_of(run, "_sink_default").find("surface_sink"), std::string::npos);
 }
 
 // kuavo campaign's counts are whole numbers (atoi took "5abc" as 5, and --jobs "4x" went to
