@@ -206,6 +206,10 @@ TEST(CommandsCli, EveryCommandRefusesWithTheOptionNamed) {
        "--verify-recovery-fast-swing needs SECONDS in [0.2, 0.4] s, got '0.45'"},
       {kBin + " retarget --stage geometric --verify-recovery-fast-swing 0.25",
        "--verify-recovery-fast-swing does not apply to --stage geometric"},
+      {kBin + " retarget --verify-carpet-sink 0.06", "--verify-carpet-sink needs M in [0, 0.05] m, got '0.06'"},
+      {kBin + " retarget --verify-carpet-sink nan", "--verify-carpet-sink needs M in [0, 0.05] m, got 'nan'"},
+      {kBin + " retarget --stage geometric --verify-carpet-sink 0.015",
+       "--verify-carpet-sink does not apply to --stage geometric"},
       {kBin + " model --mass 55 --mass 56", "kuavo model: --mass given twice"},
       {urdf2model + " --variant bogus", "urdf2model: --variant must be s45|s42|all, got 'bogus'"},
       // A directory as the spec threw from its first read: "internal error", exit 1.

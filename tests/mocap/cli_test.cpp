@@ -246,7 +246,11 @@ TEST(mocap_cli, AWindowTooShortForTheDanceIsReportedUnsound) {
 TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   if (!std::filesystem::exists(kBin)) GTEST_SKIP() << kBin << " not built";
   const std::string clip = std::string(KUAVO_SHARED_DIR) + "/mocap/cmu_05_20_mb.bvh";
-  ASSERT_EQ(run(clip + " --verify 1 --figures none -o " + kOut + "_ver.motion --report " + kOut + "_ver.json", "_ver"),
+  // On a stage that sinks 1.5 cm (--verify-carpet-sink): each carpet run's estimator is told so,
+  // the floor's is not (the runs echo what their own summaries say).
+  ASSERT_EQ(run(clip + " --verify 1 --verify-carpet-sink 0.015 --figures none -o " + kOut + "_ver.motion --report " +
+                    kOut + "_ver.json",
+                "_ver"),
             0)
       << slurp(kOut + "_ver.stderr");
   const auto report = nlohmann::json::parse(slurp(kOut + "_ver.json"));
@@ -284,11 +288,18 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   // errors (seeds 1001, 1002, ...), and stops at its first fall.
   const std::vector<std::pair<std::string, std::uint64_t>> order = {{"floor", 1}, {"carpet", 1}, {"floor", 2},
                                                                     {"carpet", 2}, {"floor", 3}, {"carpet", 3}};
+  EXPECT_EQ(v["carpet_sink_m"].get<double>(), 0.015) << v.dump();
   for (const auto& round : runs) {
     std::uint64_t show_seed = 1001;
     for (std::size_t i = 0; i < round.size(); ++i) {
       if (i + 1 < round.size()) {
         EXPECT_FALSE(round[i]["fell"].get<bool>()) << v.dump();
+      }
+      if (round[i]["ground"] == "carpet") {
+        ASSERT_TRUE(round[i].contains("surface_sink_m")) << round[i].dump();
+        EXPECT_EQ(round[i]["surface_sink_m"].get<double>(), 0.015) << round[i].dump();
+      } else {
+        EXPECT_FALSE(round[i].contains("surface_sink_m")) << round[i].dump();
       }
       if (round[i].contains("perturbation")) {
         EXPECT_EQ(round[i]["perturbation"], "show") << v.dump();
@@ -356,6 +367,10 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
                             (v["recovery_fast_swing_s"].get<double>() > 0.0
                                  ? " --recovery-fast-swing " + std::to_string(v["recovery_fast_swing_s"].get<double>())
                                  : "") +
+                            // and the carpet's sink when it ran on carpet (--verify-carpet-sink M)
+                            (last.contains("surface_sink_m")
+                                 ? " --surface-sink " + std::to_string(last["surface_sink_m"].get<double>())
+                                 : "") +
                             " --summary " + kOut +
                             "_ver_sim.json >" + kOut + "_ver_sim.stdout 2>&1";
   const std::string sim = fw ? std::string(KUAVO_BINARY_DIR) + "/firmware/sitl/kuavo_fw_sim --dance " + kOut + "_ver.motion" + where
@@ -387,6 +402,7 @@ TEST(mocap_cli, ClosedLoopCheckRepairsWhereTheRobotFalls) {
   const auto off = nlohmann::json::parse(slurp(kOut + "_nover.json"))["dynamic"]["verification"];
   EXPECT_TRUE(off["runs"].empty());
   EXPECT_TRUE(off["danced"].is_null());
+  EXPECT_EQ(off["carpet_sink_m"].get<double>(), 0.0) << "a hard floor by default, as kuavo simulate";
 }
 
 // Side inputs must be regular files (a directory read as empty text and was accepted), and the

@@ -34,7 +34,9 @@
 // the show set's model errors (--verify-show SEEDS, 0…48, default 24: seeds 1001…), each with one
 // push of the show campaign's kind (--verify-show-push NS, 0…40 N·s, default 10; 0: none); every
 // run with the recovery step's trigger on the holdable soles as online (--verify-holdable-soles
-// on|off, default on; off: on the soles; retarget_dynamic.h); where it falls,
+// on|off, default on; off: on the soles; retarget_dynamic.h), and its carpet runs on a stage
+// that sinks M under the standing robot (--verify-carpet-sink M, 0…0.05 m, default 0: the
+// estimator's stance sink, kuavo simulate's --surface-sink); where it falls,
 // the gestures before the fall are scaled down (a second fall there: taken out, and calm steps;
 // a third: both feet held down there, side by side) and the motion optimized again (0: no check).
 // The dynamic stage draws the paper's Fig. 4 and 5 (retarget_figures.h)
@@ -63,6 +65,7 @@
 #include <utility>
 #include <vector>
 
+#include "controllers/estimator/estimator.h"
 #include "tools/cli/args.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/usage.h"
@@ -168,6 +171,10 @@ int run(int argc, char** argv) {
   // Opt-in: the check's recovery step with the fast swing as kuavo simulate's
   // --recovery-fast-swing (retarget_dynamic.h); absent: off.
   p.number("--verify-recovery-fast-swing", "SECONDS", 0.2, 0.4, "s", &dyn_options.verify_recovery_fast_swing_s).modes =
+      kDynamic;
+  // The check's carpet runs on a stage surface that sinks M under the standing robot, as
+  // kuavo simulate --surface-sink M (retarget_dynamic.h); absent: 0, a hard floor.
+  p.number("--verify-carpet-sink", "M", 0.0, estimator::kMaxStanceSink_m, "m", &dyn_options.verify_carpet_sink_m).modes =
       kDynamic;
   p.text("--figures", "DIR|none", &figures_dir).modes = kDynamic;
   p.output_file("--human-csv", "OUT.csv", &human_path);

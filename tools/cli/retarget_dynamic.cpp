@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <limits>
@@ -227,7 +228,8 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
   // Closed-loop verification: the output danced by the online stack in the simulator, as
   // `kuavo simulate MOTION` dances it (MPC, estimator, MTi model; with --holdable-soles off
   // when verify_holdable_soles is, --recovery-fast-swing S when verify_recovery_fast_swing_s
-  // is S), on each ground and then in MuJoCo. Where it falls, the
+  // is S, and on carpet --surface-sink M when verify_carpet_sink_m is M), on each ground and
+  // then in MuJoCo. Where it falls, the
   // seconds before the fall are repaired (verification_range's ladder) and the motion
   // optimized again, up to verify_rounds times.
   ordered_json verification_runs = ordered_json::array();
@@ -302,6 +304,9 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
     std::vector<sim::MotionSummary> runs(checks.size());
     std::vector<std::exception_ptr> failures(checks.size());
     std::size_t simulated_to = 0;  // runs [0, simulated_to) have run (batches go in list order)
+    const auto carpet_sink = [&](const sim::GroundParams& ground) {
+      return std::strcmp(ground.name, sim::kCarpet.name) == 0 ? options.verify_carpet_sink_m : 0.0;
+    };
     const auto parallel = [&](std::size_t i) { return checks[i].engine == sim::Engine::kSimbody && !checks[i].firmware; };
     const auto simulate_one = [&](std::size_t i) {
       try {
@@ -310,6 +315,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         cfg.stack.planner = stack::PlannerKind::kMpc;
         planner::set_holdable_soles(cfg.stack.recovery, options.verify_holdable_soles);
         cfg.stack.recovery.fast_swing_s = options.verify_recovery_fast_swing_s;
+        cfg.stack.estimator.stance_sink_m = carpet_sink(check.ground);
         cfg.run.ground = check.ground;
         cfg.run.engine = check.engine;
         cfg.run.seed = check.seed;
@@ -345,10 +351,13 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
         fw.loop.seed = seed;
         fw.holdable_soles = options.verify_holdable_soles;
         fw.recovery_fast_swing_s = options.verify_recovery_fast_swing_s;
+        fw.surface_sink_m = carpet_sink(ground);
         const auto t0 = std::chrono::steady_clock::now();
         const firmware::sitl::SitlSummary s = firmware::sitl::run_firmware_sim(robot, plan.get(), fw);
         verify_sim_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         ordered_json entry = {{"round", verify_round}, {"engine", "firmware"}, {"ground", ground.name}, {"seed", seed}};
+        // The estimator's stance sink as the run's own summary gives it (verify_carpet_sink_m).
+        if (s.motion.stance_sink_m > 0.0) entry["surface_sink_m"] = s.motion.stance_sink_m;
         if (!s.motion.run.ok || s.dance_started_at_s < 0.0) {
           // The firmware loop could not run the dance (not the motion's fault, e.g. a bring-up
           // timeout): the check goes on without it, and says so.
@@ -383,6 +392,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                             {"engine", sim::to_string(engine)},
                             {"ground", ground.name},
                             {"seed", seed}};
+      if (summary.stance_sink_m > 0.0) entry["surface_sink_m"] = summary.stance_sink_m;  // as the firmware's
       if (show_errors) entry["perturbation"] = show_set.name;
       if (pushed) {
         entry["push"] = {{"start_s", push.start_s},
@@ -588,6 +598,7 @@ int run_dynamic_stage(const model::Model& robot, const mocap::HumanTargets& targ
                        {"given_up_seeds", given_up_seeds},
                        {"holdable_soles", options.verify_holdable_soles},
                        {"recovery_fast_swing_s", options.verify_recovery_fast_swing_s},
+                       {"carpet_sink_m", options.verify_carpet_sink_m},
                        {"danced", verification_runs.empty() ? ordered_json() : ordered_json(danced)},
                        {"sim_s", verify_sim_s},
                        {"runs", verification_runs}};

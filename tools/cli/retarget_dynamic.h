@@ -129,6 +129,12 @@ struct DynamicStageOptions {
   // 11 (3 show seeds given up against 6, CoM path 27 % against 25 %); perfume round 8 as off.
   // Show campaign on those motions, danced with it: 16/400, as the default pipeline's.
   double verify_recovery_fast_swing_s = 0.0;
+  // The stage surface's sink the check's carpet runs give the estimator (estimator::
+  // EstimatorConfig::stance_sink_m; `kuavo retarget --verify-carpet-sink M`, as `kuavo simulate
+  // --ground carpet --surface-sink M` dances), in every carpet run of the check (Simbody, the
+  // firmware loop, the show seeds); floor runs keep 0. A pipeline whose show's stage is set up
+  // (the `--example` spec's "surface_sink_m") checks its motions on that stage.
+  double verify_carpet_sink_m = 0.0;
   VerifyLadder verify_ladder;  // the repair's gain and range about a fall (verify_ladder.h)
   std::string csv_path;   // the dynamic trajectory, "" = none
   std::string plots_dir;  // Fig. 4 / 5 SVGs (retarget_figures.h), "" = none; the directory must exist

@@ -45,6 +45,8 @@ constexpr CommandHelp kHelp[] = {
      "                      [--verify-holdable-soles on|off]   (the check's recovery step on the holdable soles, as online; default on)\n"
      "                      [--verify-recovery-fast-swing S]   (the check's recovery step with simulate's --recovery-fast-swing S,\n"
      "                      0.2..0.4; default off, as online)\n"
+     "                      [--verify-carpet-sink M]   (the check's carpet runs with simulate's --surface-sink M, 0..0.05;\n"
+     "                      default 0)\n"
      "                      [--duration S]   (the built-in dance: whole 30 s cycles, 30..300 s; default 30)\n"
      "                      [--quiet]   (a progress line on a terminal; --quiet: none, and no summary lines)\n"},
     {"retarget-sweep", "the dynamic stage per TO horizon (Fig. 6)",
