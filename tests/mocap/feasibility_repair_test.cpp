@@ -580,13 +580,44 @@ TEST(mocap_feasibility_repair, EndOffTheFloorGetsATail) {
     return k;
   });
   ASSERT_EQ(m.labels.back(), ContactLabel::kLeftSupport);
-  const RepairConfig cfg;
+  RepairConfig cfg;
   const RepairedMotion r = repair(m, {}, cfg);
   expect_dancable(r, n, cfg);
   SCOPED_TRACE(listing(r));
-  const Repair* tail = first(r, RepairKind::kTail);
+  const Repair* tail = nullptr;
+  for (const Repair& x : r.repairs) {
+    if (x.kind == RepairKind::kTail && x.reason.find("both feet down") == 0) tail = &x;
+  }
   ASSERT_NE(tail, nullptr);
   const int end_of_dance = r.lead_frames + n;
+  // The right foot, still in the air when the clip ends (aimed 0.10 m ahead, 0.08 m by the
+  // clip's last frame), lands in the tail square beside the left, at the standing width, as the
+  // robot stands; and the move is listed. Without it (square_tail_step off) it lands where the
+  // human's would.
+  RepairConfig human_cfg = cfg;
+  human_cfg.square_tail_step = false;
+  const RepairedMotion human = repair(m, {}, human_cfg);
+  expect_dancable(human, n, human_cfg);
+  const Eigen::Vector2d ends = left_from_right(r.q.back()), human_ends = left_from_right(human.q.back());
+  const double stand_width = standing().feet[0].centre.y() - standing().feet[1].centre.y();
+  EXPECT_NEAR(ends.x(), 0.0, 1e-6) << ends.transpose();
+  EXPECT_NEAR(ends.y(), stand_width, 1e-6) << ends.transpose();
+  const auto last = feet_of(r.q.back());
+  EXPECT_NEAR(last[0].yaw, last[1].yaw, 1e-9);
+  EXPECT_LT(human_ends.x(), -0.07) << "the human's last step lands ahead: " << human_ends.transpose();
+  int squared = 0;
+  for (const Repair& x : r.repairs) {
+    if (x.kind != RepairKind::kTail || x.reason.find("ends square: the right foot beside the left") == std::string::npos) {
+      continue;
+    }
+    ++squared;
+    EXPECT_GE(x.start_s, end_of_dance / kRate_hz - 1e-9) << x.reason;
+    char moved[32];
+    std::snprintf(moved, sizeof moved, ", %.2f m", (human_ends - ends).norm());
+    EXPECT_NE(x.reason.find(moved), std::string::npos) << x.reason << " (moved " << (human_ends - ends).norm() << " m)";
+  }
+  EXPECT_EQ(squared, 1);
+  for (const Repair& x : human.repairs) EXPECT_EQ(x.reason.find("ends square"), std::string::npos) << x.reason;
   EXPECT_NEAR(tail->start_s, end_of_dance / kRate_hz, 1e-9);
   EXPECT_NEAR(tail->end_s, static_cast<double>(r.q.size()) / kRate_hz, 1e-9);
   for (int i = end_of_dance; i < static_cast<int>(r.q.size()); ++i) {

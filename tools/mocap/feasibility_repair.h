@@ -29,7 +29,8 @@
 //    max_stance_lean_m, stance_lean);
 //  - a motion that does not start standing → a lead-in: the robot stands in double support
 //    on the dance's first footholds, then blends into the dance's first pose; a tail that
-//    ends in double support.
+//    ends in double support, standing: a step that lands in it is set down square beside
+//    the other foot (square_tail_step).
 // The geometric stage's upper body, head, pelvis height and orientation (yaw kept within the
 // hip-yaw range of the stance feet) are kept; legs are re-solved by inverse kinematics to the
 // repaired feet: stance feet flat at their footholds, swing feet from lift-off to touchdown
@@ -65,6 +66,10 @@ struct RepairConfig {
   double lead_in_s = 0.8;   // standing still on the first footholds
   double blend_in_s = 1.0;  // standing pose → the dance's first pose
   double tail_s = 1.0;      // both feet down after the dance, blending to standing
+  // A step that lands in the tail (the human's last, still in the air when the clip ends) is
+  // set down beside the other foot, square, at the standing width and heading, so the motion
+  // ends standing as it starts (false: where the human's would land, within the limits below).
+  bool square_tail_step = true;
   // Swing foot: apex of the minimum arc [m] (the built-in dance: 0.06), highest foot the
   // reference keeps from the human [m] (a kick above the knee is out of the leg's reach).
   double swing_lift_m = 0.06;
