@@ -480,6 +480,15 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   }
   std::stable_sort(touchdowns.begin(), touchdowns.end(),
                    [](const Touchdown& x, const Touchdown& y) { return x.frame < y.frame; });
+  // Sets a foot down square beside the other (the standing width and heading); returns, for
+  // the log, how far that moved it from its foothold.
+  const auto set_square = [&](Interval& iv, const Interval& other, double side) {
+    const FootPose before = iv.pose;
+    iv.pose.yaw = other.pose.yaw;
+    iv.pose.centre = other.pose.centre + rot_z(other.pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+    return fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
+               std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi);
+  };
   for (const Touchdown& td : touchdowns) {
     if (td.frame == 0 && td.foot == 0) continue;  // the first foothold of the left foot is the anchor
     Interval& iv = stance[td.foot][td.index];
@@ -489,28 +498,22 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     // A square hold: the later of the two feet standing into it is set down beside the earlier
     // (the travel and stride limits below still apply to the step that brings it there).
     if (square_over(iv) && square_over(*other)) {
-      const FootPose before = iv.pose;
-      iv.pose.yaw = other->pose.yaw;
-      iv.pose.centre = other->pose.centre + rot_z(other->pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+      const std::string moved = set_square(iv, *other, side);
       log.add(RepairKind::kForcedDouble, td.frame, iv.b,
-              std::string("square hold: the ") + (td.foot == 0 ? "left foot aimed beside the right" : "right foot aimed beside the left") +
-                  fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
-                      std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi));
+              std::string("square hold: the ") +
+                  (td.foot == 0 ? "left foot aimed beside the right" : "right foot aimed beside the left") + moved);
     }
     // The motion ends standing: a step landing in the tail is set down square (the travel and
     // stride limits below apply as to any step). cmu_05_07's last step, 0.30 m ahead, 0.35 m
     // beside and 46 deg turned from the other foot (after the limits), left the robot to stand
-    // its last second in that stance, the pelvis 16 cm down: 4 of the show campaign's 8 falls
-    // came there, 12.9-13.5 s, the motion ending at 12.71 s.
+    // its last second in that stance, the pelvis 16 cm down: with the check on the sinking
+    // stage (stop 80, motion a7d2ff1a) 4 of its 8 show-campaign falls came there, 12.9-13.5 s,
+    // the motion ending at 12.71 s; squared, none after 8.3 s (d0046b7a: 2/100).
     if (cfg.square_tail_step && td.frame >= lead + n_dance) {
-      const FootPose before = iv.pose;
-      iv.pose.yaw = other->pose.yaw;
-      iv.pose.centre = other->pose.centre + rot_z(other->pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+      const std::string moved = set_square(iv, *other, side);
       log.add(RepairKind::kTail, td.frame, iv.b,
               std::string("the step landing after the dance ends square: the ") +
-                  (td.foot == 0 ? "left foot beside the right" : "right foot beside the left") +
-                  fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
-                      std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi));
+                  (td.foot == 0 ? "left foot beside the right" : "right foot beside the left") + moved);
     }
     // Travel speed: from this foot's previous foothold, no farther than the speed limit over
     // the time since that touchdown (the stride check below may move it again).
