@@ -1,6 +1,7 @@
 #include "tools/cli/campaign_spec.h"
 
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "controllers/estimator/estimator.h"
@@ -153,7 +154,9 @@ bool parse_campaign_spec(const std::string& text, CampaignSpec& out, std::string
         return false;
       }
       if (!value.is_number() || !(value.get<double>() >= 0.0 && value.get<double>() <= estimator::kMaxStanceSink_m)) {
-        error = "\"surface_sink_m\"." + ground + " must be a number in 0..0.05 m";
+        char range[48];
+        std::snprintf(range, sizeof range, " must be a number in 0..%g m", estimator::kMaxStanceSink_m);
+        error = "\"surface_sink_m\"." + ground + range;
         return false;
       }
       *out_m = value.get<double>();

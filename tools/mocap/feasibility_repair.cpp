@@ -460,14 +460,20 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
     }
     return nullptr;
   };
+  // Sets a foot down square beside the other (the standing width and heading); returns, for
+  // the log, how far that moved it from its foothold.
+  const auto set_square = [&](Interval& iv, const Interval& other, double side) {
+    const FootPose before = iv.pose;
+    iv.pose.yaw = other.pose.yaw;
+    iv.pose.centre = other.pose.centre + rot_z(other.pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+    return fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
+               std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi);
+  };
   // The first footholds: a foot without a human foothold stands beside the other.
   for (int f = 0; f < kFeet; ++f) {
     Interval& iv = stance[f].front();
     if (iv.placed) continue;
-    const Interval& other = stance[1 - f].front();
-    const double side = f == 0 ? 1.0 : -1.0;
-    iv.pose.yaw = other.pose.yaw;
-    iv.pose.centre = other.pose.centre + rot_z(other.pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
+    set_square(iv, stance[1 - f].front(), f == 0 ? 1.0 : -1.0);
     iv.placed = true;
   }
   struct Touchdown {
@@ -480,15 +486,6 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
   }
   std::stable_sort(touchdowns.begin(), touchdowns.end(),
                    [](const Touchdown& x, const Touchdown& y) { return x.frame < y.frame; });
-  // Sets a foot down square beside the other (the standing width and heading); returns, for
-  // the log, how far that moved it from its foothold.
-  const auto set_square = [&](Interval& iv, const Interval& other, double side) {
-    const FootPose before = iv.pose;
-    iv.pose.yaw = other.pose.yaw;
-    iv.pose.centre = other.pose.centre + rot_z(other.pose.yaw) * Vec3(0.0, side * stand_width, 0.0);
-    return fmt(", %.2f m and %.0f deg from the human's foothold", (before.centre - iv.pose.centre).norm(),
-               std::abs(wrap(before.yaw - iv.pose.yaw)) * 180.0 / kPi);
-  };
   for (const Touchdown& td : touchdowns) {
     if (td.frame == 0 && td.foot == 0) continue;  // the first foothold of the left foot is the anchor
     Interval& iv = stance[td.foot][td.index];
