@@ -113,7 +113,11 @@ struct DynamicRetargetConfig {
   // frame whose forces pull on the floor ("unsound"); steps 41/41, 12 → 13 of 15, 8 → 8 of
   // 11, 6 → 4 of 7; CoM path kept 61 → 63, 37 → 43, 25 → 26, 21 → 16 %. Show campaign on those
   // motions (carpet, `show` set, a 10 N·s push, seeds 1–50): perfume 0/50 (3/50 off), cmu_05_07
-  // 3/50 (3/50), cmu_05_20 21/50 at 6.4–8.7 s (0/50), built-in 0/34 (seeds 1–34). Off (0) by
+  // 3/50 (3/50), cmu_05_20 21/50 at 6.4–8.7 s (0/50), built-in 0/34 (seeds 1–34). Again at
+  // 53d47f6, end to end, off → 0.1: torque violations 1068/413/195/268 → 174/131/77/58, CoM
+  // path kept 61/37/21/18 → 63/43/19/25 %; show campaign (100 seeds each; built-in, perfume,
+  // cmu_05_07, cmu_05_20) 0/1/2/2 → 1/7/3/4: 15/400 against 5/400. The check stops attenuating
+  // sooner with it (perfume's round 8 → 6), so the motions keep more and fall more. Off (0) by
   // default; `kuavo retarget --ankle-effort-weight W`.
   double ankle_effort_weight = 0.0;  // (N·m)⁻² s⁻¹
   double velocity_barrier_mu = 0.01;
