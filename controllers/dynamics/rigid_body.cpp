@@ -1,5 +1,6 @@
 #include "controllers/dynamics/rigid_body.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace kuavo::dynamics {
@@ -79,24 +80,37 @@ ConfigVector integrate(const ConfigVector& q, const VelocityVector& v, double dt
   return out;
 }
 
-void forward_kinematics(const Model& model, Data& data, const ConfigVector& q) {
+namespace {
+
+// The base's pose from q; the reference point at its origin.
+void place_base(Data& data, const ConfigVector& q) {
   const Eigen::Quaterniond quat(q[6], q[3], q[4], q[5]);
   data.rotation[kBase] = quat.toRotationMatrix();
   data.position_m[kBase] = q.head<3>();
   data.reference_point_m = q.head<3>();
+}
+
+// Body b's pose and joint motion subspace from its parent's (placed before it).
+inline void place_body(const Model& model, Data& data, const ConfigVector& q, int b) {
+  const model::Body& body = model.bodies[b];
+  const int p = body.parent;
+  const Mat3 r_joint = data.rotation[p] * body.joint_rotation;
+  data.position_m[b] = data.position_m[p] + data.rotation[p] * body.joint_position_m;
+  data.rotation[b] = r_joint * axis_rotation(body.axis, q[7 + b - 1]);
+  const Vec3 axis_world = r_joint * body.axis;
+  const Vec3 r = data.position_m[b] - data.reference_point_m;
+  data.motion_subspace[b].head<3>() = r.cross(axis_world);
+  data.motion_subspace[b].tail<3>() = axis_world;
+}
+
+}  // namespace
+
+void forward_kinematics(const Model& model, Data& data, const ConfigVector& q) {
+  place_base(data, q);
   const Vec3 origin = data.reference_point_m;
   for (int b = 0; b < kNumBodies; ++b) {
     const model::Body& body = model.bodies[b];
-    if (b > kBase) {
-      const int p = body.parent;
-      const Mat3 r_joint = data.rotation[p] * body.joint_rotation;
-      data.position_m[b] = data.position_m[p] + data.rotation[p] * body.joint_position_m;
-      data.rotation[b] = r_joint * axis_rotation(body.axis, q[7 + b - 1]);
-      const Vec3 axis_world = r_joint * body.axis;
-      const Vec3 r = data.position_m[b] - origin;
-      data.motion_subspace[b].head<3>() = r.cross(axis_world);
-      data.motion_subspace[b].tail<3>() = axis_world;
-    }
+    if (b > kBase) place_body(model, data, q, b);
     // Body inertia in world axes about the reference point.
     const Mat3& rb = data.rotation[b];
     const Vec3 c = data.position_m[b] - origin + rb * body.com_m;
@@ -106,6 +120,11 @@ void forward_kinematics(const Model& model, Data& data, const ConfigVector& q) {
     in.rotational = rb * body.inertia_com_kgm2 * rb.transpose() +
                     body.mass_kg * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
   }
+}
+
+void forward_kinematics_chain(const Model& model, Data& data, const ConfigVector& q, int first_body, int last_body) {
+  place_base(data, q);
+  for (int b = std::max(first_body, kBase + 1); b <= last_body && b < kNumBodies; ++b) place_body(model, data, q, b);
 }
 
 void forward_velocities(const Model& model, Data& data, const VelocityVector& v) {

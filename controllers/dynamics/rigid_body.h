@@ -23,6 +23,11 @@ ConfigVector integrate(const ConfigVector& q, const VelocityVector& v, double dt
 
 // Body poses, joint motion subspaces and world-axis inertias.
 void forward_kinematics(const Model& model, Data& data, const ConfigVector& q);
+// forward_kinematics for the base and the bodies first_body … last_body only (a chain whose
+// parents are the base or lie in it, e.g. one leg): their poses and joint motion subspaces by
+// the same arithmetic, bit for bit; every other body's entries and every inertia are left as
+// they were. Enough for frame_position and frame_jacobian on that chain's frames.
+void forward_kinematics_chain(const Model& model, Data& data, const ConfigVector& q, int first_body, int last_body);
 // Body spatial velocities. Requires forward_kinematics(q).
 void forward_velocities(const Model& model, Data& data, const VelocityVector& v);
 

@@ -17,7 +17,9 @@ constexpr double kLambdaStart = 1e-6, kLambdaMin = 1e-9, kLambdaMax = 1e3;
 
 double foot_error(const model::Model& robot, dynamics::Data& data, const std::array<Vec3, model::kNumContactPoints>& targets,
                   const ConfigVector& q, int foot, Err& err) {
-  dynamics::forward_kinematics(robot, data, q);
+  // The base and this leg's bodies only: the corners and their Jacobian need nothing else.
+  const int first_body = 1 + (foot == 0 ? model::kLeftLegFirst : model::kRightLegFirst);
+  dynamics::forward_kinematics_chain(robot, data, q, first_body, first_body + model::kLegJoints - 1);
   for (int r = 0; r < 3; ++r) {
     const int c = kCorners[foot][r];
     err.segment<3>(3 * r) = targets[c] - dynamics::frame_position(robot, data, c);
