@@ -145,7 +145,7 @@ struct StepCandidate {
 // The step of foot `swing` (the other stands): the centre of pressure at the point of the
 // stance sole nearest ξ until touchdown, ξ propagated there, the sole centre overshoot_m
 // beyond it, inside the reach box and max_step_m; it captures if ξ at touchdown is inside
-// the support the step makes, by capture_margin_m. swing_s: lift-off to touchdown.
+// the support the step makes, by step_capture_margin_m. swing_s: lift-off to touchdown.
 StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& st, const PlanKnot& m,
                         const PlanKnot& k0, const std::array<Vec2, kNumPoints>& corners, const Vec2& xi,
                         double omega, int swing, const Vec2& plan_offset, double swing_s) {
@@ -175,7 +175,7 @@ StepCandidate plan_step(const RecoveryStepConfig& cfg, const RecoveryStepState& 
   std::array<Vec2, kNumPoints> after = corners;
   for (int i = 0; i < kCornersPerFoot; ++i) after[swing * kCornersPerFoot + i] += shift;
   out.margin_m = signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t);
-  out.captures = out.margin_m >= cfg.capture_margin_m;
+  out.captures = out.margin_m >= cfg.step_capture_margin_m;
   return out;
 }
 
@@ -413,7 +413,7 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   const double values[] = {c.trigger_outside_m, c.creep_outside_m, c.lift_delay_s,   c.swing_s,
                            c.lift_height_m,     c.quiet_s,         c.overshoot_m,    c.max_step_m,
                            c.reach_ahead_m,     c.reach_behind_m,  c.min_width_m,    c.max_width_m,
-                           c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m,
+                           c.min_pendulum_height_m, c.settle_s,    c.capture_margin_m, c.step_capture_margin_m,
                            c.early_trigger_m,   c.early_lead_s,    c.early_min_gain_s, c.early_min_swing_s,
                            c.early_plan_margin_min_m, c.ankle_pitch_capacity_Nm, c.fast_swing_s};
   for (double x : values) {
@@ -427,6 +427,9 @@ const char* recovery_step_validate(const RecoveryStepConfig& c) {
   if (c.min_width_m <= 0.0 || c.max_width_m < c.min_width_m) return "recovery step: need 0 < min_width_m <= max_width_m";
   if (c.reach_ahead_m < 0.0 || c.reach_behind_m < 0.0) return "recovery step: reach must be >= 0";
   if (c.settle_s < 0.0) return "recovery step: settle_s must be >= 0";
+  if (c.capture_margin_m < 0.0 || c.step_capture_margin_m < 0.0) {
+    return "recovery step: capture_margin_m and step_capture_margin_m must be >= 0";
+  }
   if (c.fast_swing_s != 0.0 && !(c.fast_swing_s >= 0.1 && c.fast_swing_s <= c.swing_s)) {
     return "recovery step: fast_swing_s must be 0 (off) or in [0.1, swing_s]";
   }

@@ -223,7 +223,7 @@ TEST(RecoveryStep, CaptureLostBackwardsStepsBackAndCapturesIt) {
   const Vec2 xi_t = p + (xi - p) * std::exp(s.omega * (f.config.lift_delay_s + f.config.swing_s));
   std::array<Vec2, kNumPoints> after;
   for (int c = 0; c < kNumPoints; ++c) after[c] = landed[c].head<2>();
-  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.capture_margin_m - 1e-3);
+  EXPECT_GT(signed_margin(convex_hull<kNumPoints>(after, kNumPoints), xi_t), f.config.step_capture_margin_m - 1e-3);
   // … which the feet as they stood do not hold.
   std::array<Vec2, kNumPoints> before;
   for (int c = 0; c < kNumPoints; ++c) before[c] = s.corner[c].head<2>();
@@ -263,12 +263,12 @@ TEST(RecoveryStep, TheFastSwingCapturesWhatTheDefaultSwingCannot) {
   const RecoveryStepConfig d;
   constexpr double kFast = 0.25;
   // Along x (ξ on the CoM's line, the centre of pressure at the stance heel): after swing_s ξ
-  // is farther behind the heels than a sole moved max_step_m back holds with capture_margin_m
+  // is farther behind the heels than a sole moved max_step_m back holds with step_capture_margin_m
   // (any D > lo); after kFast it is within one moved max_step_m back less overshoot_m and the
   // margin (D < hi).
-  const double reach = d.max_step_m - d.capture_margin_m;
+  const double reach = d.max_step_m - d.step_capture_margin_m;
   const double lo = reach / std::exp(s.omega * (d.lift_delay_s + d.swing_s));
-  const double hi = (reach - d.overshoot_m - d.capture_margin_m) / std::exp(s.omega * (d.lift_delay_s + kFast));
+  const double hi = (reach - d.overshoot_m - d.step_capture_margin_m) / std::exp(s.omega * (d.lift_delay_s + kFast));
   ASSERT_LT(lo, hi) << "the premise: a gap between the two";
   const double behind = 0.5 * (lo + hi);
   const Vec2 velocity = s.backwards(behind);
@@ -300,7 +300,7 @@ TEST(RecoveryStep, TheFastSwingCapturesWhatTheDefaultSwingCannot) {
   // ξ at touchdown inside the support the landed sole makes.
   EXPECT_GT(touchdown_margin(s, f.window->knots[kKnots - 1], swing, Vec2(s.heel_x - behind, s.com.y()),
                              f.config.lift_delay_s + kFast),
-            f.config.capture_margin_m - 2e-3);
+            f.config.step_capture_margin_m - 2e-3);
 
   // ξ 4 cm behind the heels, which the swing_s step captures (CaptureLostBackwards…): that
   // step, the same with the fast swing on.
@@ -473,7 +473,7 @@ TEST(RecoveryStep, TheDefaultTriggerIsTheHoldableSoles) {
 
 // A forward exit the ankles cannot hold (ξ 2 cm past the holdable front, 4 cm inside the
 // toes) is a fast trigger, and the step is planned on the soles as before: ξ propagated from
-// the stance sole's point nearest it (closed form) is inside, by capture_margin_m, the support
+// the stance sole's point nearest it (closed form) is inside, by step_capture_margin_m, the support
 // of the stance sole and the swing sole where forward kinematics puts it. With the soles'
 // corners (capacity 0) ξ is inside them and nothing happens.
 TEST(RecoveryStep, AForwardExitTheAnklesCannotHoldSteps) {
@@ -496,13 +496,47 @@ TEST(RecoveryStep, AForwardExitTheAnklesCannotHoldSteps) {
   const auto landed = corners_of(f.window->knots[kKnots - 1]);
   EXPECT_GT(touchdown_margin(s, f.window->knots[kKnots - 1], swing, Vec2(xi_x, s.com.y()),
                              f.config.lift_delay_s + f.config.swing_s),
-            f.config.capture_margin_m - 2e-3);
+            f.config.step_capture_margin_m - 2e-3);
   double dx = 0.0;
   for (int i = 0; i < kCornersPerFoot; ++i) {
     const int c = swing * kCornersPerFoot + i;
     dx += (landed[c].x() - s.corner[c].x()) / kCornersPerFoot;
   }
   EXPECT_GT(dx, 0.02) << "the foot steps ahead";
+}
+
+// step_capture_margin_m decides: the forward exit above steps when its landing holds ξ by at
+// least the margin and is declined when the margin asks for more (the landing's margin from
+// the closed form, touchdown_margin, within its 2 mm).
+TEST(RecoveryStep, AStepIsTakenOnlyWithStepCaptureMargin) {
+  constexpr double kCapacity = 30.0;
+  const Standing s = standing_geometry();
+  const double xi_x = holdable_front(s, kCapacity).at(s.com.y()) + 0.02;
+  const Vec2 velocity = s.towards(xi_x);
+  Fixture f(kCapacity);
+  for (int i = 0; i < f.config.trigger_calls; ++i) f.call(1.0 + kDt * i, velocity);
+  ASSERT_EQ(f.state->steps, 1u);
+  const int swing = f.state->foot[0].active ? 0 : 1;
+  const double margin = touchdown_margin(s, f.window->knots[kKnots - 1], swing, Vec2(xi_x, s.com.y()),
+                                         f.config.lift_delay_s + f.config.swing_s);
+  ASSERT_GT(margin, f.config.step_capture_margin_m + 0.005) << "the premise: room above the default";
+
+  Fixture asks_more(kCapacity);
+  asks_more.config.step_capture_margin_m = margin + 0.005;
+  ASSERT_EQ(recovery_step_validate(asks_more.config), nullptr);
+  for (int i = 0; i < asks_more.config.trigger_calls; ++i) asks_more.call(1.0 + kDt * i, velocity);
+  EXPECT_EQ(asks_more.state->steps, 0u);
+  EXPECT_GT(asks_more.state->declined, 0u);
+  EXPECT_TRUE(asks_more.window_unchanged());
+
+  Fixture asks_less(kCapacity);
+  asks_less.config.step_capture_margin_m = margin - 0.005;
+  for (int i = 0; i < asks_less.config.trigger_calls; ++i) asks_less.call(1.0 + kDt * i, velocity);
+  EXPECT_EQ(asks_less.state->steps, 1u);
+
+  RecoveryStepConfig negative;
+  negative.step_capture_margin_m = -0.01;
+  EXPECT_NE(recovery_step_validate(negative), nullptr);
 }
 
 // The creep count is of calls in a row: one call well inside starts it again.
