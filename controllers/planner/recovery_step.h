@@ -163,14 +163,9 @@ struct RecoveryStepConfig {
   // support it makes (the stance sole and the swing sole at its landing); otherwise the ankles
   // keep trying. An early touchdown needs capture_margin_m.
   double capture_margin_m = 0.02;
-  // 2 cm (capture_margin_m) until stop 83. Show campaign on row 33's motions (BENCHMARKS.md),
-  // 2 → 0.5 cm: 5/400 → 4/400. Two runs change, the 398 others are bit for bit the same: perfume
-  // 75, which had declined 75 steps whose best landing held ξ 0.4–1.5 cm inside, steps and
-  // dances to the end (it fell at 13.84 s); cmu_05_20 57 steps at 7.36 s with ξ 0.6 cm inside
-  // and still falls, at 9.21 s instead of 8.25. 0 did the same as 0.5 cm on the five falls.
-  // End to end (the check dances this stack too): built-in and CMU motions bit for bit as
-  // before; perfume's check passes a run in round 1 it had failed (seed 1015), keeps round 8
-  // with another motion, and that falls once in 100 (seed 59 at 31.8 s): 5/400, as before.
+  // 0.5 cm, not 2: a landing that holds ξ 0.4–1.5 cm inside is still a step the model says
+  // catches it, and declining it waited for the fall (perfume's show seed 75). Show campaign:
+  // 5/400 → 4/400 on row 33's motions, 5/400 end to end (BENCHMARKS.md; figures in 16bd318).
   double step_capture_margin_m = 0.005;
   double max_step_m = 0.30;         // displacement bound of one recovery step
   // Reach box of the swing sole's centre in the stance foot's axes (x ahead, y to the swing
