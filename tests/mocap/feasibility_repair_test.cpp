@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <random>
 
 #include "tests/mocap/motion_fixture.h"
 #include "tools/mocap/dynamics_check.h"
@@ -661,8 +663,8 @@ TEST(mocap_feasibility_repair, UnreachablePelvisHeightDoesNotGetWorse) {
   for (const Vec3& c : corners_of(mid)) EXPECT_LE(std::abs(c.z()), 2.0 * reachable);
 }
 
-// leg_ik_lm leaves the kinematics of the pose it returns in data (the repair's leg solve reads
-// the stance corners from there), whether its last trial step was taken or not: the right
+// leg_ik_lm leaves the legs' kinematics of the pose it returns in data (the repair's leg solve
+// reads the stance corners from there), whether its last trial step was taken or not: the right
 // foot 5 cm forward and 2 cm up (reachable), 0.5 m forward (beyond reach; its iteration ends
 // on a rejected trial), 0.3 m down (beyond reach), and the plié's targets; each against a
 // fresh forward kinematics of the returned pose.
@@ -693,6 +695,39 @@ TEST(mocap_feasibility_repair, LegIkLeavesTheReturnedPosesKinematicsInData) {
       EXPECT_GT(miss, 0.01) << "the precondition: beyond reach";
     }
   }
+}
+
+// The leg solve's JᵀJ is Eigen's jac.transpose() * jac bit for bit (the motions were verified
+// with that product), over random Jacobians with zeros, signed zeros and entries from 1e-5 to
+// 1e4; and it is JᵀJ (each entry against the long-double sum, to 1e-15 of the entries' size).
+TEST(mocap_feasibility_repair, LegJacobianGramIsEigensProductBitForBit) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  std::uniform_int_distribution<int> pick(0, 9);
+  int differ = 0;
+  for (int t = 0; t < 20000; ++t) {
+    Eigen::Matrix<double, 9, 6> jac;
+    for (int r = 0; r < 9; ++r) {
+      for (int c = 0; c < 6; ++c) {
+        const int p = pick(rng);
+        jac(r, c) = p == 0 ? 0.0 : p == 1 ? -0.0 : normal(rng) * std::pow(10.0, pick(rng) - 5);
+      }
+    }
+    const Eigen::Matrix<double, 6, 6> eigen = jac.transpose() * jac;
+    const Eigen::Matrix<double, 6, 6> gram = leg_jacobian_gram(jac);
+    for (int i = 0; i < 36; ++i) differ += std::memcmp(&eigen.data()[i], &gram.data()[i], sizeof(double)) != 0;
+    for (int i = 0; i < 6; ++i) {
+      for (int j = 0; j < 6; ++j) {
+        long double exact = 0.0L, size = 0.0L;
+        for (int r = 0; r < 9; ++r) {
+          exact += static_cast<long double>(jac(r, i)) * jac(r, j);
+          size += std::abs(static_cast<long double>(jac(r, i)) * jac(r, j));
+        }
+        ASSERT_LE(std::abs(gram(i, j) - exact), 1e-15L * size + 1e-300L) << t << " (" << i << ", " << j << ")";
+      }
+    }
+  }
+  EXPECT_EQ(differ, 0) << "entries that differ from Eigen's product in some bit, of " << 20000 * 36;
 }
 
 // A dancer on straight legs: the pelvis raised until the knees are nearly straight (the

@@ -908,7 +908,7 @@ bool repair_motion(const model::Model& robot, const std::vector<ConfigVector>& g
       const double dz = tries <= kMaxBaseLowerSteps ? -tries * kBaseLowerStep_m
                                                     : std::min(knee_lower[i], (tries - kMaxBaseLowerSteps) * kBaseLowerStep_m);
       q.head<3>() = base.pos + Vec3(0.0, 0.0, dz);
-      leg_ik_lm(robot, *data, targets, q);  // leaves q's kinematics in data
+      leg_ik_lm(robot, *data, targets, q);  // leaves the legs' kinematics at q in data
       double stance_error = 0.0;
       for (int c = 0; c < model::kNumContactPoints; ++c) {
         if (!on[i][c / kCorners]) continue;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cmath>
 
 namespace kuavo::mocap {
 namespace {
@@ -39,6 +40,36 @@ void foot_jacobian(const model::Model& robot, const dynamics::Data& data, int fo
 
 }  // namespace
 
+Eigen::Matrix<double, 6, 6> leg_jacobian_gram(const Eigen::Matrix<double, 9, 6>& jac) {
+  // Column j of the result at once, over i (the transpose makes jac's rows contiguous: the
+  // inner loops vectorize, each lane its own entry's chain).
+  const Eigen::Matrix<double, 6, 9> jt = jac.transpose();
+  Eigen::Matrix<double, 6, 6> g;
+  for (int j = 0; j < 6; ++j) {
+    double* out = &g(0, j);
+    if (j < 4) {  // the GEMM's 4-column panel: rows 0-7 in two alternating chains, then row 8
+      double even[6] = {}, odd[6] = {};
+      for (int r = 0; r < 8; r += 2) {
+        const double a = jt(j, r), b = jt(j, r + 1);
+        for (int i = 0; i < 6; ++i) {
+          even[i] = std::fma(jt(i, r), a, even[i]);
+          odd[i] = std::fma(jt(i, r + 1), b, odd[i]);
+        }
+      }
+      const double c = jt(j, 8);
+      for (int i = 0; i < 6; ++i) out[i] = std::fma(jt(i, 8), c, even[i] + odd[i]);
+    } else {  // its single columns: one chain
+      double sum[6] = {};
+      for (int r = 0; r < 9; ++r) {
+        const double a = jt(j, r);
+        for (int i = 0; i < 6; ++i) sum[i] = std::fma(jt(i, r), a, sum[i]);
+      }
+      for (int i = 0; i < 6; ++i) out[i] = sum[i];
+    }
+  }
+  return g;
+}
+
 double leg_ik_lm(const model::Model& robot, dynamics::Data& data, const std::array<Vec3, model::kNumContactPoints>& targets,
                  ConfigVector& q) {
   const auto& lim = robot.limits;
@@ -54,7 +85,7 @@ double leg_ik_lm(const model::Model& robot, dynamics::Data& data, const std::arr
     double e = foot_error(robot, data, targets, q, foot, err);
     foot_jacobian(robot, data, foot, jac);
     for (int it = 0; it < kMaxIterations && e > 1e-9; ++it) {
-      const Eigen::Matrix<double, 6, 6> normal = jac.transpose() * jac + lambda * Eigen::Matrix<double, 6, 6>::Identity();
+      const Eigen::Matrix<double, 6, 6> normal = leg_jacobian_gram(jac) + lambda * Eigen::Matrix<double, 6, 6>::Identity();
       const Eigen::Matrix<double, 6, 1> keep = q.segment<6>(col);
       q.segment<6>(col) = (keep + normal.ldlt().solve(jac.transpose() * err)).cwiseMax(lo).cwiseMin(hi);
       const double trial = foot_error(robot, data, targets, q, foot, trial_err);
@@ -71,7 +102,11 @@ double leg_ik_lm(const model::Model& robot, dynamics::Data& data, const std::arr
       }
     }
   }
-  dynamics::forward_kinematics(robot, data, q);
+  // Both legs posed at the returned q (each loop's last trial may have been rejected): the
+  // corners need nothing else.
+  for (const int first : {model::kLeftLegFirst, model::kRightLegFirst}) {
+    dynamics::forward_kinematics_chain(robot, data, q, 1 + first, first + model::kLegJoints);
+  }
   double worst = 0.0;
   for (int c = 0; c < model::kNumContactPoints; ++c) {
     worst = std::max(worst, (targets[c] - dynamics::frame_position(robot, data, c)).cwiseAbs().maxCoeff());
