@@ -19,9 +19,10 @@ namespace kuavo::mocap {
 // JᵀJ of a foot's 9×6 corner Jacobian, bit for bit what Eigen 3.4's jac.transpose() * jac
 // gives at -march=x86-64-v3 (6 + 6 + 9 ≥ 20 sends that product to its GEMM, whose blocking
 // and packing took 29 % of the leg solve; this is 3.4× faster): the GEMM's fused
-// multiply-add chains in its order, so the motions stay as they were. Not symmetric in its last bit: entry (i, j)
-// takes column j's order. The test holds it to Eigen's product; should Eigen's order change,
-// that test fails, and a plain chain (with the motions verified again) is the way out.
+// multiply-add chains in its order, so the motions stay as they were. Not symmetric in its
+// last bit: entry (i, j) takes column j's order. The test holds it to Eigen's product; should
+// Eigen's order change, that test fails, and a plain chain (with the motions verified again)
+// is the way out.
 Eigen::Matrix<double, 6, 6> leg_jacobian_gram(const Eigen::Matrix<double, 9, 6>& jac);
 
 double leg_ik_lm(const model::Model& robot, dynamics::Data& data,
